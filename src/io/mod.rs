@@ -1,0 +1,4 @@
+//! Reading and writing files: meshes in, images out.
+
+pub mod image;
+pub mod obj;

@@ -1,0 +1,15 @@
+//! The `caustic` command: parses the command line and reports errors; the work is in the library.
+
+use clap::Parser;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let cli = caustic::cli::Cli::parse();
+    match caustic::cli::run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,716 @@
+//! Turns a [`SceneDesc`] and one of its `gr.render` calls into the render-ready [`Scene`].
+//!
+//! Flattening walks the DAG from the render's root and emits one [`Instance`] per placement of a
+//! geometry node: the same node reached through several parents is placed several times
+//! (instancing), but a mesh's triangles and BVH are built once and shared by all its instances.
+//!
+//! # Two-level BVH
+//! The top level ([`Scene::tlas`]) is a BVH over instances' world-space boxes. An analytic shape
+//! is intersected in its object space (the ray is transformed, not renormalised, so `t` carries
+//! over); a mesh instance transforms the ray and traverses the mesh's own BVH (the bottom level).
+//! A 1M-triangle mesh instanced 10 times thus costs one mesh of memory plus ten instances.
+
+use crate::accel::{Bounds, Bvh};
+use crate::error::{Error, Loc, Result};
+use crate::geometry::csg::{CsgNode, CsgTree, LeafShape};
+use crate::geometry::mesh::MeshData;
+use crate::geometry::triangle::{self, RayShear, TriangleHit};
+use crate::geometry::{Interval, Ray, cube, cylinder, sphere};
+use crate::light::PointLight;
+use crate::material::Material;
+use crate::scene::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
+use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3A};
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+/// Most node visits flattening may make before it reports a runaway instancing graph.
+pub const MAX_NODE_VISITS: usize = 20_000_000;
+/// Deepest CSG tree accepted.
+const MAX_CSG_DEPTH: usize = 64;
+
+/// What an instance places in the world.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    Sphere,
+    Cube,
+    Cylinder,
+    /// Index into [`Scene::meshes`].
+    Mesh(u32),
+    /// Index into [`Scene::csgs`].
+    Csg(u32),
+}
+
+/// One placement of a shape in the world.
+#[derive(Clone, Debug)]
+pub struct Instance {
+    pub shape: Shape,
+    pub world_from_object: Affine3A,
+    pub object_from_world: Affine3A,
+    /// Maps object-space normals to world space (inverse transpose of the linear part).
+    pub normal_to_world: Mat3A,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+    /// The geometry node this instance places.
+    pub node: NodeId,
+}
+
+/// A mesh ready for tracing: attributes in object space, triangles reordered into BVH order.
+pub struct MeshGeom {
+    pub positions: Vec<Vec3A>,
+    /// Per-vertex normals, or empty for face normals.
+    pub normals: Vec<Vec3A>,
+    /// Per-vertex texture coordinates, or empty.
+    pub uvs: Vec<Vec2>,
+    /// Vertex indices, in BVH order: the BVH's leaf index `i` is triangle `i`.
+    pub triangles: Vec<[u32; 3]>,
+    pub bvh: Bvh,
+    pub bounds: Bounds,
+}
+
+impl MeshGeom {
+    /// Builds the mesh's BVH; positions must be finite.
+    pub fn new(data: &MeshData) -> MeshGeom {
+        let positions: Vec<Vec3A> = data.positions.iter().map(|&p| p.into()).collect();
+        let boxes: Vec<Bounds> = data
+            .triangles
+            .iter()
+            .map(|t| {
+                t.iter()
+                    .fold(Bounds::EMPTY, |b, &i| b.grow(positions[i as usize]))
+            })
+            .collect();
+        let bvh = Bvh::build(&boxes);
+        let triangles = bvh
+            .order()
+            .iter()
+            .map(|&i| data.triangles[i as usize])
+            .collect();
+        let bounds = boxes.iter().fold(Bounds::EMPTY, |a, &b| a.union(b));
+        MeshGeom {
+            positions,
+            normals: data.normals.iter().map(|&n| n.into()).collect(),
+            uvs: data.uvs.clone(),
+            triangles,
+            bvh,
+            bounds,
+        }
+    }
+
+    fn vertices(&self, tri: u32) -> [Vec3A; 3] {
+        self.triangles[tri as usize].map(|i| self.positions[i as usize])
+    }
+
+    /// Returns the closest triangle hit by an object-space ray and its barycentrics.
+    pub fn intersect(&self, ray: &Ray) -> Option<(u32, TriangleHit)> {
+        let shear = RayShear::new(ray);
+        let mut best = None;
+        self.bvh.closest(ray, |r, i| {
+            let [a, b, c] = self.vertices(i as u32);
+            match triangle::intersect(&shear, a, b, c, r.tmin, r.tmax) {
+                Some(h) => {
+                    best = Some((i as u32, h));
+                    h.t
+                }
+                None => f32::INFINITY,
+            }
+        });
+        best
+    }
+
+    /// Returns the `t` of some triangle on the ray within `(tmin, tmax)` (any hit, not the closest).
+    pub fn any_hit(&self, ray: &Ray) -> Option<f32> {
+        let shear = RayShear::new(ray);
+        let mut found = None;
+        self.bvh.any(ray, |r, i| {
+            let [a, b, c] = self.vertices(i as u32);
+            let t = triangle::intersect(&shear, a, b, c, r.tmin, r.tmax).map(|h| h.t);
+            found = found.or(t);
+            t.unwrap_or(f32::INFINITY)
+        });
+        found
+    }
+}
+
+/// A ray's closest intersection, enough to compute the surface on demand.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    pub t: f32,
+    /// Index into [`Scene::instances`].
+    pub instance: u32,
+    /// Triangle index (BVH order) for meshes; 0 otherwise.
+    pub prim: u32,
+    pub b1: f32,
+    pub b2: f32,
+    /// Object-space outward normal for analytic shapes and CSG; unused for meshes.
+    pub normal: Vec3A,
+    pub material: u32,
+    pub face: u8,
+}
+
+/// The surface at a hit, in world space.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    pub p: Vec3A,
+    /// Unit geometric normal as the shape orients it (outward for solids).
+    pub ng: Vec3A,
+    /// Unit shading normal (interpolated vertex normals on meshes), on the same side as `ng`.
+    pub ns: Vec3A,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+}
+
+/// Counters describing a built scene, for `--stats` and `caustic info`.
+#[derive(Clone, Debug, Default)]
+pub struct BuildStats {
+    /// Instances by kind, in [`Shape`] order: sphere, cube, cylinder, mesh, csg.
+    pub by_kind: [usize; 5],
+    /// Triangles over all mesh instances.
+    pub triangles_placed: usize,
+    /// Triangles stored once per distinct mesh.
+    pub triangles_stored: usize,
+    pub bvh_bytes: usize,
+    pub build_time: Duration,
+}
+
+/// Everything the renderer traces.
+pub struct Scene {
+    /// Instances in top-level BVH order: the TLAS leaf index `i` is instance `i`.
+    pub instances: Vec<Instance>,
+    pub meshes: Vec<MeshGeom>,
+    pub csgs: Vec<CsgTree>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<PointLight>,
+    pub ambient: Vec3A,
+    pub tlas: Bvh,
+    pub stats: BuildStats,
+}
+
+/// A geometry node reached from the root, with its accumulated `world_from_node`.
+struct Placement {
+    node: NodeId,
+    world: DAffine3,
+}
+
+/// Builds the scene that `render` draws from `desc`.
+pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
+    let start = Instant::now();
+    let placements = flatten(desc, render.root)?;
+    let mut materials: Vec<Material> = desc.materials.iter().map(Material::from_desc).collect();
+    let fallback = materials.len() as u32;
+    materials.push(Material::fallback());
+
+    let mut b = Builder {
+        desc,
+        fallback,
+        meshes: Vec::new(),
+        mesh_index: HashMap::new(),
+        csgs: Vec::new(),
+        instances: Vec::new(),
+        bounds: Vec::new(),
+        stats: BuildStats::default(),
+    };
+    for p in &placements {
+        b.place(p)?;
+    }
+    let tlas = Bvh::build(&b.bounds);
+    let mut instances: Vec<Instance> = tlas
+        .order()
+        .iter()
+        .map(|&i| b.instances[i as usize].clone())
+        .collect();
+    instances.shrink_to_fit();
+    let mut stats = b.stats;
+    stats.bvh_bytes = tlas.bytes() + b.meshes.iter().map(|m| m.bvh.bytes()).sum::<usize>();
+    stats.triangles_stored = b.meshes.iter().map(|m| m.triangles.len()).sum();
+    stats.build_time = start.elapsed();
+    Ok(Scene {
+        instances,
+        meshes: b.meshes,
+        csgs: b.csgs,
+        materials,
+        lights: render
+            .lights
+            .iter()
+            .map(|l| PointLight::from_desc(&desc.lights[l.0 as usize]))
+            .collect(),
+        ambient: render.ambient.into(),
+        tlas,
+        stats,
+    })
+}
+
+/// What a render's root places in the world, by kind, without building anything.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PlacementCounts {
+    /// Placed geometry nodes by [`NodeKind::label`].
+    pub by_kind: std::collections::BTreeMap<&'static str, usize>,
+    /// Triangles over all placed meshes.
+    pub triangles: usize,
+}
+
+/// Counts the geometry placed under `root` (instancing included), as `caustic info` prints it.
+pub fn count_placements(desc: &SceneDesc, root: NodeId) -> Result<PlacementCounts> {
+    let mut counts = PlacementCounts::default();
+    for p in flatten(desc, root)? {
+        let kind = &desc.node(p.node).kind;
+        *counts.by_kind.entry(kind.label()).or_default() += 1;
+        if let NodeKind::Mesh(m) = kind {
+            counts.triangles += desc.meshes[m.0 as usize].data.triangles.len();
+        }
+    }
+    Ok(counts)
+}
+
+/// Returns every geometry node reachable from `root` with its world transform, in DAG order.
+fn flatten(desc: &SceneDesc, root: NodeId) -> Result<Vec<Placement>> {
+    enum Step {
+        Enter(NodeId, DAffine3, Option<Loc>),
+        Leave(NodeId),
+    }
+    let mut out = Vec::new();
+    let mut on_path = vec![false; desc.nodes.len()];
+    let mut stack = vec![Step::Enter(root, DAffine3::IDENTITY, None)];
+    let mut visits = 0usize;
+    while let Some(step) = stack.pop() {
+        let (id, parent, via) = match step {
+            Step::Leave(id) => {
+                on_path[id.0 as usize] = false;
+                continue;
+            }
+            Step::Enter(id, parent, via) => (id, parent, via),
+        };
+        let node = desc.node(id);
+        if on_path[id.0 as usize] {
+            let loc = via.unwrap_or_else(|| node.loc.clone());
+            return Err(Error::at(
+                &loc,
+                format!(
+                    "node '{}' (made at {}) is its own ancestor: add_child made a cycle",
+                    node.name, node.loc
+                ),
+            ));
+        }
+        visits += 1;
+        if visits > MAX_NODE_VISITS {
+            return Err(Error::at(
+                &desc.node(root).loc,
+                format!(
+                    "the scene under '{}' expands to more than {MAX_NODE_VISITS} node placements; is the instancing nested too deep?",
+                    desc.node(root).name
+                ),
+            ));
+        }
+        let world = parent * node.transform;
+        if node.kind.is_geometry() {
+            out.push(Placement { node: id, world });
+        }
+        on_path[id.0 as usize] = true;
+        stack.push(Step::Leave(id));
+        for (child, loc) in node.children.iter().rev() {
+            stack.push(Step::Enter(*child, world, Some(loc.clone())));
+        }
+    }
+    Ok(out)
+}
+
+struct Builder<'a> {
+    desc: &'a SceneDesc,
+    fallback: u32,
+    meshes: Vec<MeshGeom>,
+    mesh_index: HashMap<MeshId, u32>,
+    csgs: Vec<CsgTree>,
+    instances: Vec<Instance>,
+    bounds: Vec<Bounds>,
+    stats: BuildStats,
+}
+
+/// Returns `parent_from_object` for the primitive a geometry kind stands for.
+fn local_transform(kind: &NodeKind) -> DAffine3 {
+    match kind {
+        NodeKind::NhSphere { center, radius } => {
+            DAffine3::from_translation(*center) * DAffine3::from_scale(DVec3::splat(*radius))
+        }
+        NodeKind::NhBox { corner, size } => {
+            DAffine3::from_translation(*corner) * DAffine3::from_scale(DVec3::splat(*size))
+        }
+        _ => DAffine3::IDENTITY,
+    }
+}
+
+fn leaf_shape(kind: &NodeKind) -> Option<LeafShape> {
+    match kind {
+        NodeKind::Sphere | NodeKind::NhSphere { .. } => Some(LeafShape::Sphere),
+        NodeKind::Cube | NodeKind::NhBox { .. } => Some(LeafShape::Cube),
+        NodeKind::Cylinder => Some(LeafShape::Cylinder),
+        _ => None,
+    }
+}
+
+fn leaf_bounds(shape: LeafShape) -> Bounds {
+    match shape {
+        LeafShape::Cube => Bounds {
+            min: Vec3A::ZERO,
+            max: Vec3A::ONE,
+        },
+        LeafShape::Sphere | LeafShape::Cylinder => Bounds {
+            min: Vec3A::NEG_ONE,
+            max: Vec3A::ONE,
+        },
+    }
+}
+
+fn to_f32(m: DAffine3) -> Affine3A {
+    Affine3A::from_cols_array(&m.to_cols_array().map(|x| x as f32))
+}
+
+fn normal_matrix(m: &DMat3) -> Mat3A {
+    Mat3A::from(m.inverse().transpose().as_mat3())
+}
+
+/// Returns the box holding `b` after transform `m`.
+fn transform_bounds(m: &DAffine3, b: Bounds) -> Bounds {
+    let mut out = Bounds::EMPTY;
+    for k in 0..8 {
+        let c = DVec3::new(
+            if k & 1 == 0 { b.min.x } else { b.max.x } as f64,
+            if k & 2 == 0 { b.min.y } else { b.max.y } as f64,
+            if k & 4 == 0 { b.min.z } else { b.max.z } as f64,
+        );
+        out = out.grow(Vec3A::from(m.transform_point3(c).as_vec3()));
+    }
+    out
+}
+
+/// Returns true when `m` can be inverted in single precision without losing the shape.
+fn is_invertible(m: &DAffine3) -> bool {
+    let det = m.matrix3.determinant();
+    let scale = m
+        .matrix3
+        .to_cols_array()
+        .iter()
+        .fold(0.0f64, |a, x| a.max(x.abs()));
+    det.is_finite() && det.abs() > (scale * 1e-7).powi(3) && det != 0.0
+}
+
+impl Builder<'_> {
+    fn material_of(&mut self, id: NodeId, inherited: Option<u32>) -> u32 {
+        let node = self.desc.node(id);
+        match (node.material, inherited) {
+            (Some(m), _) => m.0,
+            (None, Some(m)) => m,
+            (None, None) => {
+                eprintln!(
+                    "{}: warning: node '{}' has no material; drawing it matte grey",
+                    node.loc, node.name
+                );
+                self.fallback
+            }
+        }
+    }
+
+    fn place(&mut self, p: &Placement) -> Result<()> {
+        let node = self.desc.node(p.node);
+        let world = p.world * local_transform(&node.kind);
+        if !is_invertible(&world) {
+            eprintln!(
+                "{}: warning: node '{}' has a singular transform (a zero scale?); it is not drawn",
+                node.loc, node.name
+            );
+            return Ok(());
+        }
+        let (shape, object_bounds) = match &node.kind {
+            NodeKind::Group => return Ok(()),
+            NodeKind::Mesh(id) => {
+                let index = self.mesh(*id)?;
+                let mesh = &self.meshes[index as usize];
+                if mesh.triangles.is_empty() {
+                    return Ok(());
+                }
+                self.stats.triangles_placed += mesh.triangles.len();
+                (Shape::Mesh(index), mesh.bounds)
+            }
+            NodeKind::Csg { .. } => {
+                let mut nodes = Vec::new();
+                let material = self.desc.node(p.node).material.map(|m| m.0);
+                let (root, bounds) =
+                    self.csg_node(p.node, DAffine3::IDENTITY, material, &mut nodes, 0, true)?;
+                self.csgs.push(CsgTree { nodes, root });
+                (Shape::Csg(self.csgs.len() as u32 - 1), bounds)
+            }
+            kind => {
+                let leaf = leaf_shape(kind).expect("every other kind is an analytic leaf");
+                let shape = match leaf {
+                    LeafShape::Sphere => Shape::Sphere,
+                    LeafShape::Cube => Shape::Cube,
+                    LeafShape::Cylinder => Shape::Cylinder,
+                };
+                (shape, leaf_bounds(leaf))
+            }
+        };
+        let bounds = transform_bounds(&world, object_bounds);
+        if !bounds.is_finite() {
+            return Err(Error::at(
+                &node.loc,
+                format!(
+                    "node '{}' is placed at a non-finite position (overflowing transform?)",
+                    node.name
+                ),
+            ));
+        }
+        let kind_slot = match shape {
+            Shape::Sphere => 0,
+            Shape::Cube => 1,
+            Shape::Cylinder => 2,
+            Shape::Mesh(_) => 3,
+            Shape::Csg(_) => 4,
+        };
+        self.stats.by_kind[kind_slot] += 1;
+        let material = match shape {
+            // A CSG hit takes the material of the operand hit; the instance's is a fallback.
+            Shape::Csg(_) => self.fallback,
+            _ => self.material_of(p.node, None),
+        };
+        self.instances.push(Instance {
+            shape,
+            world_from_object: to_f32(world),
+            object_from_world: to_f32(world.inverse()),
+            normal_to_world: normal_matrix(&world.matrix3),
+            material,
+            node: p.node,
+        });
+        self.bounds.push(bounds);
+        Ok(())
+    }
+
+    fn mesh(&mut self, id: MeshId) -> Result<u32> {
+        if let Some(&i) = self.mesh_index.get(&id) {
+            return Ok(i);
+        }
+        let desc = &self.desc.meshes[id.0 as usize];
+        if let Some(bad) = desc.data.positions.iter().position(|p| !p.is_finite()) {
+            return Err(Error::at(
+                &desc.loc,
+                format!(
+                    "mesh {} has a non-finite vertex (#{})",
+                    desc.data.source.display(),
+                    bad + 1
+                ),
+            ));
+        }
+        let geom = MeshGeom::new(&desc.data);
+        self.meshes.push(geom);
+        let index = self.meshes.len() as u32 - 1;
+        self.mesh_index.insert(id, index);
+        Ok(index)
+    }
+
+    /// Appends the CSG subtree of `id` to `nodes`; `frame` is `csg_from_parent`. Returns the
+    /// subtree's index and its bounds in the CSG frame.
+    fn csg_node(
+        &mut self,
+        id: NodeId,
+        frame: DAffine3,
+        inherited: Option<u32>,
+        nodes: &mut Vec<CsgNode>,
+        depth: usize,
+        is_root: bool,
+    ) -> Result<(u32, Bounds)> {
+        let node = self.desc.node(id);
+        if depth > MAX_CSG_DEPTH {
+            return Err(Error::at(
+                &node.loc,
+                format!(
+                    "CSG tree under '{}' is deeper than {MAX_CSG_DEPTH} (a cycle?)",
+                    node.name
+                ),
+            ));
+        }
+        // The root's own transform is already in the instance's world transform.
+        let m = if is_root {
+            frame
+        } else {
+            frame * node.transform
+        };
+        match &node.kind {
+            NodeKind::Csg { op, a, b } => {
+                let material = node.material.map(|m| m.0).or(inherited);
+                let (ia, ba) = self.csg_node(*a, m, material, nodes, depth + 1, false)?;
+                let (ib, bb) = self.csg_node(*b, m, material, nodes, depth + 1, false)?;
+                nodes.push(CsgNode::Op {
+                    op: *op,
+                    a: ia,
+                    b: ib,
+                });
+                Ok((nodes.len() as u32 - 1, ba.union(bb)))
+            }
+            kind => {
+                let Some(shape) = leaf_shape(kind) else {
+                    return Err(Error::at(
+                        &node.loc,
+                        format!(
+                            "CSG operand '{}' is a {}; CSG takes spheres, cubes, cylinders and other CSG nodes",
+                            node.name,
+                            kind.label()
+                        ),
+                    ));
+                };
+                let m = m * local_transform(kind);
+                if !is_invertible(&m) {
+                    return Err(Error::at(
+                        &node.loc,
+                        format!("CSG operand '{}' has a singular transform", node.name),
+                    ));
+                }
+                let material = self.material_of(id, inherited);
+                nodes.push(CsgNode::Leaf {
+                    shape,
+                    leaf_from_csg: to_f32(m.inverse()),
+                    normal_to_csg: normal_matrix(&m.matrix3),
+                    material,
+                });
+                Ok((
+                    nodes.len() as u32 - 1,
+                    transform_bounds(&m, leaf_bounds(shape)),
+                ))
+            }
+        }
+    }
+}
+
+impl Scene {
+    /// Returns the closest hit with `t` in the ray's `(tmin, tmax)`.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let mut best = None;
+        self.tlas
+            .closest(ray, |r, i| match self.hit_instance(i, r) {
+                Some(h) => {
+                    best = Some(h);
+                    h.t
+                }
+                None => f32::INFINITY,
+            });
+        best
+    }
+
+    /// Returns true when anything lies on the ray within `(tmin, tmax)`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.tlas.any(ray, |r, i| {
+            let inst = &self.instances[i];
+            if let Shape::Mesh(m) = inst.shape {
+                let local = object_ray(inst, r);
+                return self.meshes[m as usize]
+                    .any_hit(&local)
+                    .unwrap_or(f32::INFINITY);
+            }
+            self.hit_instance(i, r).map_or(f32::INFINITY, |h| h.t)
+        })
+    }
+
+    fn hit_instance(&self, i: usize, r: &Ray) -> Option<Hit> {
+        let inst = &self.instances[i];
+        let local = object_ray(inst, r);
+        let analytic = |iv: Option<Interval>| {
+            let c = iv?.first_in(r.tmin, r.tmax)?;
+            Some(Hit {
+                t: c.t as f32,
+                instance: i as u32,
+                prim: 0,
+                b1: 0.0,
+                b2: 0.0,
+                normal: c.normal,
+                material: inst.material,
+                face: c.face,
+            })
+        };
+        let hit = match inst.shape {
+            Shape::Sphere => analytic(sphere::interval(local.origin, local.dir)),
+            Shape::Cube => analytic(cube::interval(local.origin, local.dir)),
+            Shape::Cylinder => analytic(cylinder::interval(local.origin, local.dir)),
+            Shape::Mesh(m) => self.meshes[m as usize]
+                .intersect(&local)
+                .map(|(tri, h)| Hit {
+                    t: h.t,
+                    instance: i as u32,
+                    prim: tri,
+                    b1: h.b1,
+                    b2: h.b2,
+                    normal: Vec3A::ZERO,
+                    material: inst.material,
+                    face: 0,
+                }),
+            Shape::Csg(c) => self.csgs[c as usize]
+                .first_hit(local.origin, local.dir, r.tmin, r.tmax)
+                .map(|b| Hit {
+                    t: b.t as f32,
+                    instance: i as u32,
+                    prim: 0,
+                    b1: 0.0,
+                    b2: 0.0,
+                    normal: b.normal,
+                    material: b.material,
+                    face: b.face,
+                }),
+        }?;
+        // Rounding f64 to f32 must not move a hit outside the ray's range.
+        (hit.t > r.tmin && hit.t < r.tmax).then_some(hit)
+    }
+
+    /// Returns the world-space surface at `hit`, found by `ray`.
+    pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
+        let inst = &self.instances[hit.instance as usize];
+        let local = object_ray(inst, ray);
+        let (p_obj, ng_obj, ns_obj) = match inst.shape {
+            Shape::Mesh(m) => {
+                let mesh = &self.meshes[m as usize];
+                let idx = mesh.triangles[hit.prim as usize];
+                let [v0, v1, v2] = idx.map(|i| mesh.positions[i as usize]);
+                let w0 = 1.0 - hit.b1 - hit.b2;
+                let p = v0 * w0 + v1 * hit.b1 + v2 * hit.b2;
+                let ng = triangle::geometric_normal(v0, v1, v2);
+                let ns = if mesh.normals.is_empty() {
+                    ng
+                } else {
+                    let [n0, n1, n2] = idx.map(|i| mesh.normals[i as usize]);
+                    n0 * w0 + n1 * hit.b1 + n2 * hit.b2
+                };
+                (p, ng, ns)
+            }
+            Shape::Sphere => {
+                // Re-project onto the sphere: the hit point's error then no longer grows with t.
+                let p = local.at(hit.t);
+                let p = p / p.length();
+                (p, p, p)
+            }
+            _ => (local.at(hit.t), hit.normal, hit.normal),
+        };
+        let p = inst.world_from_object.transform_point3a(p_obj);
+        let ng = (inst.normal_to_world * ng_obj).normalize_or_zero();
+        let ng = if ng == Vec3A::ZERO {
+            -ray.dir.normalize()
+        } else {
+            ng
+        };
+        let mut ns = (inst.normal_to_world * ns_obj).normalize_or_zero();
+        if ns == Vec3A::ZERO {
+            ns = ng;
+        } else if ns.dot(ng) < 0.0 {
+            // Vertex normals wound against the faces: keep the shading normal on ng's side.
+            ns = -ns;
+        }
+        SurfaceHit {
+            p,
+            ng,
+            ns,
+            material: hit.material,
+        }
+    }
+}
+
+fn object_ray(inst: &Instance, r: &Ray) -> Ray {
+    Ray {
+        origin: inst.object_from_world.transform_point3a(r.origin),
+        dir: inst.object_from_world.transform_vector3a(r.dir),
+        tmin: r.tmin,
+        tmax: r.tmax,
+    }
+}

@@ -1,0 +1,198 @@
+//! The plain scene description a script fills in: no Lua types, every entry tagged with the script
+//! line that made it.
+//!
+//! Index spaces ([`NodeId`], [`MaterialId`], [`LightId`], [`MeshId`]) are positions in the vectors
+//! of [`SceneDesc`]. Entries are only ever appended, so an id stays valid for the whole script, and
+//! an image rendered mid-script sees the description as it stands at that moment.
+//!
+//! Transforms follow the course's convention (pre-multiplication): each `translate`, `rotate` or
+//! `scale` call on a node computes `M ← T·M`, so calls act on the geometry in call order, each in
+//! the parent's frame, and `world_from_object = M_root · … · M_parent · M_node`.
+
+use crate::error::Loc;
+use crate::geometry::mesh::MeshData;
+use glam::{DAffine3, DVec3, Vec3};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Index of a node in [`SceneDesc::nodes`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct NodeId(pub u32);
+/// Index of a material in [`SceneDesc::materials`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct MaterialId(pub u32);
+/// Index of a light in [`SceneDesc::lights`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LightId(pub u32);
+/// Index of a loaded mesh in [`SceneDesc::meshes`]; nodes made from the same file share one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct MeshId(pub u32);
+
+/// The boolean operation of a CSG node: `a ∪ b`, `a ∩ b` or `a − b`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CsgOp {
+    Union,
+    Intersection,
+    Difference,
+}
+
+/// What a node is: a transform-only group or one kind of geometry, in its own model frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NodeKind {
+    /// `gr.node` and `gr.joint`: a transform with children and no geometry.
+    Group,
+    /// `gr.sphere`: centre (0,0,0), radius 1.
+    Sphere,
+    /// `gr.cube`: the axis-aligned unit cube from (0,0,0) to (1,1,1).
+    Cube,
+    /// `gr.nh_sphere`: a sphere with its own centre and radius in the node's frame.
+    NhSphere { center: DVec3, radius: f64 },
+    /// `gr.nh_box`: the cube from `corner` to `corner + size` on every axis.
+    NhBox { corner: DVec3, size: f64 },
+    /// `gr.cylinder`: axis z, radius 1, z in [-1, 1], closed by caps at z = ±1.
+    Cylinder,
+    /// `gr.mesh`: a triangle mesh shared with every other node loaded from the same file.
+    Mesh(MeshId),
+    /// `gr.union`, `gr.intersection`, `gr.difference`: operands evaluated in this node's frame.
+    Csg { op: CsgOp, a: NodeId, b: NodeId },
+}
+
+impl NodeKind {
+    /// Returns true for every kind that `set_material` accepts (geometry and CSG nodes).
+    pub fn is_geometry(&self) -> bool {
+        !matches!(self, NodeKind::Group)
+    }
+
+    /// Returns the kind's name as `caustic info` prints it.
+    pub fn label(&self) -> &'static str {
+        match self {
+            NodeKind::Group => "group",
+            NodeKind::Sphere | NodeKind::NhSphere { .. } => "sphere",
+            NodeKind::Cube | NodeKind::NhBox { .. } => "cube",
+            NodeKind::Cylinder => "cylinder",
+            NodeKind::Mesh(_) => "mesh",
+            NodeKind::Csg { .. } => "csg",
+        }
+    }
+}
+
+/// One node of the scene DAG.
+#[derive(Clone, Debug)]
+pub struct NodeDesc {
+    /// The name the script gave; not unique.
+    pub name: String,
+    pub kind: NodeKind,
+    /// `parent_from_node`, composed by pre-multiplication (see the module doc).
+    pub transform: DAffine3,
+    /// Set by `set_material`; the last call wins. Not inherited by children.
+    pub material: Option<MaterialId>,
+    /// Children in `add_child` order, each with the line of its `add_child` call.
+    pub children: Vec<(NodeId, Loc)>,
+    /// Where the node was created.
+    pub loc: Loc,
+}
+
+/// A material as `gr.material(kd, ks, p [, t [, ior [, s [, texture [, bump]]]]])` gives it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialDesc {
+    /// Diffuse reflectance (also multiplies the ambient light).
+    pub kd: Vec3,
+    /// Specular colour: Phong highlight and mirror reflection weight.
+    pub ks: Vec3,
+    /// Phong exponent.
+    pub shininess: f32,
+    /// Transparency in [0, 1]; above 0 the surface refracts.
+    pub transparency: f32,
+    /// Refractive index of the material's interior (meaningful when `transparency > 0`).
+    pub ior: f32,
+    /// Scale of the Perlin-noise normal perturbation; 0 means none.
+    pub perlin_scale: f32,
+    /// Texture image replacing `kd`, resolved to a readable path.
+    pub texture: Option<PathBuf>,
+    /// Normal-map image ("bump" in the original project), resolved to a readable path.
+    pub bump: Option<PathBuf>,
+    pub loc: Loc,
+}
+
+/// A point light as `gr.light(pos, rgb, falloff [, power [, num_photons]])` gives it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightDesc {
+    /// World-space position (lights are not part of the scene graph).
+    pub position: Vec3,
+    /// Intensity per channel.
+    pub colour: Vec3,
+    /// Attenuation `1 / (c0 + c1·d + c2·d²)`, all coefficients ≥ 0 and not all 0.
+    pub falloff: [f32; 3],
+    /// The extended project's light power (photon energy); `None` when the script gives none.
+    pub power: Option<f32>,
+    /// Photons this light emits; `None` lets the renderer decide.
+    pub photons: Option<u64>,
+    pub loc: Loc,
+}
+
+/// A mesh file read by `gr.mesh`, cached by resolved path.
+#[derive(Clone, Debug)]
+pub struct MeshDesc {
+    pub data: Arc<MeshData>,
+    pub loc: Loc,
+}
+
+/// The camera of a `gr.render` call, in world space, exactly as the script gave it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraDesc {
+    pub eye: Vec3,
+    /// A direction (not a look-at point); not necessarily unit length.
+    pub view: Vec3,
+    /// Approximately up; need not be perpendicular to `view`.
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_deg: f32,
+}
+
+/// One `gr.render` call.
+#[derive(Clone, Debug)]
+pub struct RenderDesc {
+    pub root: NodeId,
+    /// Where the image goes, resolved against the working directory or the script's folder.
+    pub output: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub camera: CameraDesc,
+    pub ambient: Vec3,
+    pub lights: Vec<LightId>,
+    pub loc: Loc,
+}
+
+/// Everything a script has described so far.
+#[derive(Clone, Debug, Default)]
+pub struct SceneDesc {
+    pub nodes: Vec<NodeDesc>,
+    pub materials: Vec<MaterialDesc>,
+    pub lights: Vec<LightDesc>,
+    pub meshes: Vec<MeshDesc>,
+    /// Every `gr.render` call made so far, in order.
+    pub renders: Vec<RenderDesc>,
+    /// Warnings issued while running the script (also printed to stderr as they happen).
+    pub warnings: Vec<String>,
+}
+
+impl SceneDesc {
+    /// Returns the node with id `id`.
+    pub fn node(&self, id: NodeId) -> &NodeDesc {
+        &self.nodes[id.0 as usize]
+    }
+
+    /// Appends a node and returns its id.
+    pub fn add_node(&mut self, name: impl Into<String>, kind: NodeKind, loc: Loc) -> NodeId {
+        let id = NodeId(self.nodes.len() as u32);
+        self.nodes.push(NodeDesc {
+            name: name.into(),
+            kind,
+            transform: DAffine3::IDENTITY,
+            material: None,
+            children: Vec::new(),
+            loc,
+        });
+        id
+    }
+}

@@ -1,0 +1,669 @@
+//! The `gr` scene API on an embedded Lua 5.4: runs a script and fills a [`SceneDesc`].
+//!
+//! The API is the CS488 A4 starter's (see `../shared/docs/cs488_lua_api.md` §1–§5) plus the
+//! extended ray tracer's commands, with every extra argument optional:
+//!
+//! ```lua
+//! glass = gr.material({0.2, 0.2, 0.2}, {0.05, 0.05, 0.05}, 25, 0.8, 1.85, 0)
+//! ring  = gr.difference('ring', gr.cylinder('outer'), gr.cylinder('inner'))
+//! light = gr.light({0, 0.5, 0}, {0.7, 0.5, 0.9}, {1, 0, 0}, 10000, 200000)
+//! ```
+//!
+//! As in the course, one table is both the global `gr` and the source of every node method, so
+//! `n:translate(1, 2, 3)` is `gr.translate(n, 1, 2, 3)` and `n:render(...)` is `gr.render(n, ...)`.
+//! `gr.render` calls the [`RenderHook`] synchronously: the script carries on after each image.
+//!
+//! Paths (meshes, textures, output images) resolve against the working directory first, as the
+//! course does, then against the script's folder, so a corpus scene runs both from its own folder
+//! and by path from anywhere.
+//!
+//! The whole standard library is loaded, including `debug` less the functions that could break
+//! memory safety (`setmetatable`, `setuservalue`, `getregistry`, `setupvalue`, `upvaluejoin`,
+//! `getuservalue`, `getupvalue`); `unpack` and `string.gfind` are aliased for legacy scripts.
+
+use crate::error::{Error, Loc, Result};
+use crate::io::obj;
+use crate::scene::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
+use crate::scene::desc::{
+    CameraDesc, CsgOp, LightDesc, MaterialDesc, MeshDesc, MeshId, NodeKind, RenderDesc, SceneDesc,
+};
+use glam::{DAffine3, DVec3};
+use mlua::{Lua, LuaOptions, MetaMethod, MultiValue, StdLib, Table, UserData, Value};
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::sync::Arc;
+
+/// Called by every `gr.render`: receives the description as it stands and the render call.
+pub type RenderHook = Box<dyn FnMut(&SceneDesc, &RenderDesc) -> Result<()>>;
+
+/// Largest image `gr.render` accepts, in pixels (about 8k × 8k).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
+pub fn run_script(path: &Path, hook: RenderHook) -> Result<SceneDesc> {
+    let source = std::fs::read(path).map_err(|e| Error::File {
+        path: path.to_path_buf(),
+        message: format!("cannot read script: {e}"),
+    })?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    run_source(&source, &path.display().to_string(), &dir, hook)
+}
+
+/// Runs script text named `name` (used in messages), resolving relative paths in the working
+/// directory and then in `script_dir`.
+pub fn run_source(
+    source: &[u8],
+    name: &str,
+    script_dir: &Path,
+    hook: RenderHook,
+) -> Result<SceneDesc> {
+    let state = Rc::new(RefCell::new(State {
+        desc: SceneDesc::default(),
+        script_dir: script_dir.to_path_buf(),
+        hook,
+        mesh_cache: HashMap::new(),
+    }));
+    let lua = new_lua().map_err(convert_error)?;
+    install_gr(&lua, &state).map_err(convert_error)?;
+    lua.load(source)
+        .set_name(format!("@{name}"))
+        .exec()
+        .map_err(convert_error)?;
+    drop(lua);
+    let state = Rc::try_unwrap(state)
+        .map_err(|_| Error::Lua("internal: scene state still borrowed".into()))?
+        .into_inner();
+    Ok(state.desc)
+}
+
+struct State {
+    desc: SceneDesc,
+    script_dir: PathBuf,
+    hook: RenderHook,
+    mesh_cache: HashMap<PathBuf, MeshId>,
+}
+
+impl State {
+    /// Returns the readable file `given` names: as given (working directory), else in the script's folder.
+    fn resolve_input(&self, given: &str) -> Option<PathBuf> {
+        let p = Path::new(given);
+        if p.is_file() {
+            return Some(p.to_path_buf());
+        }
+        let q = self.script_dir.join(p);
+        (p.is_relative() && q.is_file()).then_some(q)
+    }
+
+    /// Returns where to write `given`: as given when its folder exists, else in the script's folder.
+    fn resolve_output(&self, given: &str) -> PathBuf {
+        let folder_exists = |q: &Path| match q.parent() {
+            None => true,
+            Some(d) => d.as_os_str().is_empty() || d.is_dir(),
+        };
+        let p = Path::new(given);
+        let q = self.script_dir.join(p);
+        if folder_exists(p) || p.is_absolute() || !folder_exists(&q) {
+            p.to_path_buf()
+        } else {
+            q
+        }
+    }
+
+    fn warn(&mut self, loc: &Loc, message: String) {
+        let text = format!("{loc}: warning: {message}");
+        eprintln!("{text}");
+        self.desc.warnings.push(text);
+    }
+
+    fn not_found(&self, what: &str, given: &str) -> String {
+        let cwd = std::env::current_dir().unwrap_or_default();
+        format!(
+            "{what} '{given}' not found (looked in the working directory {} and in the script's folder {})",
+            cwd.display(),
+            self.script_dir.display()
+        )
+    }
+}
+
+impl UserData for NodeRef {
+    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
+        // Node methods are the `gr` functions themselves, as in the course where `gr` is the
+        // node metatable's `__index`.
+        methods.add_meta_function(MetaMethod::Index, |lua, (_node, key): (Value, Value)| {
+            let gr: Table = lua.named_registry_value(GR_KEY)?;
+            let f: Value = gr.raw_get(key.clone())?;
+            if f.is_nil() {
+                let key = key.to_string().unwrap_or_else(|_| "?".into());
+                return Err(lua_err(Error::at(
+                    &caller_loc(lua),
+                    format!("gr.node has no method '{key}'"),
+                )));
+            }
+            Ok(f)
+        });
+        methods.add_meta_method(MetaMethod::ToString, |_, node, ()| {
+            Ok(format!("gr.node #{}", node.0.0))
+        });
+    }
+}
+
+impl UserData for MaterialRef {
+    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_meta_method(MetaMethod::ToString, |_, m, ()| {
+            Ok(format!("gr.material #{}", m.0.0))
+        });
+    }
+}
+
+impl UserData for LightRef {
+    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_meta_method(MetaMethod::ToString, |_, l, ()| {
+            Ok(format!("gr.light #{}", l.0.0))
+        });
+    }
+}
+
+const GR_KEY: &str = "caustic.gr";
+
+fn new_lua() -> mlua::Result<Lua> {
+    // SAFETY: `debug` is the only unsafe library; the functions that can corrupt mlua's
+    // userdata or registry invariants are removed before any script runs.
+    let lua = unsafe { Lua::unsafe_new_with(StdLib::ALL, LuaOptions::new()) };
+    let g = lua.globals();
+    let debug: Table = g.get("debug")?;
+    for f in [
+        "setmetatable",
+        "getmetatable",
+        "setuservalue",
+        "getuservalue",
+        "getregistry",
+        "setupvalue",
+        "getupvalue",
+        "upvaluejoin",
+        "upvalueid",
+    ] {
+        debug.raw_set(f, Value::Nil)?;
+    }
+    let table: Table = g.get("table")?;
+    if g.get::<Value>("unpack")?.is_nil() {
+        g.set("unpack", table.get::<Value>("unpack")?)?;
+    }
+    let string: Table = g.get("string")?;
+    string.set("gfind", string.get::<Value>("gmatch")?)?;
+    Ok(lua)
+}
+
+type GrFn = fn(&Lua, &mut State, &Args) -> mlua::Result<Value>;
+
+fn install_gr(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()> {
+    let gr = lua.create_table()?;
+    let functions: &[(&'static str, GrFn)] = &[
+        ("node", gr_node),
+        ("joint", gr_joint),
+        ("sphere", |l, s, a| gr_simple(l, s, a, NodeKind::Sphere)),
+        ("cube", |l, s, a| gr_simple(l, s, a, NodeKind::Cube)),
+        ("cylinder", |l, s, a| gr_simple(l, s, a, NodeKind::Cylinder)),
+        ("nh_sphere", gr_nh_sphere),
+        ("nh_box", gr_nh_box),
+        ("mesh", gr_mesh),
+        ("union", |l, s, a| gr_csg(l, s, a, CsgOp::Union)),
+        ("intersection", |l, s, a| {
+            gr_csg(l, s, a, CsgOp::Intersection)
+        }),
+        ("difference", |l, s, a| gr_csg(l, s, a, CsgOp::Difference)),
+        ("material", gr_material),
+        ("light", gr_light),
+        ("render", gr_render),
+        ("add_child", gr_add_child),
+        ("set_material", gr_set_material),
+        ("translate", gr_translate),
+        ("scale", gr_scale),
+        ("rotate", gr_rotate),
+    ];
+    for &(name, f) in functions {
+        let st = Rc::clone(state);
+        let func = lua.create_function(move |lua, vals: MultiValue| {
+            let args = Args::new(lua, name, vals);
+            let mut s = st
+                .try_borrow_mut()
+                .map_err(|_| args.fail(format!("gr.{name} called while a render is running")))?;
+            f(lua, &mut s, &args)
+        })?;
+        gr.raw_set(name, func)?;
+    }
+    // Unknown names fail loudly at the line that used them instead of yielding nil.
+    let meta = lua.create_table()?;
+    meta.raw_set(
+        "__index",
+        lua.create_function(|lua, (_t, key): (Value, Value)| -> mlua::Result<Value> {
+            let key = key.to_string().unwrap_or_else(|_| "?".into());
+            Err(lua_err(Error::at(
+                &caller_loc(lua),
+                format!(
+                    "unknown function gr.{key} (caustic has gr.{})",
+                    GR_NAMES.join(", gr.")
+                ),
+            )))
+        })?,
+    )?;
+    gr.set_metatable(Some(meta))?;
+    lua.set_named_registry_value(GR_KEY, &gr)?;
+    lua.globals().set("gr", gr)?;
+    Ok(())
+}
+
+const GR_NAMES: &[&str] = &[
+    "node",
+    "joint",
+    "sphere",
+    "cube",
+    "cylinder",
+    "nh_sphere",
+    "nh_box",
+    "mesh",
+    "union",
+    "intersection",
+    "difference",
+    "material",
+    "light",
+    "render",
+];
+
+fn new_node(
+    lua: &Lua,
+    s: &mut State,
+    a: &Args,
+    name: String,
+    kind: NodeKind,
+) -> mlua::Result<Value> {
+    let id = s.desc.add_node(name, kind, a.loc.clone());
+    Ok(Value::UserData(lua.create_userdata(NodeRef(id))?))
+}
+
+fn gr_node(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    new_node(lua, s, a, a.string(1)?, NodeKind::Group)
+}
+
+fn gr_joint(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    // The A4 starter stores the joint ranges and applies nothing: a joint is a plain node.
+    a.dvec3(2)?;
+    a.dvec3(3)?;
+    new_node(lua, s, a, name, NodeKind::Group)
+}
+
+fn gr_simple(lua: &Lua, s: &mut State, a: &Args, kind: NodeKind) -> mlua::Result<Value> {
+    new_node(lua, s, a, a.string(1)?, kind)
+}
+
+fn positive(a: &Args, i: usize, what: &str) -> mlua::Result<f64> {
+    let v = a.number(i)?;
+    if v <= 0.0 {
+        return Err(a.bad(i, format!("{what} must be positive, got {v}")));
+    }
+    Ok(v)
+}
+
+fn gr_nh_sphere(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    let center = a.dvec3(2)?;
+    let radius = positive(a, 3, "radius")?;
+    new_node(lua, s, a, name, NodeKind::NhSphere { center, radius })
+}
+
+fn gr_nh_box(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    let corner = a.dvec3(2)?;
+    let size = positive(a, 3, "size")?;
+    new_node(lua, s, a, name, NodeKind::NhBox { corner, size })
+}
+
+fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    let id = match a.get(2) {
+        Some(Value::Table(_)) => inline_mesh(s, a)?,
+        _ => mesh_from_file(s, a, &a.string(2)?)?,
+    };
+    if s.desc.meshes[id.0 as usize].data.triangles.is_empty() {
+        let src = s.desc.meshes[id.0 as usize]
+            .data
+            .source
+            .display()
+            .to_string();
+        s.warn(
+            &a.loc.clone(),
+            format!("mesh '{name}' ({src}) has no triangles"),
+        );
+    }
+    new_node(lua, s, a, name, NodeKind::Mesh(id))
+}
+
+fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> {
+    let Some(path) = s.resolve_input(given) else {
+        return Err(a.fail(s.not_found("mesh file", given)));
+    };
+    let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+    if let Some(&id) = s.mesh_cache.get(&key) {
+        return Ok(id);
+    }
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let data = match ext.as_str() {
+        "obj" => {
+            obj::load_obj(&path).map_err(|e| a.fail(format!("cannot load mesh '{given}': {e}")))?
+        }
+        _ => {
+            return Err(a.fail(format!(
+                "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj)"
+            )));
+        }
+    };
+    let id = MeshId(s.desc.meshes.len() as u32);
+    s.desc.meshes.push(MeshDesc {
+        data: Arc::new(data),
+        loc: a.loc.clone(),
+    });
+    s.mesh_cache.insert(key, id);
+    Ok(id)
+}
+
+/// The legacy form `gr.mesh(name, {{x,y,z}, …}, {{i,j,k,…}, …})` with 0-based convex faces.
+fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
+    let Some(Value::Table(verts)) = a.get(2) else {
+        unreachable!("inline_mesh is only called with a table")
+    };
+    let Some(Value::Table(faces)) = a.get(3) else {
+        return Err(a.bad(3, "table of faces expected"));
+    };
+    let mut data = crate::geometry::mesh::MeshData {
+        source: PathBuf::from(format!("{} (inline mesh)", a.loc)),
+        ..Default::default()
+    };
+    for (k, v) in verts.clone().sequence_values::<Value>().enumerate() {
+        let p = match v? {
+            Value::Table(t) if t.raw_len() == 3 => {
+                let c: [f64; 3] = [t.raw_get(1)?, t.raw_get(2)?, t.raw_get(3)?];
+                DVec3::from_array(c)
+            }
+            _ => return Err(a.bad(2, format!("vertex {} is not a 3-tuple", k + 1))),
+        };
+        if !p.is_finite() {
+            return Err(a.bad(2, format!("vertex {} is not finite", k + 1)));
+        }
+        data.positions.push(p.as_vec3());
+    }
+    let nv = data.positions.len() as i64;
+    for (k, f) in faces.clone().sequence_values::<Value>().enumerate() {
+        let Value::Table(f) = f? else {
+            return Err(a.bad(3, format!("face {} is not a table", k + 1)));
+        };
+        let mut idx = Vec::new();
+        for i in f.sequence_values::<i64>() {
+            let i = i?;
+            if !(0..nv).contains(&i) {
+                return Err(a.bad(
+                    3,
+                    format!("face {}: index {i} out of range (0..{nv})", k + 1),
+                ));
+            }
+            idx.push(i as u32);
+        }
+        if idx.len() < 3 {
+            return Err(a.bad(3, format!("face {} has fewer than 3 vertices", k + 1)));
+        }
+        for j in 1..idx.len() - 1 {
+            data.triangles.push([idx[0], idx[j], idx[j + 1]]);
+        }
+    }
+    let id = MeshId(s.desc.meshes.len() as u32);
+    s.desc.meshes.push(MeshDesc {
+        data: Arc::new(data),
+        loc: a.loc.clone(),
+    });
+    Ok(id)
+}
+
+fn gr_csg(lua: &Lua, s: &mut State, a: &Args, op: CsgOp) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    let mut operands = [a.node(2)?, a.node(3)?];
+    for (k, id) in operands.iter_mut().enumerate() {
+        if !s.desc.node(*id).kind.is_geometry() {
+            return Err(a.bad(k + 2, "Geometry node expected"));
+        }
+    }
+    let [x, y] = operands;
+    new_node(lua, s, a, name, NodeKind::Csg { op, a: x, b: y })
+}
+
+fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let kd = a.colour(1)?;
+    let ks = a.colour(2)?;
+    let shininess = a.number(3)?;
+    if shininess < 0.0 {
+        return Err(a.bad(3, format!("Phong exponent must be >= 0, got {shininess}")));
+    }
+    let transparency = a.opt_number(4)?.unwrap_or(0.0);
+    if !(0.0..=1.0).contains(&transparency) {
+        return Err(a.bad(
+            4,
+            format!("transparency must be in [0, 1], got {transparency}"),
+        ));
+    }
+    let ior = a.opt_number(5)?.unwrap_or(1.0);
+    if transparency > 0.0 && ior <= 0.0 {
+        return Err(a.bad(
+            5,
+            format!("index of refraction must be positive, got {ior}"),
+        ));
+    }
+    let perlin_scale = a.opt_number(6)?.unwrap_or(0.0);
+    if perlin_scale < 0.0 {
+        return Err(a.bad(6, format!("Perlin scale must be >= 0, got {perlin_scale}")));
+    }
+    let image = |i: usize, what: &str| -> mlua::Result<Option<PathBuf>> {
+        match a.opt_string(i)? {
+            None => Ok(None),
+            Some(given) => match s.resolve_input(&given) {
+                Some(p) => Ok(Some(p)),
+                None => Err(a.fail(s.not_found(what, &given))),
+            },
+        }
+    };
+    let texture = image(7, "texture")?;
+    let bump = image(8, "bump map")?;
+    let id = crate::scene::desc::MaterialId(s.desc.materials.len() as u32);
+    s.desc.materials.push(MaterialDesc {
+        kd,
+        ks,
+        shininess: shininess as f32,
+        transparency: transparency as f32,
+        ior: if ior > 0.0 { ior as f32 } else { 1.0 },
+        perlin_scale: perlin_scale as f32,
+        texture,
+        bump,
+        loc: a.loc.clone(),
+    });
+    Ok(Value::UserData(lua.create_userdata(MaterialRef(id))?))
+}
+
+fn gr_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let position = a.vec3(1)?;
+    let colour = a.colour(2)?;
+    let falloff = a.vec3(3)?;
+    if falloff.min_element() < 0.0 || falloff.max_element() <= 0.0 {
+        return Err(a.bad(
+            3,
+            format!(
+                "falloff {{c0, c1, c2}} must be >= 0 and not all 0, got {{{}, {}, {}}}",
+                falloff.x, falloff.y, falloff.z
+            ),
+        ));
+    }
+    let power = a.opt_number(4)?;
+    if let Some(p) = power
+        && p < 0.0
+    {
+        return Err(a.bad(4, format!("power must be >= 0, got {p}")));
+    }
+    let photons = a.opt_number(5)?;
+    if let Some(n) = photons
+        && !(0.0..=1e12).contains(&n)
+    {
+        return Err(a.bad(5, format!("photon count must be in [0, 1e12], got {n}")));
+    }
+    let id = crate::scene::desc::LightId(s.desc.lights.len() as u32);
+    s.desc.lights.push(LightDesc {
+        position,
+        colour,
+        falloff: falloff.to_array(),
+        power: power.map(|p| p as f32),
+        photons: photons.map(|n| n as u64),
+        loc: a.loc.clone(),
+    });
+    Ok(Value::UserData(lua.create_userdata(LightRef(id))?))
+}
+
+fn image_size(a: &Args, i: usize) -> mlua::Result<u32> {
+    // C++ `int = double` truncates towards zero.
+    let v = a.number(i)?.trunc();
+    if !(1.0..=65535.0).contains(&v) {
+        return Err(a.bad(
+            i,
+            format!("image size must be in [1, 65535] pixels, got {v}"),
+        ));
+    }
+    Ok(v as u32)
+}
+
+fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let root = a.node(1)?;
+    let file = a.string(2)?;
+    let width = image_size(a, 3)?;
+    let height = image_size(a, 4)?;
+    if width as u64 * height as u64 > MAX_PIXELS {
+        return Err(a.fail(format!(
+            "image {width}x{height} is larger than {MAX_PIXELS} pixels"
+        )));
+    }
+    let eye = a.vec3(5)?;
+    let view = a.vec3(6)?;
+    let up = a.vec3(7)?;
+    let fov_deg = a.number(8)?;
+    let ambient = a.colour(9)?;
+    let lights = a.lights(10)?;
+    if view.length_squared() == 0.0 {
+        return Err(a.bad(6, "view direction must not be zero"));
+    }
+    if view.normalize().cross(up).length_squared() < 1e-12 {
+        return Err(a.bad(7, "up must not be zero or parallel to the view direction"));
+    }
+    if !(fov_deg > 0.0 && fov_deg < 180.0) {
+        return Err(a.bad(
+            8,
+            format!("field of view must be in (0, 180) degrees, got {fov_deg}"),
+        ));
+    }
+    let render = RenderDesc {
+        root,
+        output: s.resolve_output(&file),
+        width,
+        height,
+        camera: CameraDesc {
+            eye,
+            view,
+            up,
+            fov_deg: fov_deg as f32,
+        },
+        ambient,
+        lights,
+        loc: a.loc.clone(),
+    };
+    s.desc.renders.push(render.clone());
+    let State { desc, hook, .. } = s;
+    hook(desc, &render).map_err(|e| match e {
+        e @ (Error::Script { .. } | Error::Lua(_)) => lua_err(e),
+        other => a.fail(other.to_string()),
+    })?;
+    Ok(Value::Nil)
+}
+
+fn gr_add_child(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let parent = a.node(1)?;
+    let child = a.node(2)?;
+    if parent == child {
+        return Err(a.bad(2, "a node cannot be its own child"));
+    }
+    s.desc.nodes[parent.0 as usize]
+        .children
+        .push((child, a.loc.clone()));
+    Ok(Value::Nil)
+}
+
+fn gr_set_material(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let node = a.node(1)?;
+    let material = a.material(2)?;
+    if !s.desc.node(node).kind.is_geometry() {
+        return Err(a.bad(1, "Geometry node expected"));
+    }
+    s.desc.nodes[node.0 as usize].material = Some(material);
+    Ok(Value::Nil)
+}
+
+fn pre_multiply(s: &mut State, a: &Args, t: DAffine3) -> mlua::Result<Value> {
+    let node = a.node(1)?;
+    let m = &mut s.desc.nodes[node.0 as usize].transform;
+    *m = t * *m;
+    Ok(Value::Nil)
+}
+
+fn three_numbers(a: &Args) -> mlua::Result<DVec3> {
+    Ok(DVec3::new(a.number(2)?, a.number(3)?, a.number(4)?))
+}
+
+fn gr_translate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    a.node(1)?;
+    let t = DAffine3::from_translation(three_numbers(a)?);
+    pre_multiply(s, a, t)
+}
+
+fn gr_scale(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    a.node(1)?;
+    let t = DAffine3::from_scale(three_numbers(a)?);
+    pre_multiply(s, a, t)
+}
+
+fn gr_rotate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    a.node(1)?;
+    let axis = a.string(2)?;
+    if axis.chars().count() != 1 {
+        return Err(a.bad(2, "Single character expected"));
+    }
+    let angle = a.number(3)?.to_radians();
+    let t = match axis.to_ascii_lowercase().as_str() {
+        "x" => DAffine3::from_rotation_x(angle),
+        "y" => DAffine3::from_rotation_y(angle),
+        "z" => DAffine3::from_rotation_z(angle),
+        _ => return Err(a.bad(2, "Axis must be x, y or z")),
+    };
+    pre_multiply(s, a, t)
+}
+
+/// Turns an mlua error into ours, unwrapping callback layers down to the original cause.
+fn convert_error(e: mlua::Error) -> Error {
+    match e {
+        mlua::Error::CallbackError { cause, .. } => convert_error((*cause).clone()),
+        mlua::Error::WithContext { cause, .. } => convert_error((*cause).clone()),
+        mlua::Error::ExternalError(inner) => match inner.downcast_ref::<Error>() {
+            Some(e) => e.clone(),
+            None => Error::Lua(inner.to_string()),
+        },
+        mlua::Error::SyntaxError { message, .. } => Error::Lua(message),
+        mlua::Error::RuntimeError(message) => Error::Lua(message),
+        other => Error::Lua(other.to_string()),
+    }
+}

@@ -1,0 +1,9 @@
+//! Scenes: the description a script fills in, the Lua API that fills it, and the step that turns
+//! a description into the render-ready [`Scene`].
+
+pub mod args;
+pub mod build;
+pub mod desc;
+pub mod lua;
+
+pub use build::{Instance, Scene, Shape, build_scene};

@@ -1,0 +1,157 @@
+//! The standard A4 scenes of the course render, from their own folder and by path, at the size
+//! their scripts ask for, and look like what they describe.
+
+mod common;
+
+use common::{a4_assets, caustic, out_dir};
+use std::path::Path;
+
+/// Every A4 scene, with the image size its `gr.render` call asks for.
+const SCENES: [(&str, u32, u32); 7] = [
+    ("simple", 256, 256),
+    ("nonhier", 512, 512),
+    ("nonhier2", 256, 256),
+    ("hier", 256, 256),
+    ("instance", 256, 256),
+    ("simple-cows", 256, 256),
+    ("macho-cows", 256, 256),
+];
+
+/// Checks a written image's size and that it shows more than a blank background.
+fn check_image(path: &Path, w: u32, h: u32) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8();
+    assert_eq!((img.width(), img.height()), (w, h), "{}", path.display());
+    let mut colours: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+    colours.sort_unstable();
+    colours.dedup();
+    assert!(
+        colours.len() > 200,
+        "{}: only {} distinct colours",
+        path.display(),
+        colours.len()
+    );
+}
+
+fn render_ok(cmd: &mut std::process::Command) {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "caustic failed: {}\n{}",
+        String::from_utf8_lossy(&out.stderr),
+        String::from_utf8_lossy(&out.stdout)
+    );
+}
+
+#[test]
+fn every_a4_scene_renders_from_its_own_folder() {
+    let out = out_dir("a4-from-folder");
+    for (name, w, h) in SCENES {
+        let png = out.join(format!("{name}.png"));
+        render_ok(
+            caustic()
+                .current_dir(a4_assets())
+                .args(["render", &format!("{name}.lua"), "-o"])
+                .arg(&png),
+        );
+        check_image(&png, w, h);
+    }
+}
+
+#[test]
+fn every_a4_scene_renders_by_path_from_the_repository_root() {
+    let out = out_dir("a4-by-path");
+    for (name, w, h) in SCENES {
+        let png = out.join(format!("{name}.png"));
+        let script = Path::new("../shared/corpus/cs488/shraacha__cs488/A4/Assets")
+            .join(format!("{name}.lua"));
+        render_ok(
+            caustic()
+                .current_dir(env!("CARGO_MANIFEST_DIR"))
+                .arg("render")
+                .arg(&script)
+                .arg("-o")
+                .arg(&png),
+        );
+        check_image(&png, w, h);
+    }
+}
+
+#[test]
+fn without_o_the_image_lands_in_the_working_directory_and_meshes_beside_the_script() {
+    let out = out_dir("a4-default-output");
+    let scenes = out.join("scenes");
+    std::fs::create_dir_all(&scenes).unwrap();
+    for f in ["nonhier.lua", "smstdodeca.obj"] {
+        std::fs::copy(a4_assets().join(f), scenes.join(f)).unwrap();
+    }
+    render_ok(
+        caustic()
+            .current_dir(&out)
+            .args(["render", "scenes/nonhier.lua"]),
+    );
+    check_image(&out.join("nonhier.png"), 512, 512);
+    assert!(!scenes.join("nonhier.png").exists());
+}
+
+#[test]
+fn scale_option_resizes_the_image() {
+    let out = out_dir("a4-scale");
+    let png = out.join("n.png");
+    render_ok(
+        caustic()
+            .current_dir(a4_assets())
+            .args(["render", "nonhier.lua", "--scale", "0.25", "-o"])
+            .arg(&png),
+    );
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (128, 128));
+}
+
+#[test]
+fn incompatible_dialect_fails_with_a_located_error() {
+    let script = common::corpus("WeiqiangYu0528__cs488/A5/Assets/primitive.lua");
+    let out = caustic()
+        .arg("render")
+        .arg(&script)
+        .current_dir(out_dir("dialect"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("primitive.lua:1: bad argument #3 to 'material' (number expected, got table)"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn info_summarises_nodes_meshes_and_render_calls() {
+    let out = caustic()
+        .current_dir(a4_assets())
+        .args(["info", "macho-cows.lua"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    // 3 cow instances of one 5,804-triangle mesh, plus the plane and the buckyball.
+    assert!(
+        text.contains("render 1 at macho-cows.lua:105: macho-cows.png 256x256"),
+        "{text}"
+    );
+    assert!(
+        text.contains("camera: eye (0, 2, 30) view (0, 0, -1) up (0, 1, 0) fov 50°"),
+        "{text}"
+    );
+    assert!(text.contains("lights: 1"), "{text}");
+    assert!(
+        text.contains("placed: cube 12, mesh 5, sphere 6 (17530 triangles)"),
+        "{text}"
+    );
+}

@@ -1,0 +1,326 @@
+//! The `gr` API's semantics: transform order, instancing, argument checks, optional extended
+//! arguments, and error messages that name the script line.
+
+mod common;
+
+use caustic::scene::build::{build_scene, count_placements};
+use caustic::scene::desc::{CsgOp, NodeKind};
+use common::{lua_error, out_dir, run_lua, run_lua_in};
+use glam::DVec3;
+
+#[test]
+fn transforms_pre_multiply_in_call_order() {
+    let d = run_lua(
+        "a = gr.node('a'); a:scale(2, 2, 2); a:translate(1, 0, 0)\n\
+         b = gr.node('b'); b:translate(1, 0, 0); b:scale(2, 2, 2)\n\
+         c = gr.node('c'); c:rotate('Z', 90)\n\
+         d = gr.node('d'); gr.translate(d, 0, 0, 5)",
+    )
+    .unwrap();
+    let apply = |i: usize, p: DVec3| d.nodes[i].transform.transform_point3(p);
+    // scale then translate: M = T·S, so (1,0,0) -> (3,0,0); the other order gives (4,0,0).
+    assert!((apply(0, DVec3::X) - DVec3::new(3.0, 0.0, 0.0)).length() < 1e-12);
+    assert!((apply(1, DVec3::X) - DVec3::new(4.0, 0.0, 0.0)).length() < 1e-12);
+    // Right-handed rotation in degrees, upper-case axis accepted: x -> y.
+    assert!((apply(2, DVec3::X) - DVec3::Y).length() < 1e-12);
+    // gr doubles as the node metatable: gr.translate(n, ...) is n:translate(...).
+    assert!((apply(3, DVec3::ZERO) - DVec3::new(0.0, 0.0, 5.0)).length() < 1e-12);
+}
+
+#[test]
+fn instancing_places_a_shared_subtree_once_per_parent() {
+    let dir = common::a4_assets();
+    let src = "
+        m = gr.material({1, 1, 1}, {0, 0, 0}, 0)
+        cow = gr.mesh('cow', 'cow.obj'); cow:set_material(m)
+        again = gr.mesh('again', 'cow.obj'); again:set_material(m)
+        root = gr.node('root')
+        for i = 1, 4 do
+            n = gr.node('inst' .. i); n:translate(3 * i, 0, 0); n:add_child(cow); root:add_child(n)
+        end
+        root:add_child(again)
+        gr.render(root, 'x.png', 8, 8, {0, 0, 30}, {0, 0, -1}, {0, 1, 0}, 50, {0.1, 0.1, 0.1},
+                  {gr.light({0, 10, 10}, {1, 1, 1}, {1, 0, 0})})
+    ";
+    let d = run_lua_in(src, &dir).unwrap();
+    // Both gr.mesh calls read the same file: one mesh, shared.
+    assert_eq!(d.meshes.len(), 1);
+    let counts = count_placements(&d, d.renders[0].root).unwrap();
+    assert_eq!(counts.by_kind["mesh"], 5);
+    assert_eq!(counts.triangles, 5 * 5804);
+    let scene = build_scene(&d, &d.renders[0]).unwrap();
+    assert_eq!(scene.stats.triangles_placed, 5 * 5804);
+    assert_eq!(
+        scene.stats.triangles_stored, 5804,
+        "instances must share one mesh"
+    );
+    // Each instance sits 3 units further along x.
+    let mut xs: Vec<f32> = scene
+        .instances
+        .iter()
+        .map(|i| i.world_from_object.translation.x)
+        .collect();
+    xs.sort_by(f32::total_cmp);
+    assert_eq!(xs, vec![0.0, 3.0, 6.0, 9.0, 12.0]);
+}
+
+#[test]
+fn every_gr_render_call_renders_at_that_moment() {
+    let src = "
+        m = gr.material({1, 1, 1}, {0, 0, 0}, 0)
+        s = gr.sphere('s'); s:set_material(m)
+        root = gr.node('root'); root:add_child(s)
+        l = gr.light({0, 10, 10}, {1, 1, 1}, {1, 0, 0})
+        gr.render(root, 'a.png', 4, 3, {0, 0, 5}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0}, {l})
+        s:translate(1, 0, 0)
+        root:render('b.png', 5, 2, {0, 0, 5}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0}, {l, l})
+    ";
+    let films = common::render_films(src.as_bytes(), "two.lua", std::path::Path::new(".")).unwrap();
+    assert_eq!(films.len(), 2);
+    assert_eq!(
+        (films[0].0.width, films[0].0.height, films[0].0.lights.len()),
+        (4, 3, 1)
+    );
+    assert_eq!(
+        (films[1].0.width, films[1].0.height, films[1].0.lights.len()),
+        (5, 2, 2)
+    );
+    assert_eq!(films[1].0.loc.line, 8);
+}
+
+#[test]
+fn extended_arguments_are_optional_and_stored() {
+    let d = run_lua(
+        "a = gr.material({1, 0, 0}, {0, 0, 0}, 10)\n\
+         b = gr.material({0.2, 0.2, 0.35}, {0.7, 0.7, 0.7}, 25, 0.7, 1.33, 1.05)\n\
+         c = gr.material({1, 1, 1}, {0, 0, 0}, 0, 0, 0, 0)\n\
+         l1 = gr.light({0, 1, 0}, {1, 1, 1}, {1, 0, 0})\n\
+         l2 = gr.light({0, 1, 0}, {1, 1, 1}, {1, 0, 0}, 10000)\n\
+         l3 = gr.light({0, 1, 0}, {1, 1, 1}, {1, 0, 0}, 50, 200000)\n\
+         cyl = gr.cylinder('c')\n\
+         ring = gr.difference('ring', cyl, gr.sphere('s'))\n\
+         j = gr.joint('j', {0, 0, 90}, {-10, 0, 10})",
+    )
+    .unwrap();
+    let m = &d.materials;
+    assert_eq!(
+        (m[0].transparency, m[0].ior, m[0].perlin_scale),
+        (0.0, 1.0, 0.0)
+    );
+    assert_eq!(
+        (m[1].transparency, m[1].ior, m[1].perlin_scale),
+        (0.7, 1.33, 1.05)
+    );
+    assert_eq!(m[1].loc.line, 2);
+    let l = &d.lights;
+    assert_eq!((l[0].power, l[0].photons), (None, None));
+    assert_eq!((l[1].power, l[1].photons), (Some(10000.0), None));
+    assert_eq!((l[2].power, l[2].photons), (Some(50.0), Some(200000)));
+    assert_eq!(d.nodes[0].kind, NodeKind::Cylinder);
+    assert!(matches!(
+        d.nodes[2].kind,
+        NodeKind::Csg {
+            op: CsgOp::Difference,
+            ..
+        }
+    ));
+    assert_eq!(d.nodes[3].kind, NodeKind::Group, "a joint is a plain node");
+}
+
+#[test]
+fn textures_resolve_like_meshes_and_missing_ones_are_located_errors() {
+    let dir = out_dir("lua-textures");
+    image::RgbImage::new(2, 2).save(dir.join("t.png")).unwrap();
+    let d = run_lua_in(
+        "m = gr.material({1,1,1}, {0,0,0}, 0, 0, 1, 0, 't.png')",
+        &dir,
+    )
+    .unwrap();
+    assert_eq!(
+        d.materials[0].texture.as_deref(),
+        Some(dir.join("t.png").as_path())
+    );
+    let e = run_lua_in(
+        "\nm = gr.material({1,1,1}, {0,0,0}, 0, 0, 1, 0, 't.png', 'nope.png')",
+        &dir,
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("test.lua:2: bump map 'nope.png' not found"),
+        "{e}"
+    );
+}
+
+#[test]
+fn tuple_and_number_checks_follow_lauxlib() {
+    assert_eq!(
+        lua_error("s = gr.nh_sphere('s', {1, 2}, 3)"),
+        "test.lua:1: bad argument #2 to 'nh_sphere' (N-tuple expected)"
+    );
+    assert_eq!(
+        lua_error("\n\ns = gr.nh_sphere('s', {1, 2, 'x'}, 3)"),
+        "test.lua:3: bad argument #2 to 'nh_sphere' (entry 3: number expected, got string)"
+    );
+    assert_eq!(
+        lua_error("s = gr.nh_sphere('s', {0, 0, 0})"),
+        "test.lua:1: bad argument #3 to 'nh_sphere' (number expected, got no value)"
+    );
+    assert_eq!(
+        lua_error("s = gr.nh_sphere('s', {0, 0, 0}, nil)"),
+        "test.lua:1: bad argument #3 to 'nh_sphere' (number expected, got nil)"
+    );
+    // Numeric strings and trailing commas are numbers and tuples; leading zeros are fine.
+    let d = run_lua("s = gr.nh_sphere(7, {0, '-085', 0,}, '10')").unwrap();
+    assert_eq!(d.nodes[0].name, "7");
+    assert_eq!(
+        d.nodes[0].kind,
+        NodeKind::NhSphere {
+            center: DVec3::new(0.0, -85.0, 0.0),
+            radius: 10.0
+        }
+    );
+    // NaN and infinity are rejected.
+    assert_eq!(
+        lua_error("s = gr.nh_sphere('s', {0, 0, 0}, 0/0)"),
+        "test.lua:1: bad argument #3 to 'nh_sphere' (finite number expected, got NaN)"
+    );
+    assert_eq!(
+        lua_error("s = gr.nh_box('b', {0, math.huge, 0}, 1)"),
+        "test.lua:1: bad argument #2 to 'nh_box' (entry 2: finite number expected, got inf)"
+    );
+}
+
+#[test]
+fn node_methods_check_their_arguments_and_number_them_like_lauxlib() {
+    // Method calls number arguments after self, as lauxlib does.
+    assert_eq!(
+        lua_error("n = gr.node('n')\nn:rotate('Q', 30)"),
+        "test.lua:2: bad argument #1 to 'rotate' (Axis must be x, y or z)"
+    );
+    assert_eq!(
+        lua_error("n = gr.node('n')\ngr.rotate(n, 'xy', 30)"),
+        "test.lua:2: bad argument #2 to 'rotate' (Single character expected)"
+    );
+    assert_eq!(
+        lua_error("n = gr.node('n')\nm = gr.material({1,1,1}, {0,0,0}, 0)\nn:set_material(m)"),
+        "test.lua:3: calling 'set_material' on bad self (Geometry node expected)"
+    );
+    assert_eq!(
+        lua_error("n = gr.node('n')\nm = gr.material({1,1,1}, {0,0,0}, 0)\ngr.set_material(n, m)"),
+        "test.lua:3: bad argument #1 to 'set_material' (Geometry node expected)"
+    );
+    assert_eq!(
+        lua_error("m = gr.material({1,1,1}, {0,0,0}, 0)\ngr.add_child(m, gr.node('x'))"),
+        "test.lua:2: bad argument #1 to 'add_child' (gr.node expected, got gr.material)"
+    );
+    assert_eq!(
+        lua_error("n = gr.node('n')\nn:translate(1, 2)"),
+        "test.lua:2: bad argument #3 to 'translate' (number expected, got no value)"
+    );
+    assert_eq!(
+        lua_error("n = gr.node('n')\nn:frobnicate()"),
+        "test.lua:2: gr.node has no method 'frobnicate'"
+    );
+}
+
+#[test]
+fn unknown_functions_and_lua_errors_name_the_line() {
+    let e = lua_error("x = 1\ncone = gr.cone('c')");
+    assert!(e.starts_with("test.lua:2: unknown function gr.cone"), "{e}");
+    let e = lua_error("x = 1\n\nx = = 2");
+    assert!(e.starts_with("test.lua:3:"), "{e}");
+    let e = lua_error("error('boom')");
+    assert!(e.starts_with("test.lua:1: boom"), "{e}");
+    // The standard library is there, with the legacy aliases.
+    run_lua(
+        "assert(io and os and string and math and table and debug and coroutine and utf8)\n\
+             assert(unpack == table.unpack and string.gfind == string.gmatch)\n\
+             assert(debug.getregistry == nil and debug.traceback ~= nil)",
+    )
+    .unwrap();
+}
+
+#[test]
+fn render_arguments_are_validated() {
+    let pre = "m = gr.material({1,1,1}, {0,0,0}, 0)\nr = gr.node('r')\nl = gr.light({0,0,0}, {1,1,1}, {1,0,0})\n";
+    let call = |w: &str, h: &str, view: &str, lights: &str| {
+        lua_error(&format!(
+            "{pre}gr.render(r, 'x.png', {w}, {h}, {{0,0,0}}, {view}, {{0,1,0}}, 50, {{0,0,0}}, {lights})"
+        ))
+    };
+    assert_eq!(
+        call("0", "10", "{0,0,-1}", "{l}"),
+        "test.lua:4: bad argument #3 to 'render' (image size must be in [1, 65535] pixels, got 0)"
+    );
+    assert_eq!(
+        call("10", "-5", "{0,0,-1}", "{l}"),
+        "test.lua:4: bad argument #4 to 'render' (image size must be in [1, 65535] pixels, got -5)"
+    );
+    assert_eq!(
+        call("10", "10", "{0,0,-1}", "{}"),
+        "test.lua:4: bad argument #10 to 'render' (Tuple of lights expected)"
+    );
+    assert_eq!(
+        call("10", "10", "{0,0,-1}", "{m}"),
+        "test.lua:4: bad argument #10 to 'render' (Tuple of lights expected (entry 1 is a gr.material))"
+    );
+    assert_eq!(
+        call("10", "10", "{0,3,0}", "{l}"),
+        "test.lua:4: bad argument #7 to 'render' (up must not be zero or parallel to the view direction)"
+    );
+    // C++ int truncation: 10.9 renders 10 pixels wide.
+    let d = run_lua(&format!("{pre}gr.render(r, 'x.png', 10.9, 3, {{0,0,0}}, {{0,0,-1}}, {{0,1,0}}, 50, {{0,0,0}}, {{l}})")).unwrap();
+    assert_eq!((d.renders[0].width, d.renders[0].height), (10, 3));
+}
+
+#[test]
+fn missing_and_malformed_meshes_name_the_file_and_line() {
+    let dir = out_dir("lua-meshes");
+    let e = run_lua_in("\nm = gr.mesh('m', 'nowhere.obj')", &dir)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("test.lua:2: mesh file 'nowhere.obj' not found"),
+        "{e}"
+    );
+    std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap();
+    let e = run_lua_in("m = gr.mesh('m', 'bad.obj')", &dir)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("test.lua:1: cannot load mesh 'bad.obj': "),
+        "{e}"
+    );
+    assert!(e.contains("bad.obj:4:"), "the OBJ line must be named: {e}");
+}
+
+#[test]
+fn add_child_cycles_are_reported_not_followed() {
+    let src = "a = gr.node('a')\nb = gr.node('b')\na:add_child(b)\nb:add_child(a)\n\
+               gr.render(a, 'x.png', 4, 4, {0,0,5}, {0,0,-1}, {0,1,0}, 50, {0,0,0}, {gr.light({0,0,0}, {1,1,1}, {1,0,0})})";
+    let d = run_lua(src).unwrap();
+    let e = count_placements(&d, d.renders[0].root)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("test.lua:4: node 'a' (made at test.lua:1) is its own ancestor"),
+        "{e}"
+    );
+    assert_eq!(
+        lua_error("a = gr.node('a')\na:add_child(a)"),
+        "test.lua:2: bad argument #1 to 'add_child' (a node cannot be its own child)"
+    );
+}
+
+#[test]
+fn legacy_inline_meshes_are_accepted() {
+    let d = run_lua("m = gr.mesh('quad', {{0,0,0}, {1,0,0}, {1,1,0}, {0,1,0}}, {{0, 1, 2, 3}})")
+        .unwrap();
+    assert_eq!(d.meshes[0].data.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+    let e = lua_error("m = gr.mesh('q', {{0,0,0}, {1,0,0}, {1,1,0}}, {{0, 1, 3}})");
+    assert_eq!(
+        e,
+        "test.lua:1: bad argument #3 to 'mesh' (face 1: index 3 out of range (0..3))"
+    );
+}

@@ -324,3 +324,39 @@ fn legacy_inline_meshes_are_accepted() {
         "test.lua:1: bad argument #3 to 'mesh' (face 1: index 3 out of range (0..3))"
     );
 }
+
+#[test]
+fn degenerate_and_extreme_transforms_are_skipped_or_rejected_not_traced() {
+    let pre = "m = gr.material({1,1,1}, {0,0,0}, 0)\nr = gr.node('r')\n";
+    let post = "\ngr.render(r, 'x.png', 4, 4, {0,0,5}, {0,0,-1}, {0,1,0}, 50, {0,0,0}, {gr.light({0,0,5}, {1,1,1}, {1,0,0})})";
+    let build = |body: &str| {
+        let d = run_lua(&format!("{pre}{body}{post}")).unwrap();
+        build_scene(&d, &d.renders[0]).map(|s| s.instances.len())
+    };
+    // A zero scale flattens the sphere: nothing to draw, with a warning, not a NaN-filled ray.
+    assert_eq!(
+        build("s = gr.sphere('s'); s:set_material(m); s:scale(0, 1, 1); r:add_child(s)").unwrap(),
+        0
+    );
+    // A scale too small for single precision to invert is skipped the same way.
+    assert_eq!(
+        build(
+            "s = gr.sphere('s'); s:set_material(m); s:scale(1e-41, 1e-41, 1e-41); r:add_child(s)"
+        )
+        .unwrap(),
+        0
+    );
+    // A placement that overflows single precision is an error naming the node's line.
+    let e =
+        build("\ns = gr.sphere('s'); s:set_material(m); s:translate(1e39, 0, 0); r:add_child(s)")
+            .unwrap_err()
+            .to_string();
+    assert!(
+        e.starts_with("test.lua:4: node 's' is placed at a non-finite position"),
+        "{e}"
+    );
+    assert_eq!(
+        build("s = gr.sphere('s'); s:set_material(m); r:add_child(s)").unwrap(),
+        1
+    );
+}

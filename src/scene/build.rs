@@ -381,15 +381,21 @@ fn transform_bounds(m: &DAffine3, b: Bounds) -> Bounds {
     out
 }
 
-/// Returns true when `m` can be inverted in single precision without losing the shape.
+/// Returns true when the linear part of `m` and its inverse both fit single precision and `m`
+/// does not flatten space (a zero or vanishing scale).
 fn is_invertible(m: &DAffine3) -> bool {
+    let fits = |a: &DMat3| a.to_cols_array().iter().all(|x| x.abs() < f32::MAX as f64);
     let det = m.matrix3.determinant();
     let scale = m
         .matrix3
         .to_cols_array()
         .iter()
         .fold(0.0f64, |a, x| a.max(x.abs()));
-    det.is_finite() && det.abs() > (scale * 1e-7).powi(3) && det != 0.0
+    det.is_finite()
+        && det != 0.0
+        && det.abs() > (scale * 1e-7).powi(3)
+        && fits(&m.matrix3)
+        && fits(&m.matrix3.inverse())
 }
 
 impl Builder<'_> {
@@ -448,7 +454,8 @@ impl Builder<'_> {
             }
         };
         let bounds = transform_bounds(&world, object_bounds);
-        if !bounds.is_finite() {
+        if !bounds.is_finite() || !to_f32(world).is_finite() || !to_f32(world.inverse()).is_finite()
+        {
             return Err(Error::at(
                 &node.loc,
                 format!(

@@ -10,7 +10,7 @@ else
   echo "check: rustfmt is not installed; skipping the format check" >&2
 fi
 if cargo clippy --version >/dev/null 2>&1; then
-  cargo clippy --release --all-targets --locked -- -D warnings
+  cargo clippy --release --workspace --all-targets --locked -- -D warnings
 else
   echo "check: clippy is not installed; skipping lints" >&2
 fi

@@ -18,8 +18,31 @@ pub struct MeshData {
     pub uvs: Vec<Vec2>,
     /// Triangles as indices into `positions` (always in range).
     pub triangles: Vec<[u32; 3]>,
+    /// Materials the file defines (OBJ `usemtl`/MTL, glTF materials), used where the script sets none.
+    pub materials: Vec<MeshMaterial>,
+    /// Per-triangle index into `materials`, parallel to `triangles`, or empty when the file has none.
+    pub triangle_materials: Vec<u32>,
     /// The file this mesh was read from, for messages.
     pub source: PathBuf,
+}
+
+/// A material carried by a mesh file, in the terms of `gr.material`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshMaterial {
+    /// The file's name for it, for messages.
+    pub name: String,
+    /// Diffuse colour (OBJ `Kd`, glTF base colour).
+    pub kd: Vec3,
+    /// Specular colour (OBJ `Ks`; glTF: approximated from metallic/roughness).
+    pub ks: Vec3,
+    /// Phong exponent (OBJ `Ns`; glTF: approximated from roughness).
+    pub shininess: f32,
+    /// Transparency in [0, 1] (OBJ `1 - d`, glTF `KHR_materials_transmission`).
+    pub transparency: f32,
+    /// Index of refraction (OBJ `Ni`, glTF `KHR_materials_ior`, default 1.5 for glTF).
+    pub ior: f32,
+    /// Texture replacing `kd` (OBJ `map_Kd`, glTF base colour texture), resolved to a path.
+    pub texture: Option<PathBuf>,
 }
 
 impl MeshData {

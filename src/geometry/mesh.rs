@@ -1,10 +1,14 @@
-//! Triangle meshes in object space: the plain data every loader produces.
+//! Triangle meshes in object space: the plain data every loader produces ([`MeshData`]) and the
+//! traceable form with its own BVH ([`MeshGeom`]), the bottom level of the scene's two-level BVH.
 //!
 //! A [`MeshData`] is shared by every node that instances it (`Arc`), so a mesh
 //! placed ten times is stored once. Vertex attributes are indexed by one index
 //! per corner (loaders unify `v/vt/vn` triples into single vertices).
 
-use glam::{Vec2, Vec3};
+use crate::accel::{Bounds, Bvh};
+use crate::geometry::Ray;
+use crate::geometry::triangle::{self, RayShear, TriangleHit};
+use glam::{Vec2, Vec3, Vec3A};
 use std::path::PathBuf;
 
 /// A triangle mesh as loaded from a file, in the object space of its node.
@@ -49,5 +53,82 @@ impl MeshData {
     /// Returns the number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
+    }
+}
+
+/// A mesh ready for tracing: attributes in object space, triangles reordered into BVH order.
+pub struct MeshGeom {
+    pub positions: Vec<Vec3A>,
+    /// Per-vertex normals, or empty for face normals.
+    pub normals: Vec<Vec3A>,
+    /// Per-vertex texture coordinates, or empty.
+    pub uvs: Vec<Vec2>,
+    /// Vertex indices, in BVH order: the BVH's leaf index `i` is triangle `i`.
+    pub triangles: Vec<[u32; 3]>,
+    pub bvh: Bvh,
+    pub bounds: Bounds,
+}
+
+impl MeshGeom {
+    /// Builds the mesh's BVH; positions must be finite.
+    pub fn new(data: &MeshData) -> MeshGeom {
+        let positions: Vec<Vec3A> = data.positions.iter().map(|&p| p.into()).collect();
+        let boxes: Vec<Bounds> = data
+            .triangles
+            .iter()
+            .map(|t| {
+                t.iter()
+                    .fold(Bounds::EMPTY, |b, &i| b.grow(positions[i as usize]))
+            })
+            .collect();
+        let bvh = Bvh::build(&boxes);
+        let triangles = bvh
+            .order()
+            .iter()
+            .map(|&i| data.triangles[i as usize])
+            .collect();
+        let bounds = boxes.iter().fold(Bounds::EMPTY, |a, &b| a.union(b));
+        MeshGeom {
+            positions,
+            normals: data.normals.iter().map(|&n| n.into()).collect(),
+            uvs: data.uvs.clone(),
+            triangles,
+            bvh,
+            bounds,
+        }
+    }
+
+    fn vertices(&self, tri: u32) -> [Vec3A; 3] {
+        self.triangles[tri as usize].map(|i| self.positions[i as usize])
+    }
+
+    /// Returns the closest triangle hit by an object-space ray and its barycentrics.
+    pub fn intersect(&self, ray: &Ray) -> Option<(u32, TriangleHit)> {
+        let shear = RayShear::new(ray);
+        let mut best = None;
+        self.bvh.closest(ray, |r, i| {
+            let [a, b, c] = self.vertices(i as u32);
+            match triangle::intersect(&shear, a, b, c, r.tmin, r.tmax) {
+                Some(h) => {
+                    best = Some((i as u32, h));
+                    h.t
+                }
+                None => f32::INFINITY,
+            }
+        });
+        best
+    }
+
+    /// Returns the `t` of some triangle on the ray within `(tmin, tmax)` (any hit, not the closest).
+    pub fn any_hit(&self, ray: &Ray) -> Option<f32> {
+        let shear = RayShear::new(ray);
+        let mut found = None;
+        self.bvh.any(ray, |r, i| {
+            let [a, b, c] = self.vertices(i as u32);
+            let t = triangle::intersect(&shear, a, b, c, r.tmin, r.tmax).map(|h| h.t);
+            found = found.or(t);
+            t.unwrap_or(f32::INFINITY)
+        });
+        found
     }
 }

@@ -13,13 +13,13 @@
 use crate::accel::{Bounds, Bvh};
 use crate::error::{Error, Loc, Result};
 use crate::geometry::csg::{CsgNode, CsgTree, LeafShape};
-use crate::geometry::mesh::MeshData;
-use crate::geometry::triangle::{self, RayShear, TriangleHit};
+use crate::geometry::mesh::MeshGeom;
+use crate::geometry::triangle;
 use crate::geometry::{Interval, Ray, cube, cylinder, sphere};
 use crate::light::PointLight;
 use crate::material::Material;
 use crate::scene::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
-use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3A};
+use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec3A};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
@@ -52,83 +52,6 @@ pub struct Instance {
     pub material: u32,
     /// The geometry node this instance places.
     pub node: NodeId,
-}
-
-/// A mesh ready for tracing: attributes in object space, triangles reordered into BVH order.
-pub struct MeshGeom {
-    pub positions: Vec<Vec3A>,
-    /// Per-vertex normals, or empty for face normals.
-    pub normals: Vec<Vec3A>,
-    /// Per-vertex texture coordinates, or empty.
-    pub uvs: Vec<Vec2>,
-    /// Vertex indices, in BVH order: the BVH's leaf index `i` is triangle `i`.
-    pub triangles: Vec<[u32; 3]>,
-    pub bvh: Bvh,
-    pub bounds: Bounds,
-}
-
-impl MeshGeom {
-    /// Builds the mesh's BVH; positions must be finite.
-    pub fn new(data: &MeshData) -> MeshGeom {
-        let positions: Vec<Vec3A> = data.positions.iter().map(|&p| p.into()).collect();
-        let boxes: Vec<Bounds> = data
-            .triangles
-            .iter()
-            .map(|t| {
-                t.iter()
-                    .fold(Bounds::EMPTY, |b, &i| b.grow(positions[i as usize]))
-            })
-            .collect();
-        let bvh = Bvh::build(&boxes);
-        let triangles = bvh
-            .order()
-            .iter()
-            .map(|&i| data.triangles[i as usize])
-            .collect();
-        let bounds = boxes.iter().fold(Bounds::EMPTY, |a, &b| a.union(b));
-        MeshGeom {
-            positions,
-            normals: data.normals.iter().map(|&n| n.into()).collect(),
-            uvs: data.uvs.clone(),
-            triangles,
-            bvh,
-            bounds,
-        }
-    }
-
-    fn vertices(&self, tri: u32) -> [Vec3A; 3] {
-        self.triangles[tri as usize].map(|i| self.positions[i as usize])
-    }
-
-    /// Returns the closest triangle hit by an object-space ray and its barycentrics.
-    pub fn intersect(&self, ray: &Ray) -> Option<(u32, TriangleHit)> {
-        let shear = RayShear::new(ray);
-        let mut best = None;
-        self.bvh.closest(ray, |r, i| {
-            let [a, b, c] = self.vertices(i as u32);
-            match triangle::intersect(&shear, a, b, c, r.tmin, r.tmax) {
-                Some(h) => {
-                    best = Some((i as u32, h));
-                    h.t
-                }
-                None => f32::INFINITY,
-            }
-        });
-        best
-    }
-
-    /// Returns the `t` of some triangle on the ray within `(tmin, tmax)` (any hit, not the closest).
-    pub fn any_hit(&self, ray: &Ray) -> Option<f32> {
-        let shear = RayShear::new(ray);
-        let mut found = None;
-        self.bvh.any(ray, |r, i| {
-            let [a, b, c] = self.vertices(i as u32);
-            let t = triangle::intersect(&shear, a, b, c, r.tmin, r.tmax).map(|h| h.t);
-            found = found.or(t);
-            t.unwrap_or(f32::INFINITY)
-        });
-        found
-    }
 }
 
 /// A ray's closest intersection, enough to compute the surface on demand.

@@ -7,6 +7,11 @@
 //! so the inner faces of `a − b` face out of the solid. Every boundary keeps the material of the
 //! leaf that made it.
 //!
+//! Coincident faces (a box minus a cylinder of exactly the box's height, two boxes sharing a face)
+//! meet at parameters that differ only by rounding. Boundaries closer than a tolerance of about
+//! 1e-6 of the ray's scale count as the same point, so such faces leave no sliver spans (which
+//! would render as speckles) and unions leave no internal faces.
+//!
 //! ```lua
 //! ring = gr.difference('ring', gr.cylinder('outer'), inner_cylinder)
 //! ```
@@ -80,7 +85,8 @@ pub struct CsgTree {
 impl CsgTree {
     /// Returns the solid's spans along the full line `o + t·d` (CSG frame), sorted and disjoint.
     pub fn spans(&self, o: Vec3A, d: Vec3A) -> Vec<Span> {
-        self.spans_of(self.root, o, d)
+        let eps = Eps::for_ray(o, d);
+        self.spans_of(self.root, o, d, eps)
     }
 
     /// Returns the first boundary with `t` in `(tmin, tmax)`.
@@ -100,7 +106,7 @@ impl CsgTree {
         None
     }
 
-    fn spans_of(&self, id: u32, o: Vec3A, d: Vec3A) -> Vec<Span> {
+    fn spans_of(&self, id: u32, o: Vec3A, d: Vec3A, eps: Eps) -> Vec<Span> {
         match &self.nodes[id as usize] {
             CsgNode::Leaf {
                 shape,
@@ -126,18 +132,40 @@ impl CsgTree {
                     .collect()
             }
             CsgNode::Op { op, a, b } => {
-                let sa = self.spans_of(*a, o, d);
+                let sa = self.spans_of(*a, o, d, eps);
                 if sa.is_empty() && *op != CsgOp::Union {
                     return sa;
                 }
-                let sb = self.spans_of(*b, o, d);
+                let sb = self.spans_of(*b, o, d, eps);
                 match op {
-                    CsgOp::Union => union(sa, sb),
-                    CsgOp::Intersection => intersection(&sa, &sb),
-                    CsgOp::Difference => difference(&sa, &sb),
+                    CsgOp::Union => union(sa, sb, eps),
+                    CsgOp::Intersection => intersection(&sa, &sb, eps),
+                    CsgOp::Difference => difference(&sa, &sb, eps),
                 }
             }
         }
+    }
+}
+
+/// The tolerance below which two boundary parameters count as the same point.
+#[derive(Clone, Copy, Debug)]
+pub struct Eps {
+    /// Absolute part, in ray-parameter units.
+    base: f64,
+}
+
+impl Eps {
+    /// Returns the tolerance for the line `o + t·d` in the CSG frame.
+    pub fn for_ray(o: Vec3A, d: Vec3A) -> Eps {
+        let len = d.length().max(f32::MIN_POSITIVE) as f64;
+        Eps {
+            base: 1e-6 * (o.abs().max_element() as f64).max(1.0) / len,
+        }
+    }
+
+    /// Returns true when `a` lies clearly before `b`.
+    fn before(self, a: f64, b: f64) -> bool {
+        a < b - (self.base + 1e-7 * b.abs().max(a.abs()))
     }
 }
 
@@ -149,13 +177,13 @@ fn flipped(b: Boundary) -> Boundary {
 }
 
 /// Returns `a ∪ b` for sorted, disjoint span lists.
-pub fn union(mut a: Vec<Span>, b: Vec<Span>) -> Vec<Span> {
+pub fn union(mut a: Vec<Span>, b: Vec<Span>, eps: Eps) -> Vec<Span> {
     a.extend(b);
     a.sort_by(|x, y| x.enter.t.total_cmp(&y.enter.t));
     let mut out: Vec<Span> = Vec::with_capacity(a.len());
     for s in a {
         match out.last_mut() {
-            Some(last) if s.enter.t <= last.exit.t => {
+            Some(last) if !eps.before(last.exit.t, s.enter.t) => {
                 if s.exit.t > last.exit.t {
                     last.exit = s.exit;
                 }
@@ -167,7 +195,7 @@ pub fn union(mut a: Vec<Span>, b: Vec<Span>) -> Vec<Span> {
 }
 
 /// Returns `a ∩ b` for sorted, disjoint span lists.
-pub fn intersection(a: &[Span], b: &[Span]) -> Vec<Span> {
+pub fn intersection(a: &[Span], b: &[Span], eps: Eps) -> Vec<Span> {
     let (mut i, mut j) = (0, 0);
     let mut out = Vec::new();
     while i < a.len() && j < b.len() {
@@ -181,7 +209,7 @@ pub fn intersection(a: &[Span], b: &[Span]) -> Vec<Span> {
         } else {
             b[j].exit
         };
-        if enter.t < exit.t {
+        if eps.before(enter.t, exit.t) {
             out.push(Span { enter, exit });
         }
         if a[i].exit.t <= b[j].exit.t {
@@ -194,18 +222,18 @@ pub fn intersection(a: &[Span], b: &[Span]) -> Vec<Span> {
 }
 
 /// Returns `a − b` for sorted, disjoint span lists; `b`'s boundaries get flipped normals.
-pub fn difference(a: &[Span], b: &[Span]) -> Vec<Span> {
+pub fn difference(a: &[Span], b: &[Span], eps: Eps) -> Vec<Span> {
     let mut out = Vec::new();
     for s in a {
         let mut cur = s.enter;
         for r in b {
-            if r.exit.t <= cur.t {
+            if !eps.before(cur.t, r.exit.t) {
                 continue;
             }
-            if r.enter.t >= s.exit.t {
+            if !eps.before(r.enter.t, s.exit.t) {
                 break;
             }
-            if r.enter.t > cur.t {
+            if eps.before(cur.t, r.enter.t) {
                 out.push(Span {
                     enter: cur,
                     exit: flipped(r.enter),
@@ -213,7 +241,7 @@ pub fn difference(a: &[Span], b: &[Span]) -> Vec<Span> {
             }
             cur = flipped(r.exit);
         }
-        if cur.t < s.exit.t {
+        if eps.before(cur.t, s.exit.t) {
             out.push(Span {
                 enter: cur,
                 exit: s.exit,
@@ -248,16 +276,42 @@ mod tests {
     fn interval_operations_match_hand_computed_sets() {
         let a = vec![span(0.0, 4.0, 0), span(6.0, 8.0, 0)];
         let b = vec![span(1.0, 2.0, 1), span(3.0, 7.0, 1)];
-        assert_eq!(ts(&union(a.clone(), b.clone())), vec![(0.0, 8.0)]);
+        let eps = Eps::for_ray(Vec3A::ZERO, Vec3A::X);
+        assert_eq!(ts(&union(a.clone(), b.clone(), eps)), vec![(0.0, 8.0)]);
         assert_eq!(
-            ts(&intersection(&a, &b)),
+            ts(&intersection(&a, &b, eps)),
             vec![(1.0, 2.0), (3.0, 4.0), (6.0, 7.0)]
         );
-        let d = difference(&a, &b);
+        let d = difference(&a, &b, eps);
         assert_eq!(ts(&d), vec![(0.0, 1.0), (2.0, 3.0), (7.0, 8.0)]);
         // The carved faces come from b: its material, normals flipped to face out of the solid.
         assert_eq!((d[0].exit.material, d[0].exit.normal), (1, -Vec3A::X));
-        assert_eq!(ts(&difference(&b, &a)), vec![(4.0, 6.0)]);
+        assert_eq!(ts(&difference(&b, &a, eps)), vec![(4.0, 6.0)]);
+    }
+
+    #[test]
+    fn coincident_boundaries_leave_no_slivers() {
+        let eps = Eps::for_ray(Vec3A::ZERO, Vec3A::X);
+        let wobble = 3e-13;
+        // A hole exactly as tall as the slab it cuts: nothing is left along the hole's axis.
+        let slab = vec![span(1.0, 2.0, 0)];
+        let hole = vec![span(1.0 + wobble, 2.0 - wobble, 1)];
+        assert!(difference(&slab, &hole, eps).is_empty());
+        let hole = vec![span(1.0 - wobble, 2.0 + wobble, 1)];
+        assert!(difference(&slab, &hole, eps).is_empty());
+        // Two boxes sharing a face: one span, no internal face.
+        assert_eq!(
+            ts(&union(
+                vec![span(0.0, 1.0, 0)],
+                vec![span(1.0 + wobble, 2.0, 0)],
+                eps
+            )),
+            vec![(0.0, 2.0)]
+        );
+        // Touching solids do not intersect in a sliver.
+        assert!(intersection(&[span(0.0, 1.0, 0)], &[span(1.0 - wobble, 2.0, 0)], eps).is_empty());
+        // Genuinely thin pieces above the tolerance survive.
+        assert_eq!(difference(&slab, &[span(1.0 + 1e-3, 2.0, 1)], eps).len(), 1);
     }
 
     #[test]

@@ -116,14 +116,11 @@ fn render_command(args: RenderArgs) -> Result<()> {
         if stats {
             let b = &scene.stats;
             println!("image {}: {w}x{h} from {}", out.display(), r.loc);
+            let kinds: Vec<String> = b.by_kind.iter().map(|(k, v)| format!("{k} {v}")).collect();
             println!(
-                "  scene: {} instances (sphere {}, cube {}, cylinder {}, mesh {}, csg {}), {} lights",
+                "  scene: {} instances ({}), {} lights",
                 scene.instances.len(),
-                b.by_kind[0],
-                b.by_kind[1],
-                b.by_kind[2],
-                b.by_kind[3],
-                b.by_kind[4],
+                kinds.join(", "),
                 scene.lights.len()
             );
             println!(

@@ -38,6 +38,7 @@ fn scene_at(scale: f64) -> Scene {
          s = gr.nh_sphere('s', {{-3, 0, 0}}, 1.3); s:set_material(m); root:add_child(s)\n\
          b = gr.cube('b'); b:set_material(m); b:rotate('y', 30); b:translate(0, -0.5, -3); root:add_child(b)\n\
          c = gr.cylinder('c'); c:set_material(m); c:rotate('x', 70); c:translate(3, 0, 0); root:add_child(c)\n\
+         k = gr.cone('k'); k:set_material(m); k:scale(1.5, 1.5, 2); k:rotate('x', -100); k:translate(0, -3, 0); root:add_child(k)\n\
          k1 = gr.cube('k1'); k1:set_material(m); k1:translate(-0.5, -0.5, -0.5); k1:scale(1.6, 1.6, 1.6)\n\
          k2 = gr.sphere('k2'); k2:set_material(m)\n\
          csg = gr.difference('csg', k1, k2); csg:translate(0, 0, 3); root:add_child(csg)\n\
@@ -65,7 +66,7 @@ fn spawn_from_hits(scale: f32, primaries: usize, seed: u64) -> (usize, usize) {
     let centre = Vec3A::splat(3.0 * scale);
     let mut rng = Rng(seed);
     let (mut spawned, mut rehits) = (0, 0);
-    let mut kinds = [0usize; 5];
+    let mut kinds = [0usize; 6];
     for _ in 0..primaries {
         // From a sphere of radius 20 around the scene towards a random point inside it.
         let origin = centre + rng.direction() * 20.0 * scale;
@@ -82,6 +83,7 @@ fn spawn_from_hits(scale: f32, primaries: usize, seed: u64) -> (usize, usize) {
             caustic::scene::Shape::Cylinder => 2,
             caustic::scene::Shape::Mesh(_) => 3,
             caustic::scene::Shape::Csg(_) => 4,
+            caustic::scene::Shape::Cone => 5,
         }] += 1;
         for side in [1.0f32, -1.0] {
             let mut w = rng.direction();

@@ -16,7 +16,7 @@
 //! ring = gr.difference('ring', gr.cylinder('outer'), inner_cylinder)
 //! ```
 
-use super::{Crossing, Interval, cube, cylinder, sphere};
+use super::{Crossing, Interval, cone, cube, cylinder, sphere};
 use crate::scene::desc::CsgOp;
 use glam::{Affine3A, Mat3A, Vec3A};
 
@@ -26,6 +26,7 @@ pub enum LeafShape {
     Sphere,
     Cube,
     Cylinder,
+    Cone,
 }
 
 impl LeafShape {
@@ -35,6 +36,7 @@ impl LeafShape {
             LeafShape::Sphere => sphere::interval(o, d),
             LeafShape::Cube => cube::interval(o, d),
             LeafShape::Cylinder => cylinder::interval(o, d),
+            LeafShape::Cone => cone::interval(o, d),
         }
     }
 }

@@ -4,6 +4,7 @@
 //! instances can transform rays without renormalising them. Normals returned here are geometric,
 //! unnormalised object-space normals; [`crate::scene`] turns them into world-space shading frames.
 
+pub mod cone;
 pub mod csg;
 pub mod cube;
 pub mod cylinder;

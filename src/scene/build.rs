@@ -15,7 +15,7 @@ use crate::error::{Error, Loc, Result};
 use crate::geometry::csg::{CsgNode, CsgTree, LeafShape};
 use crate::geometry::mesh::MeshGeom;
 use crate::geometry::triangle;
-use crate::geometry::{Interval, Ray, cube, cylinder, sphere};
+use crate::geometry::{Interval, Ray, cone, cube, cylinder, sphere};
 use crate::light::PointLight;
 use crate::material::Material;
 use crate::scene::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
@@ -34,10 +34,25 @@ pub enum Shape {
     Sphere,
     Cube,
     Cylinder,
+    Cone,
     /// Index into [`Scene::meshes`].
     Mesh(u32),
     /// Index into [`Scene::csgs`].
     Csg(u32),
+}
+
+impl Shape {
+    /// Returns the kind's name, as `--stats` prints it.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Shape::Sphere => "sphere",
+            Shape::Cube => "cube",
+            Shape::Cylinder => "cylinder",
+            Shape::Cone => "cone",
+            Shape::Mesh(_) => "mesh",
+            Shape::Csg(_) => "csg",
+        }
+    }
 }
 
 /// One placement of a shape in the world.
@@ -85,8 +100,8 @@ pub struct SurfaceHit {
 /// Counters describing a built scene, for `--stats` and `caustic info`.
 #[derive(Clone, Debug, Default)]
 pub struct BuildStats {
-    /// Instances by kind, in [`Shape`] order: sphere, cube, cylinder, mesh, csg.
-    pub by_kind: [usize; 5],
+    /// Instances by [`Shape::label`].
+    pub by_kind: std::collections::BTreeMap<&'static str, usize>,
     /// Triangles over all mesh instances.
     pub triangles_placed: usize,
     /// Triangles stored once per distinct mesh.
@@ -265,6 +280,7 @@ fn leaf_shape(kind: &NodeKind) -> Option<LeafShape> {
         NodeKind::Sphere | NodeKind::NhSphere { .. } => Some(LeafShape::Sphere),
         NodeKind::Cube | NodeKind::NhBox { .. } => Some(LeafShape::Cube),
         NodeKind::Cylinder => Some(LeafShape::Cylinder),
+        NodeKind::Cone => Some(LeafShape::Cone),
         _ => None,
     }
 }
@@ -273,6 +289,10 @@ fn leaf_bounds(shape: LeafShape) -> Bounds {
     match shape {
         LeafShape::Cube => Bounds {
             min: Vec3A::ZERO,
+            max: Vec3A::ONE,
+        },
+        LeafShape::Cone => Bounds {
+            min: Vec3A::new(-1.0, -1.0, 0.0),
             max: Vec3A::ONE,
         },
         LeafShape::Sphere | LeafShape::Cylinder => Bounds {
@@ -372,6 +392,7 @@ impl Builder<'_> {
                     LeafShape::Sphere => Shape::Sphere,
                     LeafShape::Cube => Shape::Cube,
                     LeafShape::Cylinder => Shape::Cylinder,
+                    LeafShape::Cone => Shape::Cone,
                 };
                 (shape, leaf_bounds(leaf))
             }
@@ -387,14 +408,7 @@ impl Builder<'_> {
                 ),
             ));
         }
-        let kind_slot = match shape {
-            Shape::Sphere => 0,
-            Shape::Cube => 1,
-            Shape::Cylinder => 2,
-            Shape::Mesh(_) => 3,
-            Shape::Csg(_) => 4,
-        };
-        self.stats.by_kind[kind_slot] += 1;
+        *self.stats.by_kind.entry(shape.label()).or_default() += 1;
         let material = match shape {
             // A CSG hit takes the material of the operand hit; the instance's is a fallback.
             Shape::Csg(_) => self.fallback,
@@ -556,6 +570,7 @@ impl Scene {
             Shape::Sphere => analytic(sphere::interval(local.origin, local.dir)),
             Shape::Cube => analytic(cube::interval(local.origin, local.dir)),
             Shape::Cylinder => analytic(cylinder::interval(local.origin, local.dir)),
+            Shape::Cone => analytic(cone::interval(local.origin, local.dir)),
             Shape::Mesh(m) => self.meshes[m as usize]
                 .intersect(&local)
                 .map(|(tri, h)| Hit {

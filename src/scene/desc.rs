@@ -51,6 +51,8 @@ pub enum NodeKind {
     NhBox { corner: DVec3, size: f64 },
     /// `gr.cylinder`: axis z, radius 1, z in [-1, 1], closed by caps at z = ±1.
     Cylinder,
+    /// `gr.cone`: apex at the origin, axis z, radius 1 at z = 1, closed by a cap at z = 1.
+    Cone,
     /// `gr.mesh`: a triangle mesh shared with every other node loaded from the same file.
     Mesh(MeshId),
     /// `gr.union`, `gr.intersection`, `gr.difference`: operands evaluated in this node's frame.
@@ -70,6 +72,7 @@ impl NodeKind {
             NodeKind::Sphere | NodeKind::NhSphere { .. } => "sphere",
             NodeKind::Cube | NodeKind::NhBox { .. } => "cube",
             NodeKind::Cylinder => "cylinder",
+            NodeKind::Cone => "cone",
             NodeKind::Mesh(_) => "mesh",
             NodeKind::Csg { .. } => "csg",
         }

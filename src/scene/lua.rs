@@ -5,6 +5,7 @@
 //!
 //! ```lua
 //! glass = gr.material({0.2, 0.2, 0.2}, {0.05, 0.05, 0.05}, 25, 0.8, 1.85, 0)
+//! cone  = gr.cone('c')   -- apex at the origin, radius 1 at z = 1
 //! ring  = gr.difference('ring', gr.cylinder('outer'), gr.cylinder('inner'))
 //! light = gr.light({0, 0.5, 0}, {0.7, 0.5, 0.9}, {1, 0, 0}, 10000, 200000)
 //! ```
@@ -205,6 +206,7 @@ fn install_gr(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()> {
         ("sphere", |l, s, a| gr_simple(l, s, a, NodeKind::Sphere)),
         ("cube", |l, s, a| gr_simple(l, s, a, NodeKind::Cube)),
         ("cylinder", |l, s, a| gr_simple(l, s, a, NodeKind::Cylinder)),
+        ("cone", |l, s, a| gr_simple(l, s, a, NodeKind::Cone)),
         ("nh_sphere", gr_nh_sphere),
         ("nh_box", gr_nh_box),
         ("mesh", gr_mesh),
@@ -260,6 +262,7 @@ const GR_NAMES: &[&str] = &[
     "sphere",
     "cube",
     "cylinder",
+    "cone",
     "nh_sphere",
     "nh_box",
     "mesh",

@@ -68,6 +68,8 @@ pub struct Boundary {
     pub normal: Vec3A,
     pub material: u32,
     pub face: u8,
+    /// Index in [`CsgTree::nodes`] of the leaf this boundary belongs to.
+    pub leaf: u32,
 }
 
 /// A piece of the solid along the ray: `enter.t <= exit.t`.
@@ -122,6 +124,7 @@ impl CsgTree {
                     t: c.t,
                     normal: *normal_to_csg * c.normal,
                     material: *material,
+                    leaf: id,
                     face: c.face,
                 };
                 shape
@@ -263,6 +266,7 @@ mod tests {
             normal: Vec3A::X,
             material: m,
             face: 0,
+            leaf: 0,
         };
         Span {
             enter: b(t0),

@@ -12,6 +12,7 @@ pub mod mesh;
 pub mod ray;
 pub mod sphere;
 pub mod triangle;
+pub mod uv;
 
 pub use ray::{Ray, offset_ray_origin};
 

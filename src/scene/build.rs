@@ -15,11 +15,12 @@ use crate::error::{Error, Loc, Result};
 use crate::geometry::csg::{CsgNode, CsgTree, LeafShape};
 use crate::geometry::mesh::MeshGeom;
 use crate::geometry::triangle;
+use crate::geometry::uv::analytic_uv;
 use crate::geometry::{Interval, Ray, cone, cube, cylinder, sphere};
 use crate::light::PointLight;
 use crate::material::Material;
 use crate::scene::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
-use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec3A};
+use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3A};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
@@ -93,6 +94,9 @@ pub struct SurfaceHit {
     pub ng: Vec3A,
     /// Unit shading normal (interpolated vertex normals on meshes), on the same side as `ng`.
     pub ns: Vec3A,
+    /// Texture coordinates ([`crate::geometry::uv`] for analytic shapes, interpolated on meshes,
+    /// or the barycentrics `(b1, b2)` for meshes without them).
+    pub uv: Vec2,
     /// Index into [`Scene::materials`].
     pub material: u32,
 }
@@ -588,7 +592,7 @@ impl Scene {
                 .map(|b| Hit {
                     t: b.t as f32,
                     instance: i as u32,
-                    prim: 0,
+                    prim: b.leaf,
                     b1: 0.0,
                     b2: 0.0,
                     normal: b.normal,
@@ -604,7 +608,7 @@ impl Scene {
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
         let inst = &self.instances[hit.instance as usize];
         let local = object_ray(inst, ray);
-        let (p_obj, ng_obj, ns_obj) = match inst.shape {
+        let (p_obj, ng_obj, ns_obj, uv) = match inst.shape {
             Shape::Mesh(m) => {
                 let mesh = &self.meshes[m as usize];
                 let idx = mesh.triangles[hit.prim as usize];
@@ -618,15 +622,41 @@ impl Scene {
                     let [n0, n1, n2] = idx.map(|i| mesh.normals[i as usize]);
                     n0 * w0 + n1 * hit.b1 + n2 * hit.b2
                 };
-                (p, ng, ns)
+                let uv = if mesh.uvs.is_empty() {
+                    Vec2::new(hit.b1, hit.b2)
+                } else {
+                    let [t0, t1, t2] = idx.map(|i| mesh.uvs[i as usize]);
+                    t0 * w0 + t1 * hit.b1 + t2 * hit.b2
+                };
+                (p, ng, ns, uv)
             }
             Shape::Sphere => {
                 // Re-project onto the sphere: the hit point's error then no longer grows with t.
                 let p = local.at(hit.t);
                 let p = p / p.length();
-                (p, p, p)
+                (p, p, p, analytic_uv(LeafShape::Sphere, p, hit.face))
             }
-            _ => (local.at(hit.t), hit.normal, hit.normal),
+            Shape::Csg(c) => {
+                let p = local.at(hit.t);
+                let uv = match &self.csgs[c as usize].nodes[hit.prim as usize] {
+                    CsgNode::Leaf {
+                        shape,
+                        leaf_from_csg,
+                        ..
+                    } => analytic_uv(*shape, leaf_from_csg.transform_point3a(p), hit.face),
+                    CsgNode::Op { .. } => Vec2::ZERO,
+                };
+                (p, hit.normal, hit.normal, uv)
+            }
+            shape => {
+                let p = local.at(hit.t);
+                let leaf = match shape {
+                    Shape::Cube => LeafShape::Cube,
+                    Shape::Cylinder => LeafShape::Cylinder,
+                    _ => LeafShape::Cone,
+                };
+                (p, hit.normal, hit.normal, analytic_uv(leaf, p, hit.face))
+            }
         };
         let p = inst.world_from_object.transform_point3a(p_obj);
         let ng = (inst.normal_to_world * ng_obj).normalize_or_zero();
@@ -646,6 +676,7 @@ impl Scene {
             p,
             ng,
             ns,
+            uv,
             material: hit.material,
         }
     }

@@ -1,0 +1,94 @@
+//! Texture coordinates of the analytic primitives, in object space.
+//!
+//! Images are indexed with v = 0 at the top row (the original project's convention), so every
+//! mapping puts v = 0 at the "top" of its surface:
+//! - sphere: u = ½ + atan2(x, z)/2π around the y axis (u = ½ faces +z), v = acos(y)/π from the
+//!   north pole (+y) to the south pole;
+//! - cube face `2·axis + side`: the face's other two coordinates, both in [0, 1]; ±x faces use
+//!   (z, 1 − y), ±y faces (x, z), ±z faces (x, 1 − y);
+//! - cylinder side: u = ½ + atan2(y, x)/2π around z, v = (1 − z)/2; caps: u = (x + 1)/2,
+//!   v = (1 − y)/2;
+//! - cone side: u as the cylinder's, v = 1 − z (apex at the bottom row); cap as the cylinder's.
+
+use crate::geometry::csg::LeafShape;
+use glam::{Vec2, Vec3A};
+use std::f32::consts::{PI, TAU};
+
+/// Returns the texture coordinates of object-space point `p` on face `face` of `shape`.
+pub fn analytic_uv(shape: LeafShape, p: Vec3A, face: u8) -> Vec2 {
+    let around_z = || 0.5 + p.y.atan2(p.x) / TAU;
+    let disc = || Vec2::new((p.x + 1.0) * 0.5, (1.0 - p.y) * 0.5);
+    let uv = match shape {
+        LeafShape::Sphere => {
+            let n = p.normalize_or_zero();
+            Vec2::new(0.5 + n.x.atan2(n.z) / TAU, n.y.clamp(-1.0, 1.0).acos() / PI)
+        }
+        LeafShape::Cube => match face / 2 {
+            0 => Vec2::new(p.z, 1.0 - p.y),
+            1 => Vec2::new(p.x, p.z),
+            _ => Vec2::new(p.x, 1.0 - p.y),
+        },
+        LeafShape::Cylinder => match face {
+            0 => Vec2::new(around_z(), (1.0 - p.z) * 0.5),
+            _ => disc(),
+        },
+        LeafShape::Cone => match face {
+            0 => Vec2::new(around_z(), 1.0 - p.z),
+            _ => disc(),
+        },
+    };
+    uv.clamp(Vec2::ZERO, Vec2::ONE)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: Vec2, b: Vec2) -> bool {
+        (a - b).length() < 1e-6
+    }
+
+    #[test]
+    fn known_points_map_to_known_coordinates() {
+        assert!(close(
+            analytic_uv(LeafShape::Sphere, Vec3A::Y, 0),
+            Vec2::new(0.5, 0.0)
+        ));
+        assert!(close(
+            analytic_uv(LeafShape::Sphere, Vec3A::Z, 0),
+            Vec2::new(0.5, 0.5)
+        ));
+        assert!(close(
+            analytic_uv(LeafShape::Sphere, Vec3A::X, 0),
+            Vec2::new(0.75, 0.5)
+        ));
+        // At the poles u is arbitrary; v is 0 at the north pole and 1 at the south.
+        assert!((analytic_uv(LeafShape::Sphere, -Vec3A::Y, 0).y - 1.0).abs() < 1e-6);
+        // Cube +z face (face 5): x across, y up with v = 0 at the top.
+        assert!(close(
+            analytic_uv(LeafShape::Cube, Vec3A::new(0.25, 0.9, 1.0), 5),
+            Vec2::new(0.25, 0.1)
+        ));
+        assert!(close(
+            analytic_uv(LeafShape::Cube, Vec3A::new(0.0, 0.3, 0.6), 0),
+            Vec2::new(0.6, 0.7)
+        ));
+        assert!(close(
+            analytic_uv(LeafShape::Cube, Vec3A::new(0.2, 1.0, 0.6), 3),
+            Vec2::new(0.2, 0.6)
+        ));
+        // Cylinder side at angle 0 (the +x side), half way up; cap centre.
+        assert!(close(
+            analytic_uv(LeafShape::Cylinder, Vec3A::new(1.0, 0.0, 0.0), 0),
+            Vec2::new(0.5, 0.5)
+        ));
+        assert!(close(
+            analytic_uv(LeafShape::Cylinder, Vec3A::new(0.0, 0.0, 1.0), 2),
+            Vec2::new(0.5, 0.5)
+        ));
+        assert!(close(
+            analytic_uv(LeafShape::Cone, Vec3A::new(0.0, -0.5, 0.5), 0),
+            Vec2::new(0.25, 0.5)
+        ));
+    }
+}

@@ -2,13 +2,14 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::io::image::write_png;
-use crate::render::render;
+use crate::io::image::{Tonemap, write_image, write_sample_map};
+use crate::render::{Film, RenderOptions, RenderStats, Sampling, Window, render_with};
 use crate::scene::build::{build_scene, count_placements};
 use crate::scene::desc::{RenderDesc, SceneDesc};
 use crate::scene::lua::run_script;
 use clap::{Args, Parser, Subcommand};
 use std::cell::Cell;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::rc::Rc;
 use std::time::Instant;
@@ -27,6 +28,8 @@ pub enum Command {
     Render(RenderArgs),
     /// Run a scene script without rendering and summarise what it describes.
     Info(InfoArgs),
+    /// Assemble tiles rendered with --crop into the full image.
+    Stitch(StitchArgs),
 }
 
 #[derive(Debug, Args)]
@@ -48,6 +51,64 @@ pub struct RenderArgs {
     /// Render at this multiple of the script's image size (0.25 for a quick preview).
     #[arg(long, value_name = "F", default_value_t = 1.0)]
     pub scale: f64,
+    /// Stratified samples per pixel (1 = one ray through the pixel centre, as the course).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub spp: u32,
+    /// Adaptive anti-aliasing: trace pixel corners and refine where they differ (replaces --spp).
+    #[arg(long)]
+    pub adaptive: bool,
+    /// Adaptive: refine a square whose corners differ by more than this in any channel.
+    #[arg(long, value_name = "T", default_value_t = 0.1)]
+    pub aa_threshold: f32,
+    /// Adaptive: split a pixel at most this many times (up to (2^D+1)² rays per pixel).
+    #[arg(long, value_name = "D", default_value_t = 3)]
+    pub aa_depth: u32,
+    /// Also write a grey image of how many camera rays each pixel took (white = most).
+    #[arg(long, value_name = "OUT.png")]
+    pub aa_map: Option<PathBuf>,
+    /// Render only the window x0,y0,x1,y1 (pixels, end exclusive) of each image, as a tile for
+    /// `caustic stitch`.
+    #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop)]
+    pub crop: Option<[u32; 4]>,
+    /// How radiance becomes 8-bit PNG values: clamp (the course's) or srgb (exposure + sRGB curve).
+    #[arg(long, value_enum, default_value_t = TonemapArg::Clamp)]
+    pub tonemap: TonemapArg,
+    /// Exposure in stops for --tonemap srgb (radiance is multiplied by 2^E).
+    #[arg(long, value_name = "E", default_value_t = 0.0)]
+    pub exposure: f32,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// The `--tonemap` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TonemapArg {
+    Clamp,
+    Srgb,
+}
+
+#[derive(Debug, Args)]
+pub struct StitchArgs {
+    /// Tiles written by `caustic render --crop` (PNG), in any order.
+    #[arg(required = true)]
+    pub tiles: Vec<PathBuf>,
+    /// The full image to write.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+}
+
+/// Parses `x0,y0,x1,y1`.
+fn parse_crop(s: &str) -> std::result::Result<[u32; 4], String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u32>().map_err(|e| format!("'{p}': {e}")))
+        .collect::<std::result::Result<_, _>>()?;
+    match v[..] {
+        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok([x0, y0, x1, y1]),
+        [_, _, _, _] => Err("need x0 < x1 and y0 < y1".into()),
+        _ => Err("expected four numbers x0,y0,x1,y1".into()),
+    }
 }
 
 #[derive(Debug, Args)]
@@ -61,6 +122,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render_command(args),
         Command::Info(args) => info_command(args),
+        Command::Stitch(args) => crate::io::image::stitch(&args.tiles, &args.output),
     }
 }
 
@@ -89,7 +151,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let rendered = Rc::new(Cell::new(0u32));
     let count = Rc::clone(&rendered);
     let output = args.output.clone();
-    let (scale, stats) = (args.scale, args.stats);
+    let settings = RenderSettings::from_args(&args)?;
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
         count.set(count.get() + 1);
         let out = match &output {
@@ -102,49 +164,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
                 ));
             }
         };
-        let (w, h) = scaled_size(r, scale);
-        let start = Instant::now();
-        let scene = build_scene(desc, r)?;
-        let camera = Camera::new(&r.camera, w, h);
-        let (film, rstats) = render(&scene, &camera, w, h);
-        write_png(&film, &out)?;
-        eprintln!(
-            "wrote {} ({w}x{h}) in {:.2} s",
-            out.display(),
-            start.elapsed().as_secs_f64()
-        );
-        if stats {
-            let b = &scene.stats;
-            println!("image {}: {w}x{h} from {}", out.display(), r.loc);
-            let kinds: Vec<String> = b.by_kind.iter().map(|(k, v)| format!("{k} {v}")).collect();
-            println!(
-                "  scene: {} instances ({}), {} lights",
-                scene.instances.len(),
-                kinds.join(", "),
-                scene.lights.len()
-            );
-            println!(
-                "  triangles: {} placed, {} stored; BVH {} bytes; build {:.3} s",
-                b.triangles_placed,
-                b.triangles_stored,
-                b.bvh_bytes,
-                b.build_time.as_secs_f64()
-            );
-            let secs = rstats.time.as_secs_f64();
-            let rays = rstats.primary_rays + rstats.shadow_rays + rstats.secondary_rays;
-            println!(
-                "  rays: {} primary, {} shadow, {} secondary; render {:.3} s ({:.2} Mrays/s, {} threads)",
-                rstats.primary_rays,
-                rstats.shadow_rays,
-                rstats.secondary_rays,
-                secs,
-                rays as f64 / secs.max(1e-9) / 1e6,
-                rayon::current_num_threads()
-            );
-        }
-        Ok(())
+        render_one(desc, r, &settings, &out)
     });
-    let _seed = args.seed; // No random stream exists yet: the first renderer is deterministic.
     run_script(&args.scene, hook)?;
     if rendered.get() == 0 {
         eprintln!(
@@ -153,6 +174,179 @@ fn render_command(args: RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The render options of the command line, checked.
+struct RenderSettings {
+    scale: f64,
+    seed: u64,
+    sampling: Sampling,
+    crop: Option<[u32; 4]>,
+    tonemap: Tonemap,
+    aa_map: Option<PathBuf>,
+    stats: bool,
+    progress: bool,
+}
+
+impl RenderSettings {
+    fn from_args(a: &RenderArgs) -> Result<RenderSettings> {
+        if a.spp == 0 || a.spp > 1 << 16 {
+            return Err(Error::Usage(format!(
+                "--spp must be in [1, 65536], got {}",
+                a.spp
+            )));
+        }
+        if !(a.aa_threshold >= 0.0 && a.aa_threshold.is_finite()) || a.aa_depth > 8 {
+            return Err(Error::Usage(
+                "--aa-threshold must be >= 0 and --aa-depth at most 8".into(),
+            ));
+        }
+        if !a.exposure.is_finite() {
+            return Err(Error::Usage("--exposure must be finite".into()));
+        }
+        let sampling = if a.adaptive {
+            Sampling::Adaptive {
+                threshold: a.aa_threshold,
+                max_depth: a.aa_depth,
+            }
+        } else {
+            Sampling::Stratified { spp: a.spp }
+        };
+        let tonemap = match a.tonemap {
+            TonemapArg::Clamp => Tonemap::Clamp,
+            TonemapArg::Srgb => Tonemap::Srgb {
+                exposure: a.exposure,
+            },
+        };
+        Ok(RenderSettings {
+            scale: a.scale,
+            seed: a.seed,
+            sampling,
+            crop: a.crop,
+            tonemap,
+            aa_map: a.aa_map.clone(),
+            stats: a.stats,
+            progress: !a.quiet && std::io::stderr().is_terminal(),
+        })
+    }
+}
+
+/// Builds, renders and writes the image of one `gr.render` call.
+fn render_one(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    settings: &RenderSettings,
+    out: &std::path::Path,
+) -> Result<()> {
+    let (w, h) = scaled_size(r, settings.scale);
+    let window = match settings.crop {
+        None => Window::full(w, h),
+        Some([x0, y0, x1, y1]) => {
+            let win = Window {
+                x0,
+                y0,
+                x1,
+                y1,
+                full_width: w,
+                full_height: h,
+            };
+            if !win.is_valid() {
+                return Err(Error::at(
+                    &r.loc,
+                    format!("--crop {x0},{y0},{x1},{y1} is not inside the {w}x{h} image"),
+                ));
+            }
+            win
+        }
+    };
+    let start = Instant::now();
+    let scene = build_scene(desc, r)?;
+    let camera = Camera::new(&r.camera, w, h);
+    let opts = RenderOptions {
+        seed: settings.seed,
+        sampling: settings.sampling.clone(),
+        window,
+    };
+    let bar = if settings.progress {
+        let bar = indicatif::ProgressBar::new(window.size().1 as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{msg} [{bar:40}] {pos}/{len} rows, {elapsed} elapsed, {eta} left",
+        ) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar.set_message(format!("rendering {}", out.display()));
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let (film, rstats) = render_with(&scene, &camera, &opts, &|| bar.inc(1));
+    bar.finish_and_clear();
+    write_image(&film, out, settings.tonemap)?;
+    if let Some(map) = &settings.aa_map {
+        write_sample_map(&film, map)?;
+    }
+    let (fw, fh) = window.size();
+    eprintln!(
+        "wrote {} ({fw}x{fh}) in {:.2} s",
+        out.display(),
+        start.elapsed().as_secs_f64()
+    );
+    if settings.stats {
+        print_stats(&scene, &film, &rstats, r, out);
+    }
+    Ok(())
+}
+
+fn print_stats(
+    scene: &crate::scene::Scene,
+    film: &Film,
+    rstats: &RenderStats,
+    r: &RenderDesc,
+    out: &std::path::Path,
+) {
+    let b = &scene.stats;
+    println!(
+        "image {}: {}x{} from {}",
+        out.display(),
+        film.width,
+        film.height,
+        r.loc
+    );
+    let kinds: Vec<String> = b.by_kind.iter().map(|(k, v)| format!("{k} {v}")).collect();
+    println!(
+        "  scene: {} instances ({}), {} lights",
+        scene.instances.len(),
+        kinds.join(", "),
+        scene.lights.len()
+    );
+    println!(
+        "  triangles: {} placed, {} stored; BVH {} bytes; build {:.3} s",
+        b.triangles_placed,
+        b.triangles_stored,
+        b.bvh_bytes,
+        b.build_time.as_secs_f64()
+    );
+    let n = film.samples.len().max(1) as f64;
+    let total: u64 = film.samples.iter().map(|&s| s as u64).sum();
+    let (lo, hi) = (
+        film.samples.iter().min().copied().unwrap_or(0),
+        film.samples.iter().max().copied().unwrap_or(0),
+    );
+    println!(
+        "  camera rays per pixel: mean {:.2}, min {lo}, max {hi}",
+        total as f64 / n
+    );
+    let secs = rstats.time.as_secs_f64();
+    let rays = rstats.primary_rays + rstats.shadow_rays + rstats.secondary_rays;
+    println!(
+        "  rays: {} primary, {} shadow, {} secondary; render {:.3} s ({:.2} Mrays/s, {} threads)",
+        rstats.primary_rays,
+        rstats.shadow_rays,
+        rstats.secondary_rays,
+        secs,
+        rays as f64 / secs.max(1e-9) / 1e6,
+        rayon::current_num_threads()
+    );
 }
 
 fn info_command(args: InfoArgs) -> Result<()> {

@@ -36,6 +36,7 @@ pub mod io;
 pub mod light;
 pub mod material;
 pub mod render;
+pub mod sampling;
 pub mod scene;
 
 pub use error::{Error, Loc};

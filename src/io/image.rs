@@ -1,24 +1,67 @@
-//! Image output: PNG as the course writes it, written atomically.
+//! Image output: PNG as the course writes it, OpenEXR for linear floats, tiles and their stitching.
 //!
-//! Each channel becomes `(u8)(255·clamp(c, 0, 1))`, truncating as the course's `Image::savePng`
-//! does (0.999 → 254); 8-bit RGB, no alpha, no gamma, row 0 at the top. The file is written to a
-//! temporary name beside the target and renamed over it, so a failed render never leaves a
-//! truncated image where a good one was.
+//! **Tone mapping** ([`Tonemap`]) turns linear radiance into 8 bits:
+//! - `clamp` (the default, the course's `Image::savePng`): `(u8)(255·clamp(c, 0, 1))`, truncating
+//!   (0.999 → 254), no gamma;
+//! - `srgb`: multiply by `2^exposure`, clamp to [0, 1], apply the sRGB transfer curve, round.
+//!
+//! PNGs are 8-bit RGB, row 0 at the top. An output path ending in `.exr` gets linear 32-bit float
+//! RGB instead (no tone mapping). Every file is written to a temporary name beside the target and
+//! renamed over it, so a failed or interrupted render never leaves a truncated image where a good
+//! one was.
+//!
+//! **Tiles.** A PNG of a window of an image (`--crop`) carries a `tEXt` chunk `caustic-window`
+//! with `x0 y0 x1 y1 full_width full_height`; [`stitch`] reads tiles back and assembles the full
+//! image, which is byte-identical to the PNG of a full render.
 
 use crate::error::{Error, Result};
-use crate::render::Film;
-use std::path::Path;
+use crate::render::{Film, Window};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The `tEXt` keyword that records a tile's place in its image.
+pub const WINDOW_KEY: &str = "caustic-window";
+
+/// How linear radiance becomes 8-bit pixel values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tonemap {
+    /// Clamp to [0, 1] and truncate, as the course does.
+    Clamp,
+    /// Scale by `2^exposure`, clamp, encode with the sRGB curve, round.
+    Srgb { exposure: f32 },
+}
+
+/// Returns the sRGB encoding of a linear value in [0, 1].
+fn srgb_encode(c: f32) -> f32 {
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
 
 /// Returns the film as 8-bit RGB bytes, row 0 first.
-pub fn to_rgb8(film: &Film) -> Vec<u8> {
+pub fn to_rgb8(film: &Film, tonemap: Tonemap) -> Vec<u8> {
+    let map = |v: f32| -> u8 {
+        match tonemap {
+            Tonemap::Clamp => (255.0 * v.clamp(0.0, 1.0)) as u8,
+            Tonemap::Srgb { exposure } => {
+                let v = (v * exposure.exp2()).clamp(0.0, 1.0);
+                (255.0 * srgb_encode(v) + 0.5) as u8
+            }
+        }
+    };
     film.pixels
         .iter()
-        .flat_map(|c| c.to_array().map(|v| (255.0 * v.clamp(0.0, 1.0)) as u8))
+        .flat_map(|c| c.to_array().map(map))
         .collect()
 }
 
-/// Writes `film` as a PNG at `path`, atomically.
-pub fn write_png(film: &Film, path: &Path) -> Result<()> {
+/// Writes `write` to a temporary file beside `path`, then renames it over `path`.
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> Result<()> {
     let fail = |message: String| Error::File {
         path: path.to_path_buf(),
         message,
@@ -31,12 +74,215 @@ pub fn write_png(film: &Film, path: &Path) -> Result<()> {
         name.to_string_lossy(),
         std::process::id()
     ));
-    let img = image::RgbImage::from_raw(film.width, film.height, to_rgb8(film))
-        .ok_or_else(|| fail("internal: film size does not match its pixels".into()))?;
-    img.save_with_format(&tmp, image::ImageFormat::Png)
-        .map_err(|e| fail(format!("cannot write image: {e}")))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
+    let result = write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+    result.map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         fail(format!("cannot write image: {e}"))
+    })
+}
+
+/// Encodes 8-bit RGB (`channels = 3`) or grey (`channels = 1`) rows as PNG, with optional text.
+fn encode_png(
+    out: impl Write,
+    width: u32,
+    height: u32,
+    channels: u8,
+    data: &[u8],
+    text: Option<String>,
+) -> std::result::Result<(), String> {
+    let mut enc = png::Encoder::new(out, width, height);
+    enc.set_color(if channels == 1 {
+        png::ColorType::Grayscale
+    } else {
+        png::ColorType::Rgb
+    });
+    enc.set_depth(png::BitDepth::Eight);
+    if let Some(text) = text {
+        enc.add_text_chunk(WINDOW_KEY.to_string(), text)
+            .map_err(|e| e.to_string())?;
+    }
+    let mut writer = enc.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(data).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())
+}
+
+/// Writes `film` at `path`: PNG with `tonemap`, or linear EXR when the path ends in `.exr`.
+/// A film that is a window of a larger image records its place (PNG only).
+pub fn write_image(film: &Film, path: &Path, tonemap: Tonemap) -> Result<()> {
+    let is_exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if is_exr {
+        let data: Vec<f32> = film.pixels.iter().flat_map(|c| c.to_array()).collect();
+        let img = image::Rgb32FImage::from_raw(film.width, film.height, data).ok_or_else(|| {
+            Error::File {
+                path: path.to_path_buf(),
+                message: "internal: film size does not match its pixels".into(),
+            }
+        })?;
+        return write_atomically(path, |tmp| {
+            img.save_with_format(tmp, image::ImageFormat::OpenExr)
+                .map_err(|e| e.to_string())
+        });
+    }
+    let w = film.window;
+    let text = (w != Window::full(film.width, film.height)).then(|| {
+        format!(
+            "{} {} {} {} {} {}",
+            w.x0, w.y0, w.x1, w.y1, w.full_width, w.full_height
+        )
+    });
+    let data = to_rgb8(film, tonemap);
+    write_atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut out = BufWriter::new(file);
+        encode_png(&mut out, film.width, film.height, 3, &data, text)?;
+        out.flush().map_err(|e| e.to_string())
+    })
+}
+
+/// Writes `film` as a course-style PNG (clamped, truncated) at `path`.
+pub fn write_png(film: &Film, path: &Path) -> Result<()> {
+    write_image(film, path, Tonemap::Clamp)
+}
+
+/// Writes the per-pixel sample counts of `film` as a grey PNG, white = the most samples.
+pub fn write_sample_map(film: &Film, path: &Path) -> Result<()> {
+    let max = film.samples.iter().copied().max().unwrap_or(1).max(1) as f32;
+    let data: Vec<u8> = film
+        .samples
+        .iter()
+        .map(|&n| (255.0 * n as f32 / max + 0.5) as u8)
+        .collect();
+    write_atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut out = BufWriter::new(file);
+        encode_png(&mut out, film.width, film.height, 1, &data, None)?;
+        out.flush().map_err(|e| e.to_string())
+    })
+}
+
+/// A tile read back from disk: its window and 8-bit RGB pixels.
+struct Tile {
+    path: PathBuf,
+    window: Window,
+    rgb: Vec<u8>,
+}
+
+fn read_tile(path: &Path) -> Result<Tile> {
+    let fail = |message: String| Error::File {
+        path: path.to_path_buf(),
+        message,
+    };
+    let file = std::fs::File::open(path).map_err(|e| fail(format!("cannot read tile: {e}")))?;
+    let decoder = png::Decoder::new(std::io::BufReader::new(file));
+    let mut reader = decoder
+        .read_info()
+        .map_err(|e| fail(format!("not a readable PNG: {e}")))?;
+    let info = reader.info();
+    let (width, height) = (info.width, info.height);
+    if info.color_type != png::ColorType::Rgb || info.bit_depth != png::BitDepth::Eight {
+        return Err(fail("not an 8-bit RGB tile written by caustic".into()));
+    }
+    let text = info
+        .uncompressed_latin1_text
+        .iter()
+        .find(|t| t.keyword == WINDOW_KEY)
+        .map(|t| t.text.clone())
+        .ok_or_else(|| {
+            fail(format!(
+                "has no '{WINDOW_KEY}' record: was it rendered with --crop?"
+            ))
+        })?;
+    let v: Vec<u32> = text
+        .split_whitespace()
+        .filter_map(|s| s.parse().ok())
+        .collect();
+    let window = match v[..] {
+        [x0, y0, x1, y1, full_width, full_height] => Window {
+            x0,
+            y0,
+            x1,
+            y1,
+            full_width,
+            full_height,
+        },
+        _ => return Err(fail(format!("malformed '{WINDOW_KEY}' record '{text}'"))),
+    };
+    if !window.is_valid() || window.size() != (width, height) {
+        return Err(fail(format!(
+            "its window '{text}' does not match its {width}x{height} pixels"
+        )));
+    }
+    let mut rgb = vec![
+        0;
+        reader
+            .output_buffer_size()
+            .ok_or_else(|| fail("image too large".into()))?
+    ];
+    reader
+        .next_frame(&mut rgb)
+        .map_err(|e| fail(format!("truncated or corrupt PNG: {e}")))?;
+    rgb.truncate(width as usize * height as usize * 3);
+    Ok(Tile {
+        path: path.to_path_buf(),
+        window,
+        rgb,
+    })
+}
+
+/// Assembles tiles written with `--crop` into the full image at `out`; every pixel must be
+/// covered by exactly one tile.
+pub fn stitch(tiles: &[PathBuf], out: &Path) -> Result<()> {
+    let tiles: Vec<Tile> = tiles.iter().map(|p| read_tile(p)).collect::<Result<_>>()?;
+    let Some(first) = tiles.first() else {
+        return Err(Error::Usage("stitch needs at least one tile".into()));
+    };
+    let (fw, fh) = (first.window.full_width, first.window.full_height);
+    let mut owner: Vec<Option<usize>> = vec![None; fw as usize * fh as usize];
+    let mut rgb = vec![0u8; fw as usize * fh as usize * 3];
+    for (k, t) in tiles.iter().enumerate() {
+        if (t.window.full_width, t.window.full_height) != (fw, fh) {
+            return Err(Error::File {
+                path: t.path.clone(),
+                message: format!(
+                    "belongs to a {}x{} image, but {} to a {fw}x{fh} one",
+                    t.window.full_width,
+                    t.window.full_height,
+                    first.path.display()
+                ),
+            });
+        }
+        let (w, _) = t.window.size();
+        for y in t.window.y0..t.window.y1 {
+            for x in t.window.x0..t.window.x1 {
+                let i = (y * fw + x) as usize;
+                if let Some(other) = owner[i] {
+                    return Err(Error::File {
+                        path: t.path.clone(),
+                        message: format!(
+                            "overlaps {} at pixel ({x}, {y})",
+                            tiles[other].path.display()
+                        ),
+                    });
+                }
+                owner[i] = Some(k);
+                let j = ((y - t.window.y0) * w + (x - t.window.x0)) as usize * 3;
+                rgb[i * 3..i * 3 + 3].copy_from_slice(&t.rgb[j..j + 3]);
+            }
+        }
+    }
+    if let Some(i) = owner.iter().position(Option::is_none) {
+        return Err(Error::Usage(format!(
+            "the tiles leave pixel ({}, {}) of the {fw}x{fh} image uncovered",
+            i as u32 % fw,
+            i as u32 / fw
+        )));
+    }
+    write_atomically(out, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut w = BufWriter::new(file);
+        encode_png(&mut w, fw, fh, 3, &rgb, None)?;
+        w.flush().map_err(|e| e.to_string())
     })
 }

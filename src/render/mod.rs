@@ -2,9 +2,21 @@
 //!
 //! The first renderer is a Whitted-style ray tracer ([`shade`]): Phong direct lighting with shadow
 //! rays, `ambient·kd`, mirror reflection weighted by `ks`, refraction weighted by the material's
-//! transparency, and a background gradient where rays escape. One ray per pixel, through its
-//! centre. Rows are shaded in parallel with rayon; the image does not depend on the thread count.
+//! transparency, and a background gradient where rays escape.
+//!
+//! # Pixel sampling ([`aa`])
+//! - `spp = 1` (the default): one ray through the pixel centre, as the course renders.
+//! - `spp = N`: N jittered samples stratified in x and y, box-filtered.
+//! - adaptive (the original project's scheme): rays through the pixel corners; where they differ by
+//!   more than a threshold, the pixel is split into four and refined recursively.
+//!
+//! # Determinism and tiles
+//! Rows are shaded in parallel with rayon. Every random number a pixel uses comes from the stream
+//! keyed by `(seed, Pass::Pixel, pixel index in the full image)` ([`crate::sampling`]), and
+//! adaptive corner rays are deterministic, so the image is bit-identical for any thread count and
+//! a cropped window equals the same window of the full render.
 
+pub mod aa;
 pub mod shade;
 
 use crate::camera::Camera;
@@ -14,19 +26,91 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-/// A linear-RGB image, row 0 at the top.
+/// A linear-RGB image, row 0 at the top: the whole image or a window (crop) of it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
     /// Row-major pixels, `width × height` of them.
     pub pixels: Vec<Vec3A>,
+    /// Camera rays traced for each pixel (same layout as `pixels`).
+    pub samples: Vec<u32>,
+    /// Where this window sits in the full image, and the full image's size.
+    pub window: Window,
 }
 
 impl Film {
-    /// Returns the pixel at column `x`, row `y` (0 = top).
+    /// Returns the pixel at column `x`, row `y` of this film (0 = top).
     pub fn get(&self, x: u32, y: u32) -> Vec3A {
         self.pixels[(y * self.width + x) as usize]
+    }
+}
+
+/// A rectangle `[x0, x1) × [y0, y1)` of an image `full_width × full_height` pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Window {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+    pub full_width: u32,
+    pub full_height: u32,
+}
+
+impl Window {
+    /// Returns the window covering a whole `width × height` image.
+    pub fn full(width: u32, height: u32) -> Window {
+        Window {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+            full_width: width,
+            full_height: height,
+        }
+    }
+
+    /// Returns the window's width and height.
+    pub fn size(&self) -> (u32, u32) {
+        (self.x1 - self.x0, self.y1 - self.y0)
+    }
+
+    /// Returns true when the window is non-empty and inside the full image.
+    pub fn is_valid(&self) -> bool {
+        self.x0 < self.x1
+            && self.y0 < self.y1
+            && self.x1 <= self.full_width
+            && self.y1 <= self.full_height
+    }
+}
+
+/// How pixels are sampled.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Sampling {
+    /// `n` stratified jittered samples per pixel (1 = the pixel centre).
+    Stratified { spp: u32 },
+    /// Corner rays, refined where neighbours differ by more than `threshold` (any channel),
+    /// splitting at most `max_depth` times.
+    Adaptive { threshold: f32, max_depth: u32 },
+}
+
+/// Everything that shapes a render besides the scene and camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    pub seed: u64,
+    pub sampling: Sampling,
+    /// The part of the image to render.
+    pub window: Window,
+}
+
+impl RenderOptions {
+    /// Returns the course's defaults: one centre ray per pixel over the whole image.
+    pub fn new(width: u32, height: u32) -> RenderOptions {
+        RenderOptions {
+            seed: 0,
+            sampling: Sampling::Stratified { spp: 1 },
+            window: Window::full(width, height),
+        }
     }
 }
 
@@ -47,37 +131,59 @@ pub struct RayCounts {
     pub secondary: u64,
 }
 
-/// Renders `scene` through `camera` into a `width × height` film.
+/// Renders `scene` through `camera` into a `width × height` film with one centre ray per pixel.
 pub fn render(scene: &Scene, camera: &Camera, width: u32, height: u32) -> (Film, RenderStats) {
+    render_with(scene, camera, &RenderOptions::new(width, height), &|| {})
+}
+
+/// Renders the window `opts.window` of the image; `row_done` is called once per finished row.
+pub fn render_with(
+    scene: &Scene,
+    camera: &Camera,
+    opts: &RenderOptions,
+    row_done: &(dyn Fn() + Sync),
+) -> (Film, RenderStats) {
     let start = Instant::now();
+    let win = opts.window;
+    let (w, h) = win.size();
     let totals = [AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)];
-    let mut pixels = vec![Vec3A::ZERO; width as usize * height as usize];
+    let mut pixels = vec![Vec3A::ZERO; w as usize * h as usize];
+    let mut samples = vec![0u32; w as usize * h as usize];
+    let sampler = aa::PixelSampler::new(scene, camera, opts);
     pixels
-        .par_chunks_mut(width as usize)
+        .par_chunks_mut(w as usize)
+        .zip(samples.par_chunks_mut(w as usize))
         .enumerate()
-        .for_each(|(y, row)| {
+        .for_each(|(row, (px_row, count_row))| {
+            let y = win.y0 + row as u32;
             let mut counts = RayCounts::default();
-            for (x, px) in row.iter_mut().enumerate() {
-                let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-                counts.primary += 1;
-                *px = shade::radiance(scene, camera, &ray, 0, &mut counts);
+            for (i, (px, n)) in px_row.iter_mut().zip(count_row.iter_mut()).enumerate() {
+                let before = counts.primary;
+                *px = sampler.pixel(win.x0 + i as u32, y, &mut counts);
+                *n = (counts.primary - before) as u32
+                    + sampler.corner_rays_charged(i as u32, row as u32);
             }
             totals[0].fetch_add(counts.primary, Ordering::Relaxed);
             totals[1].fetch_add(counts.shadow, Ordering::Relaxed);
             totals[2].fetch_add(counts.secondary, Ordering::Relaxed);
+            row_done();
         });
+    let corner_counts = sampler.corner_counts();
+    totals[0].fetch_add(corner_counts.primary, Ordering::Relaxed);
+    totals[1].fetch_add(corner_counts.shadow, Ordering::Relaxed);
+    totals[2].fetch_add(corner_counts.secondary, Ordering::Relaxed);
     let stats = RenderStats {
         primary_rays: totals[0].load(Ordering::Relaxed),
         shadow_rays: totals[1].load(Ordering::Relaxed),
         secondary_rays: totals[2].load(Ordering::Relaxed),
         time: start.elapsed(),
     };
-    (
-        Film {
-            width,
-            height,
-            pixels,
-        },
-        stats,
-    )
+    let film = Film {
+        width: w,
+        height: h,
+        pixels,
+        samples,
+        window: win,
+    };
+    (film, stats)
 }

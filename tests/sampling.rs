@@ -1,0 +1,238 @@
+//! Pixel sampling: determinism across threads, crops and stitched tiles equal the full render,
+//! and the adaptive scheme against uniform supersampling.
+
+mod common;
+
+use caustic::camera::Camera;
+use caustic::render::{Film, RenderOptions, Sampling, Window, render_with};
+use caustic::scene::Scene;
+use caustic::scene::build::build_scene;
+use common::{a4_assets, caustic, out_dir, run_lua};
+
+/// A large flat floor and a ball against the sky: mostly flat areas, a few long edges.
+const FLAT_SCENE: &str = "
+    floor_mat = gr.material({0.6, 0.5, 0.3}, {0, 0, 0}, 0)
+    ball_mat = gr.material({0.2, 0.4, 0.9}, {0, 0, 0}, 0)
+    root = gr.node('root')
+    floor = gr.cube('floor'); floor:set_material(floor_mat); floor:scale(40, 1, 40); floor:translate(-20, -1, -30)
+    root:add_child(floor)
+    ball = gr.nh_sphere('ball', {0, 1.2, -4}, 1.2); ball:set_material(ball_mat); root:add_child(ball)
+    gr.render(root, 'flat.png', 96, 72, {0, 2.5, 4}, {0, -0.3, -1}, {0, 1, 0}, 50, {0.2, 0.2, 0.2},
+              {gr.light({5, 10, 5}, {0.9, 0.9, 0.9}, {1, 0, 0})})
+";
+
+fn flat_scene() -> (Scene, Camera, u32, u32) {
+    let d = run_lua(FLAT_SCENE).unwrap();
+    let r = &d.renders[0];
+    let scene = build_scene(&d, r).unwrap();
+    (
+        scene,
+        Camera::new(&r.camera, r.width, r.height),
+        r.width,
+        r.height,
+    )
+}
+
+fn render(
+    scene: &Scene,
+    camera: &Camera,
+    w: u32,
+    h: u32,
+    sampling: Sampling,
+    window: Option<Window>,
+) -> Film {
+    let opts = RenderOptions {
+        seed: 5,
+        sampling,
+        window: window.unwrap_or(Window::full(w, h)),
+    };
+    render_with(scene, camera, &opts, &|| {}).0
+}
+
+fn rmse(a: &Film, b: &Film, pixels: impl Iterator<Item = usize>) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for i in pixels {
+        let d = a.pixels[i] - b.pixels[i];
+        sum += d.length_squared() as f64 / 3.0;
+        n += 1;
+    }
+    (sum / n.max(1) as f64).sqrt()
+}
+
+#[test]
+fn cropped_windows_equal_the_full_render() {
+    let (scene, camera, w, h) = flat_scene();
+    for sampling in [
+        Sampling::Stratified { spp: 4 },
+        Sampling::Adaptive {
+            threshold: 0.05,
+            max_depth: 3,
+        },
+    ] {
+        let full = render(&scene, &camera, w, h, sampling.clone(), None);
+        let win = Window {
+            x0: 17,
+            y0: 9,
+            x1: 61,
+            y1: 50,
+            full_width: w,
+            full_height: h,
+        };
+        let crop = render(&scene, &camera, w, h, sampling.clone(), Some(win));
+        for y in win.y0..win.y1 {
+            for x in win.x0..win.x1 {
+                assert_eq!(
+                    crop.get(x - win.x0, y - win.y0),
+                    full.get(x, y),
+                    "{sampling:?} pixel ({x}, {y})"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn adaptive_sampling_beats_uniform_supersampling_at_equal_error() {
+    let (scene, camera, w, h) = flat_scene();
+    let reference = render(
+        &scene,
+        &camera,
+        w,
+        h,
+        Sampling::Stratified { spp: 400 },
+        None,
+    );
+    let centre = render(&scene, &camera, w, h, Sampling::Stratified { spp: 1 }, None);
+    let adaptive = render(
+        &scene,
+        &camera,
+        w,
+        h,
+        Sampling::Adaptive {
+            threshold: 0.02,
+            max_depth: 3,
+        },
+        None,
+    );
+    let all = || 0..(w * h) as usize;
+    let adaptive_err = rmse(&adaptive, &reference, all());
+    let adaptive_rays: u64 = adaptive.samples.iter().map(|&n| n as u64).sum();
+    // The cheapest uniform rate whose error is as low as the adaptive render's.
+    let mut uniform = None;
+    for spp in [1u32, 2, 4, 6, 9, 12, 16, 25, 36, 49, 64] {
+        let film = render(&scene, &camera, w, h, Sampling::Stratified { spp }, None);
+        if rmse(&film, &reference, all()) <= adaptive_err {
+            uniform = Some(spp);
+            break;
+        }
+    }
+    let spp = uniform.expect("some uniform rate up to 64 spp must match the adaptive error");
+    let uniform_rays = spp as u64 * (w * h) as u64;
+    eprintln!(
+        "adaptive: {adaptive_rays} rays, rmse {adaptive_err:.5}; uniform needs {spp} spp = {uniform_rays} rays"
+    );
+    assert!(
+        adaptive_rays * 2 < uniform_rays,
+        "adaptive {adaptive_rays} rays vs uniform {uniform_rays}"
+    );
+    // Jaggies: on the pixels the reference shows as mixed (edges), adaptive sampling removes most
+    // of the one-ray-per-pixel error.
+    let edges: Vec<usize> = all()
+        .filter(|&i| (reference.pixels[i] - centre.pixels[i]).abs().max_element() > 0.05)
+        .collect();
+    assert!(edges.len() > 40, "{} edge pixels", edges.len());
+    let (e_centre, e_adaptive) = (
+        rmse(&centre, &reference, edges.iter().copied()),
+        rmse(&adaptive, &reference, edges.iter().copied()),
+    );
+    assert!(
+        e_adaptive < 0.3 * e_centre,
+        "edge rmse: adaptive {e_adaptive:.4} vs one ray {e_centre:.4}"
+    );
+}
+
+fn render_cli(dir: &std::path::Path, name: &str, extra: &[&str]) -> Vec<u8> {
+    let png = dir.join(name);
+    let out = caustic()
+        .current_dir(a4_assets())
+        .args(["render", "nonhier.lua", "--scale", "0.5", "-q", "-o"])
+        .arg(&png)
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::read(png).unwrap()
+}
+
+#[test]
+fn one_and_two_threads_give_the_same_bytes() {
+    let dir = out_dir("sampling-threads");
+    for mode in [&["--spp", "4"][..], &["--adaptive"][..]] {
+        let one = render_cli(&dir, "t1.png", &[&["--threads", "1"][..], mode].concat());
+        let two = render_cli(&dir, "t2.png", &[&["--threads", "2"][..], mode].concat());
+        assert!(
+            one == two,
+            "{mode:?}: images differ between 1 and 2 threads"
+        );
+        let again = render_cli(&dir, "t3.png", &[&["--threads", "2"][..], mode].concat());
+        assert!(two == again, "{mode:?}: two runs differ");
+    }
+    // Another seed draws other sample positions.
+    let other = render_cli(&dir, "t4.png", &["--spp", "4", "--seed", "9"]);
+    assert!(other != render_cli(&dir, "t5.png", &["--spp", "4"]));
+}
+
+#[test]
+fn stitched_tiles_equal_the_full_render_byte_for_byte() {
+    let dir = out_dir("sampling-stitch");
+    let full = render_cli(&dir, "full.png", &["--spp", "2"]);
+    let tiles = [
+        ("a.png", "0,0,100,37"),
+        ("b.png", "100,0,256,37"),
+        ("c.png", "0,37,256,256"),
+    ];
+    for (name, crop) in tiles {
+        render_cli(&dir, name, &["--spp", "2", "--crop", crop]);
+    }
+    let out = caustic()
+        .current_dir(&dir)
+        .args(["stitch", "c.png", "a.png", "b.png", "-o", "stitched.png"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        std::fs::read(dir.join("stitched.png")).unwrap() == full,
+        "stitched image differs from the full render"
+    );
+    // Missing and overlapping tiles are reported, naming the problem.
+    let out = caustic()
+        .current_dir(&dir)
+        .args(["stitch", "a.png", "c.png", "-o", "x.png"])
+        .output()
+        .unwrap();
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("uncovered"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = caustic()
+        .current_dir(&dir)
+        .args(["stitch", "a.png", "a.png", "-o", "x.png"])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("overlaps"));
+    let out = caustic()
+        .current_dir(&dir)
+        .args(["stitch", "full.png", "-o", "x.png"])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--crop"));
+}

@@ -6,6 +6,9 @@
 //! weight `t`. Textures, normal maps and Perlin-noise normals are parsed and validated but not yet
 //! simulated by the first renderer (see the materials issue).
 
+pub mod fresnel;
+pub mod medium;
+
 use crate::scene::desc::MaterialDesc;
 use glam::Vec3A;
 

@@ -83,7 +83,13 @@ impl<'a> PixelSampler<'a> {
     /// Returns the radiance along the camera ray through image-plane position `(x, y)`.
     fn trace(&self, x: f32, y: f32, counts: &mut RayCounts) -> Vec3A {
         counts.primary += 1;
-        shade::radiance(self.scene, self.camera, &self.camera.ray(x, y), 0, counts)
+        shade::radiance(
+            self.scene,
+            self.camera,
+            &self.camera.ray(x, y),
+            shade::PathState::camera(),
+            counts,
+        )
     }
 
     /// Returns the value of pixel `(x, y)` (full-image coordinates).

@@ -1,21 +1,58 @@
 //! Whitted-style shading: what one eye ray sees.
 //!
-//! At a hit with material `(kd, ks, p, t, ior)` the radiance is
-//! `kd·ambient + Σ_visible lights att(d)·I·(kd·max(0, n·l) + ks·max(0, r·v)^p)`
-//! plus `ks` times the mirror-reflected radiance, all blended with the refracted radiance by the
-//! transparency `t` (Snell's law; total internal reflection reflects). Normals are flipped to face
-//! the incoming ray, so both sides of a surface shade alike.
+//! A material `(kd, ks, p, t, ior)` is a mix of two surfaces, weighted by the transparency `t`:
+//! - with weight `1 − t`, an opaque Phong surface:
+//!   `kd·ambient + Σ_visible lights att(d)·I·(kd·max(0, n·l) + ks·max(0, r·v)^p)` plus `ks`
+//!   times the mirror-reflected radiance;
+//! - with weight `t`, a clear dielectric interface between the medium the ray is in and the
+//!   solid's interior of index `ior`: Fresnel reflectance `F` of the reflected ray and `1 − F`
+//!   of the refracted one (total internal reflection reflects everything).
+//!
+//! Rays carry a [`MediumStack`], so nested and touching dielectrics refract with the ratio of the
+//! two media at each interface, and the boundary of a solid inside a denser one (a water surface
+//! inside a glass ball) is passed through untouched. Normals are flipped to face the incoming ray
+//! for the opaque part, so both sides of a surface shade alike.
 
 use super::RayCounts;
 use crate::camera::Camera;
 use crate::geometry::{Ray, offset_ray_origin};
+use crate::material::fresnel;
+use crate::material::medium::MediumStack;
 use crate::scene::Scene;
 use glam::Vec3A;
 
 /// Deepest chain of reflections and refractions followed.
-pub const MAX_DEPTH: u32 = 8;
-/// Contributions weighted below this are not traced.
+pub const MAX_DEPTH: u32 = 12;
+/// Paths whose weight falls below this are not traced further.
 const MIN_WEIGHT: f32 = 1e-3;
+
+/// Where an eye path stands: how deep, how much it still matters, which medium it is in.
+#[derive(Clone, Copy, Debug)]
+pub struct PathState {
+    pub depth: u32,
+    /// Largest channel of the product of weights so far.
+    pub weight: f32,
+    pub media: MediumStack,
+}
+
+impl PathState {
+    /// Returns the state of a camera ray (in air).
+    pub fn camera() -> PathState {
+        PathState {
+            depth: 0,
+            weight: 1.0,
+            media: MediumStack::air(),
+        }
+    }
+
+    fn child(&self, weight: f32, media: MediumStack) -> PathState {
+        PathState {
+            depth: self.depth + 1,
+            weight: self.weight * weight,
+            media,
+        }
+    }
+}
 
 /// Returns the background seen along `dir`: a vertical gradient in the camera's frame, so objects
 /// stand out against it wherever they are.
@@ -31,7 +68,7 @@ pub fn radiance(
     scene: &Scene,
     camera: &Camera,
     ray: &Ray,
-    depth: u32,
+    state: PathState,
     counts: &mut RayCounts,
 ) -> Vec3A {
     let Some(hit) = scene.intersect(ray) else {
@@ -40,13 +77,51 @@ pub fn radiance(
     let surf = scene.surface(ray, &hit);
     let mat = &scene.materials[surf.material as usize];
     let wo = -ray.dir.normalize();
+    let front = surf.ng.dot(wo) > 0.0;
+    let t = mat.transparency;
+
+    let mut out = Vec3A::ZERO;
+    if t > 0.0 {
+        let crossing = state.media.cross(surf.material, mat.ior, front);
+        if crossing.is_false() {
+            // The boundary of a solid inside a denser one: no surface here, go straight on.
+            return continue_straight(
+                scene,
+                camera,
+                surf.p,
+                surf.ng,
+                ray.dir,
+                state,
+                crossing.after,
+                counts,
+            );
+        }
+        if state.depth < MAX_DEPTH {
+            out += t * dielectric(scene, camera, &surf, wo, front, crossing, state, counts);
+        }
+    }
+    if t < 1.0 {
+        out += (1.0 - t) * opaque(scene, camera, &surf, wo, state, counts);
+    }
+    out
+}
+
+/// Returns the light the opaque Phong part of a surface sends towards `wo`.
+fn opaque(
+    scene: &Scene,
+    camera: &Camera,
+    surf: &crate::scene::build::SurfaceHit,
+    wo: Vec3A,
+    state: PathState,
+    counts: &mut RayCounts,
+) -> Vec3A {
+    let mat = &scene.materials[surf.material as usize];
     // Face the viewer: both sides of a surface shade alike.
     let (n, ng) = if surf.ng.dot(wo) < 0.0 {
         (-surf.ns, -surf.ng)
     } else {
         (surf.ns, surf.ng)
     };
-
     let mut colour = scene.ambient * mat.kd;
     for light in &scene.lights {
         let to_light = light.position - surf.p;
@@ -65,8 +140,7 @@ pub fn radiance(
         if scene.occluded(&shadow) {
             continue;
         }
-        let r = 2.0 * cos * n - wi;
-        let rv = r.dot(wo);
+        let rv = fresnel::reflect(wi, n).dot(wo);
         let spec = if rv > 0.0 && mat.shininess > 0.0 {
             mat.ks * rv.powf(mat.shininess)
         } else {
@@ -74,70 +148,86 @@ pub fn radiance(
         };
         colour += light.colour * light.attenuation(d) * (mat.kd * cos + spec);
     }
+    let weight = mat.ks.max_element();
+    if mat.is_reflective() && state.depth < MAX_DEPTH && state.weight * weight > MIN_WEIGHT {
+        let wr = fresnel::reflect(wo, n);
+        let ray = Ray::new(offset_ray_origin(surf.p, ng, wr), wr);
+        counts.secondary += 1;
+        colour += mat.ks
+            * radiance(
+                scene,
+                camera,
+                &ray,
+                state.child(weight, state.media),
+                counts,
+            );
+    }
+    colour
+}
 
-    if depth >= MAX_DEPTH {
-        return colour;
+/// Returns the light a dielectric interface sends towards `wo`: Fresnel-weighted reflection and
+/// refraction between the media on either side of `crossing`.
+#[allow(clippy::too_many_arguments)]
+fn dielectric(
+    scene: &Scene,
+    camera: &Camera,
+    surf: &crate::scene::build::SurfaceHit,
+    wo: Vec3A,
+    front: bool,
+    crossing: crate::material::medium::Crossing,
+    state: PathState,
+    counts: &mut RayCounts,
+) -> Vec3A {
+    // Normals on the side the ray arrives from.
+    let (n, ng) = if front {
+        (surf.ns, surf.ng)
+    } else {
+        (-surf.ns, -surf.ng)
+    };
+    let eta = crossing.n_from / crossing.n_to;
+    let cos_i = n.dot(wo).max(0.0);
+    let f = fresnel::dielectric(cos_i, eta);
+    let mut out = Vec3A::ZERO;
+    if f > 0.0 && state.weight * f > MIN_WEIGHT {
+        let wr = fresnel::reflect(wo, n);
+        let ray = Ray::new(offset_ray_origin(surf.p, ng, wr), wr);
+        counts.secondary += 1;
+        out += f * radiance(scene, camera, &ray, state.child(f, state.media), counts);
     }
-    let mut out = colour;
-    if mat.is_reflective() && mat.ks.max_element() > MIN_WEIGHT {
-        out += mat.ks * trace_reflection(scene, camera, surf.p, ng, n, wo, depth, counts);
-    }
-    if mat.transparency > 0.0 {
-        let refracted = trace_refraction(
-            scene, camera, surf.p, surf.ng, surf.ns, wo, mat.ior, depth, counts,
-        );
-        out = out * (1.0 - mat.transparency) + refracted * mat.transparency;
+    if f < 1.0
+        && state.weight * (1.0 - f) > MIN_WEIGHT
+        && let Some(wt) = fresnel::refract(wo, n, eta)
+    {
+        let ray = Ray::new(offset_ray_origin(surf.p, ng, wt), wt);
+        counts.secondary += 1;
+        out += (1.0 - f)
+            * radiance(
+                scene,
+                camera,
+                &ray,
+                state.child(1.0 - f, crossing.after),
+                counts,
+            );
     }
     out
 }
 
+/// Returns the radiance seen by continuing `dir` through a false interface at `p`.
 #[allow(clippy::too_many_arguments)]
-fn trace_reflection(
+fn continue_straight(
     scene: &Scene,
     camera: &Camera,
     p: Vec3A,
     ng: Vec3A,
-    n: Vec3A,
-    wo: Vec3A,
-    depth: u32,
+    dir: Vec3A,
+    state: PathState,
+    media: MediumStack,
     counts: &mut RayCounts,
 ) -> Vec3A {
-    let wr = 2.0 * n.dot(wo) * n - wo;
-    let ray = Ray::new(offset_ray_origin(p, ng, wr), wr);
+    if state.depth >= MAX_DEPTH {
+        return Vec3A::ZERO;
+    }
+    let ray = Ray::new(offset_ray_origin(p, ng, dir), dir);
     counts.secondary += 1;
-    radiance(scene, camera, &ray, depth + 1, counts)
-}
-
-/// Returns the radiance seen through a refracting surface; `ng`/`ns` are the surface's own
-/// (outward) normals and `ior` the index inside it.
-#[allow(clippy::too_many_arguments)]
-fn trace_refraction(
-    scene: &Scene,
-    camera: &Camera,
-    p: Vec3A,
-    ng: Vec3A,
-    ns: Vec3A,
-    wo: Vec3A,
-    ior: f32,
-    depth: u32,
-    counts: &mut RayCounts,
-) -> Vec3A {
-    let entering = ng.dot(wo) > 0.0;
-    let (n, eta) = if entering {
-        (ns, 1.0 / ior)
-    } else {
-        (-ns, ior)
-    };
-    let cos_i = n.dot(wo).clamp(0.0, 1.0);
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-    let wt = if sin2_t >= 1.0 {
-        // Total internal reflection.
-        2.0 * cos_i * n - wo
-    } else {
-        let cos_t = (1.0 - sin2_t).sqrt();
-        -wo * eta + n * (eta * cos_i - cos_t)
-    };
-    let ray = Ray::new(offset_ray_origin(p, ng, wt), wt);
-    counts.secondary += 1;
-    radiance(scene, camera, &ray, depth + 1, counts)
+    radiance(scene, camera, &ray, state.child(1.0, media), counts)
 }

@@ -8,6 +8,8 @@
 
 pub mod fresnel;
 pub mod medium;
+pub mod perlin;
+pub mod texture;
 
 use crate::scene::desc::MaterialDesc;
 use glam::Vec3A;

@@ -1,0 +1,237 @@
+//! Image textures: colour maps that replace `kd`, and bump maps (RGB normal maps or grey height
+//! maps) that bend the shading normal.
+//!
+//! ```lua
+//! brick = gr.material({0.1, 0.7, 0.1}, {0, 0, 0}, 0, 0, 0, 0, 'Assets/brick.png', 'Assets/brick_norm.png')
+//! ```
+//!
+//! Conventions:
+//! - `(u, v)` in [0, 1]² with `v = 0` at the image's top row (the original project's convention);
+//!   coordinates outside wrap around (repeat).
+//! - Lookups are bilinear between the four nearest texel centres.
+//! - Texel bytes are used as linear values `c/255`, exactly as the course uses colours (no gamma).
+//! - A normal map stores a tangent-space normal: red along +u, green along "up" in the image
+//!   (towards decreasing v), blue along the surface normal, each byte decoded as `(c − 128)/127`
+//!   so that (128, 128, 255) is exactly the unperturbed normal.
+//! - A bump image whose texels are all grey is a height map instead: its slopes (central
+//!   differences, one texel apart) tilt the normal, a rise of 1/8 of full scale per texel giving
+//!   45°.
+
+use crate::error::{Error, Loc, Result};
+use glam::{Vec2, Vec3A};
+use std::path::Path;
+
+/// An 8-bit RGB image kept in memory for lookups.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major RGB bytes, row 0 at the top.
+    texels: Vec<[u8; 3]>,
+}
+
+/// How a bump image bends the normal.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BumpMap {
+    /// An RGB tangent-space normal map.
+    Normal(Texture),
+    /// A grey height map.
+    Height(Texture),
+}
+
+/// Slope multiplier of height maps: a full-scale rise over 8 texels tilts the normal by 45°.
+const HEIGHT_SLOPE: f32 = 8.0;
+
+impl Texture {
+    /// Loads a PNG or JPEG image; errors name the file and the script line at `loc`.
+    pub fn load(path: &Path, loc: &Loc) -> Result<Texture> {
+        let img = image::ImageReader::open(path)
+            .and_then(|r| r.with_guessed_format())
+            .map_err(|e| Error::at(loc, format!("cannot read texture {}: {e}", path.display())))?
+            .decode()
+            .map_err(|e| {
+                Error::at(
+                    loc,
+                    format!("cannot decode texture {}: {e}", path.display()),
+                )
+            })?
+            .to_rgb8();
+        if img.width() == 0 || img.height() == 0 {
+            return Err(Error::at(
+                loc,
+                format!("texture {} is empty", path.display()),
+            ));
+        }
+        Ok(Texture::from_rgb(
+            img.width(),
+            img.height(),
+            img.pixels().map(|p| p.0).collect(),
+        ))
+    }
+
+    /// Returns a texture from row-major RGB texels (`width × height` of them, both non-zero).
+    pub fn from_rgb(width: u32, height: u32, texels: Vec<[u8; 3]>) -> Texture {
+        assert_eq!(
+            texels.len(),
+            width as usize * height as usize,
+            "texel count must match the size"
+        );
+        Texture {
+            width,
+            height,
+            texels,
+        }
+    }
+
+    fn texel(&self, x: i64, y: i64) -> Vec3A {
+        let x = x.rem_euclid(self.width as i64) as usize;
+        let y = y.rem_euclid(self.height as i64) as usize;
+        let [r, g, b] = self.texels[y * self.width as usize + x];
+        Vec3A::new(r as f32, g as f32, b as f32)
+    }
+
+    /// Returns the bilinearly filtered texel bytes (0–255 per channel) at `uv`.
+    fn bilinear_bytes(&self, uv: Vec2) -> Vec3A {
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = uv.y * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let top = self.texel(x0, y0) * (1.0 - fx) + self.texel(x0 + 1, y0) * fx;
+        let bottom = self.texel(x0, y0 + 1) * (1.0 - fx) + self.texel(x0 + 1, y0 + 1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// Returns the colour at `uv` in [0, 1] per channel.
+    pub fn colour(&self, uv: Vec2) -> Vec3A {
+        self.bilinear_bytes(uv) / 255.0
+    }
+
+    /// Returns true when every texel is grey (R = G = B).
+    pub fn is_grey(&self) -> bool {
+        self.texels.iter().all(|t| t[0] == t[1] && t[1] == t[2])
+    }
+}
+
+impl BumpMap {
+    /// Returns the bump map an image stands for: grey images are height maps.
+    pub fn from_texture(t: Texture) -> BumpMap {
+        if t.is_grey() {
+            BumpMap::Height(t)
+        } else {
+            BumpMap::Normal(t)
+        }
+    }
+
+    /// Returns the tangent-space normal at `uv` (x along +u, y towards decreasing v, z along n).
+    pub fn tangent_normal(&self, uv: Vec2) -> Vec3A {
+        match self {
+            BumpMap::Normal(t) => {
+                let c = ((t.bilinear_bytes(uv) - Vec3A::splat(128.0)) / 127.0)
+                    .clamp(Vec3A::splat(-1.0), Vec3A::ONE);
+                c.normalize_or(Vec3A::Z)
+            }
+            BumpMap::Height(t) => {
+                let (du, dv) = (1.0 / t.width as f32, 1.0 / t.height as f32);
+                let h = |u: f32, v: f32| t.bilinear_bytes(Vec2::new(u, v)).x / 255.0;
+                let slope_u = (h(uv.x + du, uv.y) - h(uv.x - du, uv.y)) * 0.5 * HEIGHT_SLOPE;
+                // "Up" in the image is decreasing v.
+                let slope_up = (h(uv.x, uv.y - dv) - h(uv.x, uv.y + dv)) * 0.5 * HEIGHT_SLOPE;
+                Vec3A::new(-slope_u, -slope_up, 1.0).normalize()
+            }
+        }
+    }
+}
+
+/// Returns `n` bent by the tangent-space normal `ts`, in the frame built from the surface's
+/// `dpdu` (the tangent: +u), the "up" vector `n × tangent` and `n`.
+pub fn apply_tangent_normal(n: Vec3A, dpdu: Vec3A, ts: Vec3A) -> Vec3A {
+    let t = (dpdu - n * n.dot(dpdu)).normalize_or_zero();
+    let t = if t == Vec3A::ZERO {
+        n.any_orthonormal_vector()
+    } else {
+        t
+    };
+    let b = n.cross(t);
+    (t * ts.x + b * ts.y + n * ts.z).normalize_or(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checker() -> Texture {
+        // 2 × 2: red, green / blue, white.
+        Texture::from_rgb(
+            2,
+            2,
+            vec![[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]],
+        )
+    }
+
+    #[test]
+    fn lookups_at_texel_centres_and_between_them() {
+        let t = checker();
+        assert_eq!(
+            t.colour(Vec2::new(0.25, 0.25)),
+            Vec3A::new(1.0, 0.0, 0.0),
+            "top-left texel, v = 0 at the top"
+        );
+        assert_eq!(t.colour(Vec2::new(0.75, 0.75)), Vec3A::ONE);
+        // Half-way between red and green.
+        let mid = t.colour(Vec2::new(0.5, 0.25));
+        assert!((mid - Vec3A::new(0.5, 0.5, 0.0)).length() < 1e-6, "{mid}");
+        // Wrap-around: u = 1.25 is u = 0.25.
+        assert_eq!(
+            t.colour(Vec2::new(1.25, 0.25)),
+            t.colour(Vec2::new(0.25, 0.25))
+        );
+        // The centre of the image averages all four.
+        let c = t.colour(Vec2::new(0.5, 0.5));
+        assert!((c - Vec3A::new(0.5, 0.5, 0.5)).length() < 1e-6);
+    }
+
+    #[test]
+    fn flat_maps_leave_the_normal_alone_and_tilted_ones_tilt_it() {
+        let flat = BumpMap::from_texture(Texture::from_rgb(1, 1, vec![[128, 128, 255]]));
+        assert_eq!(flat.tangent_normal(Vec2::new(0.3, 0.8)), Vec3A::Z);
+        let n = Vec3A::new(0.0, 0.6, 0.8);
+        assert_eq!(apply_tangent_normal(n, Vec3A::X, Vec3A::Z), n);
+        // A normal map pointing along +u tilts the normal towards the tangent.
+        let tilted = BumpMap::from_texture(Texture::from_rgb(1, 1, vec![[255, 128, 128]]));
+        let ts = tilted.tangent_normal(Vec2::ZERO);
+        assert!((ts - Vec3A::X).length() < 1e-6, "{ts}");
+        assert!((apply_tangent_normal(Vec3A::Z, Vec3A::X, ts) - Vec3A::X).length() < 1e-6);
+        // Constant height: flat. A ramp rising along +u tilts towards -u.
+        let level =
+            BumpMap::from_texture(Texture::from_rgb(2, 1, vec![[90, 90, 90], [90, 90, 90]]));
+        assert_eq!(level.tangent_normal(Vec2::new(0.5, 0.5)), Vec3A::Z);
+        let ramp: Vec<[u8; 3]> = (0..8).map(|i| [(i * 30) as u8; 3]).collect();
+        let ramp = BumpMap::from_texture(Texture::from_rgb(8, 1, ramp));
+        assert!(matches!(ramp, BumpMap::Height(_)));
+        let n = ramp.tangent_normal(Vec2::new(0.5, 0.5));
+        assert!(n.x < -0.5 && n.y.abs() < 1e-6, "{n}");
+    }
+
+    #[test]
+    fn unreadable_textures_name_the_file_and_line() {
+        let loc = Loc {
+            file: "scene.lua".into(),
+            line: 7,
+        };
+        let e = Texture::load(Path::new("/nonexistent/t.png"), &loc)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("scene.lua:7: cannot read texture /nonexistent/t.png"),
+            "{e}"
+        );
+        let dir = std::env::temp_dir().join(format!("caustic-tex-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bad = dir.join("bad.png");
+        std::fs::write(&bad, b"\x89PNG\r\n\x1a\nnot really").unwrap();
+        let e = Texture::load(&bad, &loc).unwrap_err().to_string();
+        assert!(e.starts_with("scene.lua:7: cannot decode texture"), "{e}");
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}

@@ -1,5 +1,6 @@
 //! Mesh files in: glTF 2.0 import (hierarchies, index widths, containers, topologies,
-//! materials, faults). Every file is written by the test itself under `target/`.
+//! materials, faults) and OBJ materials from MTL. Every file is written by the test itself under
+//! `target/`.
 
 mod common;
 
@@ -342,5 +343,80 @@ fn mangled_glb_files_never_panic() {
     assert!(
         (300..3000).contains(&rejected),
         "{rejected} of 3000 rejected"
+    );
+}
+
+// ---- OBJ materials from MTL ----
+
+use caustic::io::obj::load_obj;
+
+/// Writes `colours.mtl` and an OBJ quad `name.obj` naming it; returns the OBJ's path.
+fn obj_with_mtl(dir: &Path, name: &str, faces: &str) -> std::path::PathBuf {
+    let mtl = "# two materials\nnewmtl red\nKd 0.8 0.2 0.1\nKs 0 0 0\nNs 20\nd 1\nNi 1.5\n\
+               map_Kd -s 1 1 1 tex/red.png\n\nnewmtl glass\nKd 0 0 0\nTr 0.9\nNi 1.33\n";
+    std::fs::write(dir.join("colours.mtl"), mtl).unwrap();
+    let path = dir.join(format!("{name}.obj"));
+    let quad = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n";
+    std::fs::write(&path, format!("mtllib colours.mtl\n{quad}{faces}")).unwrap();
+    path
+}
+
+#[test]
+fn obj_mtl_materials_fill_per_triangle_materials() {
+    let dir = out_dir("obj-mtl");
+    let faces = "f 1 2 3\nusemtl red\nf 1 3 4\nusemtl glass\nf 2 3 4\nusemtl nowhere\nf 1 2 4\n";
+    let mesh = load_obj(&obj_with_mtl(&dir, "shapes", faces)).unwrap();
+    // Faces before any usemtl, or naming an unknown material, get the renderer's grey.
+    assert_eq!(mesh.triangle_materials, [2, 0, 1, 2]);
+    let red = MeshMaterial {
+        name: "red".to_owned(),
+        kd: vec3(0.8, 0.2, 0.1),
+        ks: Vec3::ZERO,
+        shininess: 20.0,
+        transparency: 0.0,
+        ior: 1.5,
+        texture: Some(dir.join("tex/red.png")),
+    };
+    let glass = MeshMaterial {
+        name: "glass".to_owned(),
+        kd: Vec3::ZERO,
+        ks: Vec3::ZERO,
+        shininess: 0.0,
+        transparency: 0.9,
+        ior: 1.33,
+        texture: None,
+    };
+    let grey = MeshMaterial {
+        name: "(no usemtl)".to_owned(),
+        kd: Vec3::splat(0.6),
+        ks: Vec3::ZERO,
+        shininess: 0.0,
+        transparency: 0.0,
+        ior: 1.0,
+        texture: None,
+    };
+    assert_eq!(mesh.materials, [red, glass, grey]);
+
+    // Without usemtl, or with the library missing, the mesh carries no materials.
+    let plain = load_obj(&obj_with_mtl(&dir, "plain", "f 1 2 3\n")).unwrap();
+    assert!(plain.materials.is_empty() && plain.triangle_materials.is_empty());
+    let lost = dir.join("lost.obj");
+    std::fs::write(
+        &lost,
+        "mtllib gone.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let lost = load_obj(&lost).unwrap();
+    assert!(lost.materials.is_empty() && lost.triangle_materials.is_empty());
+
+    // A malformed library is an error naming the .mtl file and line.
+    std::fs::write(dir.join("bad.mtl"), "newmtl x\nKd 0.5\n").unwrap();
+    let bad = dir.join("bad.obj");
+    std::fs::write(&bad, "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let e = load_obj(&bad).unwrap_err().to_string();
+    let mtl = dir.join("bad.mtl");
+    assert_eq!(
+        e,
+        format!("{}:2: `Kd` needs 3 numbers, found 1", mtl.display())
     );
 }

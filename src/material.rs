@@ -6,6 +6,7 @@
 //! weight `t`. Textures, normal maps and Perlin-noise normals are parsed and validated but not yet
 //! simulated by the first renderer (see the materials issue).
 
+use crate::geometry::mesh::MeshMaterial;
 use crate::scene::desc::MaterialDesc;
 use glam::Vec3A;
 
@@ -28,6 +29,17 @@ impl Material {
             shininess: d.shininess,
             transparency: d.transparency,
             ior: d.ior,
+        }
+    }
+
+    /// Returns the material a mesh file defined (its texture is not used yet).
+    pub fn from_mesh(m: &MeshMaterial) -> Material {
+        Material {
+            kd: m.kd.into(),
+            ks: m.ks.into(),
+            shininess: m.shininess,
+            transparency: m.transparency,
+            ior: m.ior,
         }
     }
 

@@ -1,6 +1,6 @@
 //! Mesh files in: glTF 2.0 import (hierarchies, index widths, containers, topologies,
-//! materials, faults) and OBJ materials from MTL. Every file is written by the test itself under
-//! `target/`.
+//! materials, faults), OBJ materials from MTL and their use in renders. Every file is written by
+//! the test itself under `target/`.
 
 mod common;
 
@@ -419,4 +419,50 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         e,
         format!("{}:2: `Kd` needs 3 numbers, found 1", mtl.display())
     );
+}
+
+// ---- Mesh materials in scenes, and gr.mesh's choice of loader ----
+
+use common::render_films;
+
+#[test]
+fn render_shows_the_mtl_colour_unless_the_script_sets_a_material() {
+    let dir = out_dir("obj-mtl-render");
+    obj_with_mtl(&dir, "red", "usemtl red\nf 1 2 3\nf 1 3 4\n");
+    std::fs::write(
+        dir.join("bare.obj"),
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3 4\n",
+    )
+    .unwrap();
+    // Ambient light only (the light is behind the quads): each quad pixel is exactly its kd.
+    let script = r#"
+        root = gr.node('root')
+        own = gr.mesh('own', 'red.obj')               -- the MTL's red
+        own:translate(-3, 0, 0)
+        root:add_child(own)
+        painted = gr.mesh('painted', 'red.obj')       -- the script's green wins
+        painted:set_material(gr.material({0.1, 0.7, 0.2}, {0, 0, 0}, 0))
+        root:add_child(painted)
+        bare = gr.mesh('bare', 'bare.obj')            -- no material anywhere: grey
+        bare:translate(3, 0, 0)
+        root:add_child(bare)
+        gr.render(root, 'x.png', 96, 32, {0, 0, 8}, {0, 0, -1}, {0, 1, 0}, 50, {1, 1, 1},
+                  {gr.light({0, 0, -100}, {1, 1, 1}, {1, 0, 0})})
+    "#;
+    let films = render_films(script.as_bytes(), "mtl.lua", &dir).unwrap();
+    let (_, camera, film) = &films[0];
+    let pixel_at = |x: f32| {
+        // The pixel whose ray crosses z = 0 nearest to (x, 0).
+        let (px, _) = (0..film.width)
+            .map(|px| (px, camera.ray(px as f32 + 0.5, 16.5)))
+            .min_by(|a, b| {
+                let at = |r: &caustic::geometry::Ray| (r.at(-r.origin.z / r.dir.z).x - x).abs();
+                at(&a.1).total_cmp(&at(&b.1))
+            })
+            .unwrap();
+        film.get(px, 16)
+    };
+    assert_eq!(pixel_at(-3.0), glam::Vec3A::new(0.8, 0.2, 0.1));
+    assert_eq!(pixel_at(0.0), glam::Vec3A::new(0.1, 0.7, 0.2));
+    assert_eq!(pixel_at(3.0), glam::Vec3A::splat(0.6));
 }

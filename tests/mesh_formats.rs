@@ -1,6 +1,6 @@
 //! Mesh files in: glTF 2.0 import (hierarchies, index widths, containers, topologies,
-//! materials, faults), OBJ materials from MTL and their use in renders. Every file is written by
-//! the test itself under `target/`.
+//! materials, faults), OBJ materials from MTL, their use in renders, and the loaders behind
+//! `gr.mesh`. Every file is written by the test itself under `target/`.
 
 mod common;
 
@@ -423,7 +423,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
 
 // ---- Mesh materials in scenes, and gr.mesh's choice of loader ----
 
-use common::render_films;
+use common::{render_films, run_lua_in};
 
 #[test]
 fn render_shows_the_mtl_colour_unless_the_script_sets_a_material() {
@@ -465,4 +465,34 @@ fn render_shows_the_mtl_colour_unless_the_script_sets_a_material() {
     assert_eq!(pixel_at(-3.0), glam::Vec3A::new(0.8, 0.2, 0.1));
     assert_eq!(pixel_at(0.0), glam::Vec3A::new(0.1, 0.7, 0.2));
     assert_eq!(pixel_at(3.0), glam::Vec3A::splat(0.6));
+}
+
+#[test]
+fn gr_mesh_picks_the_loader_by_extension() {
+    let dir = out_dir("lua-mesh-formats");
+    let mut f = GltfFile::default();
+    let rest = textured_quad(&mut f);
+    std::fs::write(dir.join("QUAD.GLB"), f.glb(&rest)).unwrap();
+    f.write_external(&dir, "quad", &rest);
+    std::fs::write(dir.join("quad.ply"), "ply\n").unwrap();
+    std::fs::write(dir.join("bad.gltf"), "{\"asset\":").unwrap();
+    let d = run_lua_in(
+        "a = gr.mesh('a', 'QUAD.GLB')\nb = gr.mesh('b', 'quad.gltf')",
+        &dir,
+    )
+    .unwrap();
+    assert_same_mesh(&d.meshes[0].data, &d.meshes[1].data);
+    assert_eq!(d.meshes[0].data.triangle_count(), 2);
+    let error = |src: &str| run_lua_in(src, &dir).unwrap_err().to_string();
+    assert_eq!(
+        error("\nm = gr.mesh('m', 'quad.ply')"),
+        "test.lua:2: cannot load mesh 'quad.ply': unsupported format '.ply' (caustic reads .obj, .gltf and .glb)"
+    );
+    let e = error("m = gr.mesh('m', 'bad.gltf')");
+    let file = dir.join("bad.gltf");
+    let prefix = format!(
+        "test.lua:1: cannot load mesh 'bad.gltf': {}: invalid glTF JSON",
+        file.display()
+    );
+    assert!(e.starts_with(&prefix), "{e}");
 }

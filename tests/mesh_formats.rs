@@ -1,6 +1,6 @@
-//! Mesh files in: glTF 2.0 import (hierarchies, index widths, containers, topologies,
-//! materials, faults), OBJ materials from MTL, their use in renders, and the loaders behind
-//! `gr.mesh`. Every file is written by the test itself under `target/`.
+//! Mesh files in and out: glTF 2.0 import (hierarchies, index widths, containers, topologies,
+//! materials, faults), OBJ materials from MTL, the loaders behind `gr.mesh`, and the same wave
+//! mesh through OBJ and glTF. Every file is written by the test itself under `target/`.
 
 mod common;
 
@@ -495,4 +495,97 @@ fn gr_mesh_picks_the_loader_by_extension() {
         file.display()
     );
     assert!(e.starts_with(&prefix), "{e}");
+}
+
+// ---- The water generator, and one mesh through OBJ and glTF ----
+
+use caustic::geometry::water::{WaveField, WaveParams, wave_mesh};
+use caustic::io::gltf::write_gltf;
+use caustic::io::obj::write_obj;
+
+fn waves(n: u32, seed: u64) -> WaveParams {
+    WaveParams {
+        n,
+        seed,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn wave_mesh_counts_normals_and_uvs_match_the_analytic_surface() {
+    let p = waves(33, 7);
+    let mesh = wave_mesh(&p);
+    assert_eq!(
+        (mesh.positions.len(), mesh.triangle_count()),
+        (33 * 33, 2 * 32 * 32)
+    );
+    assert_eq!((mesh.normals.len(), mesh.uvs.len()), (33 * 33, 33 * 33));
+    let field = WaveField::new(&p);
+    let h = 1e-4;
+    for ((v, n), uv) in mesh.positions.iter().zip(&mesh.normals).zip(&mesh.uvs) {
+        let (x, z) = (v.x as f64, v.z as f64);
+        assert!((n.length() - 1.0).abs() < 1e-6, "{n}");
+        assert!(v.y.abs() <= p.amplitude);
+        assert_eq!(v.y, field.height(x, z) as f32);
+        // Central differences of the height give the same normal.
+        let dx = (field.height(x + h, z) - field.height(x - h, z)) / (2.0 * h);
+        let dz = (field.height(x, z + h) - field.height(x, z - h)) / (2.0 * h);
+        let numeric = glam::DVec3::new(-dx, 1.0, -dz).normalize().as_vec3();
+        assert!((*n - numeric).length() < 1e-6, "{n} vs {numeric}");
+        assert!((*n - field.normal(x, z)).length() < 1e-6);
+        // The uv is the grid position scaled to [0, 1]².
+        let expected = (Vec2::new(v.x, v.z) / p.size + 0.5).clamp(Vec2::ZERO, Vec2::ONE);
+        assert!(
+            (*uv - expected).abs().max_element() < 1e-6,
+            "{uv} vs {expected}"
+        );
+    }
+    // Every triangle faces up, like the vertex normals.
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+        assert!((b - a).cross(c - a).y > 0.0);
+    }
+    assert_eq!(
+        wave_mesh(&p).positions,
+        mesh.positions,
+        "same seed, same mesh"
+    );
+    assert_ne!(wave_mesh(&waves(33, 8)).positions, mesh.positions);
+}
+
+#[test]
+fn one_wave_mesh_as_obj_and_gltf_loads_and_renders_identically() {
+    let dir = out_dir("water-formats");
+    let mesh = wave_mesh(&waves(65, 3));
+    let files = ["water.obj", "water.gltf", "water.glb"];
+    write_obj(&mesh, &dir.join(files[0])).unwrap();
+    write_gltf(&mesh, &dir.join(files[1])).unwrap();
+    write_gltf(&mesh, &dir.join(files[2])).unwrap();
+    assert_same_mesh(&mesh, &load_obj(&dir.join(files[0])).unwrap());
+    assert_same_mesh(&mesh, &load_gltf(&dir.join(files[1])).unwrap());
+    assert_same_mesh(&mesh, &load_gltf(&dir.join(files[2])).unwrap());
+    let images: Vec<_> = files
+        .iter()
+        .map(|file| {
+            let script = format!(
+                r#"
+                water = gr.mesh('water', '{file}')
+                water:set_material(gr.material({{0.1, 0.3, 0.5}}, {{0.4, 0.4, 0.4}}, 40))
+                light = gr.light({{2, 4, 3}}, {{0.9, 0.9, 0.8}}, {{1, 0, 0}})
+                gr.render(water, 'x.png', 48, 32, {{0, 4, 7}}, {{0, -4, -7}}, {{0, 1, 0}}, 50,
+                          {{0.1, 0.1, 0.1}}, {{light}})
+                "#
+            );
+            let films = render_films(script.as_bytes(), "water.lua", &dir).unwrap();
+            films.into_iter().next().unwrap().2.pixels
+        })
+        .collect();
+    assert_eq!(images[0], images[1], "OBJ and glTF render alike");
+    assert_eq!(images[0], images[2], "OBJ and GLB render alike");
+    // The waves show: the lit surface is not one flat colour.
+    let distinct = images[0]
+        .iter()
+        .filter(|&&p| p != images[0][images[0].len() / 2])
+        .count();
+    assert!(distinct > images[0].len() / 2, "{distinct}");
 }

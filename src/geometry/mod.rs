@@ -11,6 +11,7 @@ pub mod mesh;
 pub mod ray;
 pub mod sphere;
 pub mod triangle;
+pub mod water;
 
 pub use ray::{Ray, offset_ray_origin};
 

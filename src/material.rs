@@ -11,6 +11,7 @@ pub mod medium;
 pub mod perlin;
 pub mod texture;
 
+use crate::geometry::mesh::MeshMaterial;
 use crate::scene::desc::MaterialDesc;
 use glam::Vec3A;
 
@@ -33,6 +34,17 @@ impl Material {
             shininess: d.shininess,
             transparency: d.transparency,
             ior: d.ior,
+        }
+    }
+
+    /// Returns the material a mesh file defined (its texture is not used yet).
+    pub fn from_mesh(m: &MeshMaterial) -> Material {
+        Material {
+            kd: m.kd.into(),
+            ks: m.ks.into(),
+            shininess: m.shininess,
+            transparency: m.transparency,
+            ior: m.ior,
         }
     }
 

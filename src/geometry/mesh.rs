@@ -65,13 +65,20 @@ pub struct MeshGeom {
     pub uvs: Vec<Vec2>,
     /// Vertex indices, in BVH order: the BVH's leaf index `i` is triangle `i`.
     pub triangles: Vec<[u32; 3]>,
+    /// Scene material (index into `Scene::materials`) of each triangle, in BVH order like
+    /// `triangles`, or empty when the file carries no materials.
+    pub materials: Vec<u32>,
     pub bvh: Bvh,
     pub bounds: Bounds,
 }
 
 impl MeshGeom {
-    /// Builds the mesh's BVH; positions must be finite.
-    pub fn new(data: &MeshData) -> MeshGeom {
+    /// Builds the mesh's BVH; the file's materials become scene materials from `first_material`
+    /// on.
+    ///
+    /// Positions must be finite, and `triangle_materials` empty or parallel to `triangles` with
+    /// every entry below `materials.len()` (the scene builder checks both).
+    pub fn new(data: &MeshData, first_material: u32) -> MeshGeom {
         let positions: Vec<Vec3A> = data.positions.iter().map(|&p| p.into()).collect();
         let boxes: Vec<Bounds> = data
             .triangles
@@ -87,12 +94,21 @@ impl MeshGeom {
             .iter()
             .map(|&i| data.triangles[i as usize])
             .collect();
+        let materials = if data.triangle_materials.is_empty() {
+            Vec::new()
+        } else {
+            bvh.order()
+                .iter()
+                .map(|&i| first_material + data.triangle_materials[i as usize])
+                .collect()
+        };
         let bounds = boxes.iter().fold(Bounds::EMPTY, |a, &b| a.union(b));
         MeshGeom {
             positions,
             normals: data.normals.iter().map(|&n| n.into()).collect(),
             uvs: data.uvs.clone(),
             triangles,
+            materials,
             bvh,
             bounds,
         }

@@ -13,6 +13,7 @@ pub mod ray;
 pub mod sphere;
 pub mod triangle;
 pub mod uv;
+pub mod water;
 
 pub use ray::{Ray, offset_ray_origin};
 

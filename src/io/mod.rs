@@ -1,4 +1,5 @@
 //! Reading and writing files: meshes in, images out.
 
+pub mod gltf;
 pub mod image;
 pub mod obj;

@@ -4,9 +4,12 @@
 //! Accepted subset: `v x y z [w]` (and `v x y z r g b`, colours ignored),
 //! `vt u v [w]`, `vn x y z`, and `f` faces whose corners are `i`, `i/t`, `i//n`
 //! or `i/t/n`, with positive or negative (relative) indices; quads and n-gons
-//! are fan triangulated. `#` comments, `o`, `g`, `s`, `usemtl`, `mtllib` (the
-//! `.mtl` is not read) and unknown statements are ignored, and all objects and
-//! groups are merged into one mesh. Faces and `l` lines with one or two corners
+//! are fan triangulated. `#` comments, `o`, `g`, `s` and unknown statements are
+//! ignored, and all objects and groups are merged into one mesh. `mtllib` reads a
+//! material library (see [`mtl`]; a missing one is skipped) and `usemtl` sets the
+//! material of the faces after it, filling [`MeshData::materials`] and
+//! `triangle_materials` when any face has a known material (faces without one then
+//! get the renderer's grey). Faces and `l` lines with one or two corners
 //! are dropped (longer `l` lines are read as faces, as tobj does). Colours on
 //! only some `v` lines are rejected by tobj. Only vertices used by faces are kept;
 //! a position is duplicated when its corners carry different normals or uvs.
@@ -14,6 +17,15 @@
 //! Parsing is done by `tobj`. Because tobj reports no line numbers, a light
 //! line scanner re-reads the text only when something is wrong (and a cheap
 //! guard vets zero, relative or huge face indices before tobj sees them).
+//!
+//! ```lua
+//! cow = gr.mesh('cow', 'cow.obj')   -- its .mtl colours apply unless cow:set_material(...)
+//! ```
+
+mod mtl;
+mod write;
+
+pub use write::write_obj;
 
 use crate::geometry::mesh::MeshData;
 use glam::{Vec2, Vec3};
@@ -51,7 +63,8 @@ pub fn load_obj(path: &Path) -> Result<MeshData, ObjError> {
     parse_obj(&String::from_utf8_lossy(&bytes), path)
 }
 
-/// Parses OBJ text already in memory into one mesh; `path` is only used for messages.
+/// Parses OBJ text already in memory into one mesh; `path` names the file in messages and
+/// locates its material libraries.
 pub fn parse_obj(text: &str, path: &Path) -> Result<MeshData, ObjError> {
     if has_unsafe_index(text) {
         return Err(locate(text, path, "face index out of range"));
@@ -64,10 +77,15 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<MeshData, ObjError> {
         ignore_lines: true,
         ..Default::default()
     };
-    let no_materials = |_: &Path| Ok((Vec::new(), Default::default()));
-    let (models, _) = tobj::load_obj_buf(&mut text.as_bytes(), &options, no_materials)
-        .map_err(|e| locate(text, path, &e.to_string()))?;
-    let mesh = merge(&models, path)?;
+    let libraries = mtl::MtlLoader::new(path.parent().unwrap_or(Path::new("")));
+    let (models, materials) =
+        tobj::load_obj_buf(&mut text.as_bytes(), &options, |name| libraries.load(name))
+            .map_err(|e| locate(text, path, &e.to_string()))?;
+    if let Some(fault) = libraries.fault.into_inner() {
+        return Err(fault);
+    }
+    let mut mesh = merge(&models, path)?;
+    mtl::attach(&mut mesh, &models, &materials.unwrap_or_default());
     if let Some(what) = first_non_finite(&mesh) {
         return Err(locate(text, path, what));
     }

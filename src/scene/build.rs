@@ -66,6 +66,9 @@ pub struct Instance {
     pub normal_to_world: Mat3A,
     /// Index into [`Scene::materials`].
     pub material: u32,
+    /// True when a mesh instance shades each triangle with its file's material
+    /// ([`MeshGeom::materials`]) rather than `material`: the script set no material on the node.
+    pub mesh_materials: bool,
     /// The geometry node this instance places.
     pub node: NodeId,
 }
@@ -144,6 +147,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
     let mut b = Builder {
         desc,
         fallback,
+        materials,
         meshes: Vec::new(),
         mesh_index: HashMap::new(),
         csgs: Vec::new(),
@@ -169,7 +173,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         instances,
         meshes: b.meshes,
         csgs: b.csgs,
-        materials,
+        materials: b.materials,
         lights: render
             .lights
             .iter()
@@ -258,6 +262,8 @@ fn flatten(desc: &SceneDesc, root: NodeId) -> Result<Vec<Placement>> {
 struct Builder<'a> {
     desc: &'a SceneDesc,
     fallback: u32,
+    /// The script's materials, the fallback, then each built mesh's file materials.
+    materials: Vec<Material>,
     meshes: Vec<MeshGeom>,
     mesh_index: HashMap<MeshId, u32>,
     csgs: Vec<CsgTree>,
@@ -413,9 +419,17 @@ impl Builder<'_> {
             ));
         }
         *self.stats.by_kind.entry(shape.label()).or_default() += 1;
+        let mesh_materials = match shape {
+            Shape::Mesh(m) => {
+                node.material.is_none() && !self.meshes[m as usize].materials.is_empty()
+            }
+            _ => false,
+        };
         let material = match shape {
             // A CSG hit takes the material of the operand hit; the instance's is a fallback.
             Shape::Csg(_) => self.fallback,
+            // Each triangle takes its file material; the instance's is a fallback.
+            _ if mesh_materials => self.fallback,
             _ => self.material_of(p.node, None),
         };
         self.instances.push(Instance {
@@ -424,6 +438,7 @@ impl Builder<'_> {
             object_from_world: to_f32(world.inverse()),
             normal_to_world: normal_matrix(&world.matrix3),
             material,
+            mesh_materials,
             node: p.node,
         });
         self.bounds.push(bounds);
@@ -445,7 +460,26 @@ impl Builder<'_> {
                 ),
             ));
         }
-        let geom = MeshGeom::new(&desc.data);
+        let data = &desc.data;
+        let ids = &data.triangle_materials;
+        if !ids.is_empty()
+            && (ids.len() != data.triangles.len()
+                || ids.iter().any(|&m| m as usize >= data.materials.len()))
+        {
+            return Err(Error::at(
+                &desc.loc,
+                format!(
+                    "mesh {} has per-triangle materials that do not match its triangles or materials",
+                    data.source.display()
+                ),
+            ));
+        }
+        let first_material = self.materials.len() as u32;
+        if !ids.is_empty() {
+            self.materials
+                .extend(data.materials.iter().map(Material::from_mesh));
+        }
+        let geom = MeshGeom::new(data, first_material);
         self.meshes.push(geom);
         let index = self.meshes.len() as u32 - 1;
         self.mesh_index.insert(id, index);
@@ -578,13 +612,17 @@ impl Scene {
             Shape::Mesh(m) => self.meshes[m as usize]
                 .intersect(&local)
                 .map(|(tri, h)| Hit {
+                    material: if inst.mesh_materials {
+                        self.meshes[m as usize].materials[tri as usize]
+                    } else {
+                        inst.material
+                    },
                     t: h.t,
                     instance: i as u32,
                     prim: tri,
                     b1: h.b1,
                     b2: h.b2,
                     normal: Vec3A::ZERO,
-                    material: inst.material,
                     face: 0,
                 }),
             Shape::Csg(c) => self.csgs[c as usize]

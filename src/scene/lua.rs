@@ -23,7 +23,7 @@
 //! `getuservalue`, `getupvalue`); `unpack` and `string.gfind` are aliased for legacy scripts.
 
 use crate::error::{Error, Loc, Result};
-use crate::io::obj;
+use crate::io::{gltf, obj};
 use crate::scene::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
 use crate::scene::desc::{
     CameraDesc, CsgOp, LightDesc, MaterialDesc, MeshDesc, MeshId, NodeKind, RenderDesc, SceneDesc,
@@ -356,13 +356,13 @@ fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> 
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
+    let cannot = |e: &dyn std::fmt::Display| a.fail(format!("cannot load mesh '{given}': {e}"));
     let data = match ext.as_str() {
-        "obj" => {
-            obj::load_obj(&path).map_err(|e| a.fail(format!("cannot load mesh '{given}': {e}")))?
-        }
+        "obj" => obj::load_obj(&path).map_err(|e| cannot(&e))?,
+        "gltf" | "glb" => gltf::load_gltf(&path).map_err(|e| cannot(&e))?,
         _ => {
             return Err(a.fail(format!(
-                "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj)"
+                "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj, .gltf and .glb)"
             )));
         }
     };

@@ -84,3 +84,143 @@ pub fn render_corpus_script(path: &Path) -> Vec<(RenderDesc, Camera, Film)> {
     let src = std::fs::read(path).unwrap();
     render_films(&src, &path.display().to_string(), path.parent().unwrap()).unwrap()
 }
+
+/// A glTF file built by a test: one binary buffer of typed views plus JSON written around it.
+#[derive(Default)]
+pub struct GltfFile {
+    /// The buffer's bytes, every view starting on a 4-byte boundary.
+    pub bin: Vec<u8>,
+    views: Vec<String>,
+    accessors: Vec<String>,
+}
+
+impl GltfFile {
+    /// Appends raw bytes as a buffer view and returns the view's index.
+    pub fn view(&mut self, bytes: &[u8]) -> usize {
+        self.bin.resize(self.bin.len().next_multiple_of(4), 0);
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        self.views.push(format!(
+            r#"{{"buffer":0,"byteOffset":{offset},"byteLength":{}}}"#,
+            bytes.len()
+        ));
+        self.views.len() - 1
+    }
+
+    /// Appends an accessor with raw JSON members over a new view of `bytes`; returns its index.
+    pub fn accessor(&mut self, bytes: &[u8], members: &str) -> usize {
+        let view = self.view(bytes);
+        self.accessors
+            .push(format!(r#"{{"bufferView":{view},{members}}}"#));
+        self.accessors.len() - 1
+    }
+
+    /// Appends `FLOAT` data as a `VEC3` or `VEC2` (`kind`) accessor; returns its index.
+    pub fn floats(&mut self, kind: &str, values: &[f32]) -> usize {
+        let width = if kind == "VEC2" { 2 } else { 3 };
+        let bytes: Vec<u8> = values.iter().flat_map(|f| f.to_le_bytes()).collect();
+        let mut members = format!(
+            r#""componentType":5126,"count":{},"type":"{kind}""#,
+            values.len() / width
+        );
+        if width == 3 && !values.is_empty() {
+            let fold = |f: fn(f32, f32) -> f32| {
+                let axis = |k: usize| values.iter().skip(k).step_by(3).copied().reduce(f).unwrap();
+                format!("[{},{},{}]", axis(0), axis(1), axis(2))
+            };
+            members += &format!(r#","min":{},"max":{}"#, fold(f32::min), fold(f32::max));
+        }
+        self.accessor(&bytes, &members)
+    }
+
+    /// Appends indices as `u8` (5121), `u16` (5123) or `u32` (5125) `component`s.
+    pub fn indices(&mut self, component: u32, values: &[u32]) -> usize {
+        let bytes: Vec<u8> = match component {
+            5121 => values.iter().map(|&i| i as u8).collect(),
+            5123 => values
+                .iter()
+                .flat_map(|&i| (i as u16).to_le_bytes())
+                .collect(),
+            _ => values.iter().flat_map(|&i| i.to_le_bytes()).collect(),
+        };
+        let members = format!(
+            r#""componentType":{component},"count":{},"type":"SCALAR""#,
+            values.len()
+        );
+        self.accessor(&bytes, &members)
+    }
+
+    /// Returns the JSON: `rest` holds the other top-level members (scenes, nodes, meshes, …);
+    /// `uri` names the buffer's data (`None` for a GLB's BIN chunk).
+    pub fn json(&self, uri: Option<&str>, rest: &str) -> String {
+        let uri = uri.map_or(String::new(), |u| format!(r#""uri":"{u}","#));
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},{rest},"buffers":[{{{uri}"byteLength":{}}}],"bufferViews":[{}],"accessors":[{}]}}"#,
+            self.bin.len(),
+            self.views.join(","),
+            self.accessors.join(",")
+        )
+    }
+
+    /// Writes `name.gltf` and `name.bin` into `dir`; returns the `.gltf` path.
+    pub fn write_external(&self, dir: &Path, name: &str, rest: &str) -> PathBuf {
+        std::fs::write(dir.join(format!("{name}.bin")), &self.bin).unwrap();
+        let path = dir.join(format!("{name}.gltf"));
+        let json = self.json(Some(&format!("{name}.bin")), rest);
+        std::fs::write(&path, json).unwrap();
+        path
+    }
+
+    /// Writes `name.gltf` with the buffer embedded as a base64 data URI; returns its path.
+    pub fn write_embedded(&self, dir: &Path, name: &str, rest: &str) -> PathBuf {
+        use base64::Engine;
+        let data = base64::engine::general_purpose::STANDARD.encode(&self.bin);
+        let uri = format!("data:application/octet-stream;base64,{data}");
+        let path = dir.join(format!("{name}.gltf"));
+        std::fs::write(&path, self.json(Some(&uri), rest)).unwrap();
+        path
+    }
+
+    /// Returns the GLB bytes of the file.
+    pub fn glb(&self, rest: &str) -> Vec<u8> {
+        let mut json = self.json(None, rest).into_bytes();
+        json.resize(json.len().next_multiple_of(4), b' ');
+        let mut bin = self.bin.clone();
+        bin.resize(bin.len().next_multiple_of(4), 0);
+        let total = 12 + 8 + json.len() + 8 + bin.len();
+        let mut out = Vec::with_capacity(total);
+        out.extend(b"glTF");
+        out.extend(2u32.to_le_bytes());
+        out.extend((total as u32).to_le_bytes());
+        out.extend((json.len() as u32).to_le_bytes());
+        out.extend(b"JSON");
+        out.extend(json);
+        out.extend((bin.len() as u32).to_le_bytes());
+        out.extend(b"BIN\0");
+        out.extend(bin);
+        out
+    }
+
+    /// Writes `name.glb` into `dir`; returns its path.
+    pub fn write_glb(&self, dir: &Path, name: &str, rest: &str) -> PathBuf {
+        let path = dir.join(format!("{name}.glb"));
+        std::fs::write(&path, self.glb(rest)).unwrap();
+        path
+    }
+}
+
+/// Asserts two meshes hold the same data (every field but `source`).
+pub fn assert_same_mesh(
+    a: &caustic::geometry::mesh::MeshData,
+    b: &caustic::geometry::mesh::MeshData,
+) {
+    assert_eq!(a.positions, b.positions, "positions");
+    assert_eq!(a.normals, b.normals, "normals");
+    assert_eq!(a.uvs, b.uvs, "uvs");
+    assert_eq!(a.triangles, b.triangles, "triangles");
+    assert_eq!(a.materials, b.materials, "materials");
+    assert_eq!(
+        a.triangle_materials, b.triangle_materials,
+        "triangle materials"
+    );
+}

@@ -1,0 +1,232 @@
+//! Procedural water surfaces: a seedable sum of sine waves sampled as an N×N height field, with
+//! analytic normals, for caustics through a wavy interface.
+//!
+//! # Formula
+//! The surface is the height field `y = h(x, z)` over the square `[-size/2, size/2]²` with
+//!
+//! ```text
+//! h(x, z) = Σᵢ Aᵢ · sin(kᵢ · (x, z) + φᵢ),     ∇h = Σᵢ Aᵢ · cos(kᵢ · (x, z) + φᵢ) · kᵢ
+//! n(x, z) = normalize(−∂h/∂x, 1, −∂h/∂z)
+//! ```
+//!
+//! For each of the `waves` components, drawn from a SplitMix64 stream keyed by `seed`: the
+//! wavelength `λᵢ` is uniform in `[wavelength/4, wavelength]`, the direction makes an angle
+//! uniform in `[-spread, spread]` with +x (the wind), `kᵢ = 2π/λᵢ · (cos θᵢ, sin θᵢ)`, the phase
+//! `φᵢ` is uniform in `[0, 2π)`, and `Aᵢ ∝ λᵢ` (equal steepness) scaled so that `Σ Aᵢ =
+//! amplitude`, hence `|h| ≤ amplitude`. Sine waves rather than Gerstner waves keep the surface a
+//! true height field over the grid, so vertex `(i, j)` sits exactly at its grid point.
+//!
+//! The generator is reached through the `water` tool, whose file `gr.mesh` then loads:
+//!
+//! ```lua
+//! -- cargo run --release -p caustic-tools --bin water -- --n 1001 --seed 7 -o meshes/water_1001.obj
+//! water = gr.mesh('water', 'meshes/water_1001.obj')
+//! ```
+
+use crate::geometry::mesh::MeshData;
+use glam::{DVec2, Vec2, Vec3};
+use std::f64::consts::TAU;
+
+/// Largest grid side [`wave_mesh`] accepts: `n²` vertex indices must fit in `u32`.
+pub const MAX_N: u32 = 65_535;
+
+/// What [`wave_mesh`] generates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WaveParams {
+    /// Vertices per side of the grid (N×N vertices, 2(N−1)² triangles), in `2..=MAX_N`.
+    pub n: u32,
+    /// Side length of the square the grid covers, centred on the origin in the xz plane.
+    pub size: f32,
+    /// Seed of the wave components: the same seed gives the same surface.
+    pub seed: u64,
+    /// Number of sine components.
+    pub waves: u32,
+    /// Sum of the components' amplitudes, a bound on `|y|`.
+    pub amplitude: f32,
+    /// Longest wavelength; components range down to a quarter of it.
+    pub wavelength: f32,
+    /// Largest angle, in radians, between a component's direction and +x.
+    pub spread: f32,
+}
+
+impl Default for WaveParams {
+    fn default() -> WaveParams {
+        WaveParams {
+            n: 129,
+            size: 10.0,
+            seed: 0,
+            waves: 8,
+            amplitude: 0.1,
+            wavelength: 2.0,
+            spread: 0.6,
+        }
+    }
+}
+
+/// One sine component: `amplitude · sin(k · (x, z) + phase)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wave {
+    pub amplitude: f64,
+    /// Wave vector in the xz plane, `2π/λ` long.
+    pub k: DVec2,
+    pub phase: f64,
+}
+
+/// The continuous surface a [`WaveParams`] describes, before sampling.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WaveField {
+    pub waves: Vec<Wave>,
+}
+
+/// Returns the next SplitMix64 output (Steele, Lea and Flood 2014) and advances `state`.
+fn splitmix64(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+impl WaveField {
+    /// Draws the components of `p` from its seed.
+    pub fn new(p: &WaveParams) -> WaveField {
+        let mut state = p.seed;
+        let mut uniform = || (splitmix64(&mut state) >> 11) as f64 / (1u64 << 53) as f64;
+        let mut waves: Vec<Wave> = (0..p.waves)
+            .map(|_| {
+                let wavelength = p.wavelength as f64 * (0.25 + 0.75 * uniform());
+                let angle = p.spread as f64 * (2.0 * uniform() - 1.0);
+                Wave {
+                    amplitude: wavelength,
+                    k: DVec2::from_angle(angle) * (TAU / wavelength),
+                    phase: TAU * uniform(),
+                }
+            })
+            .collect();
+        let total: f64 = waves.iter().map(|w| w.amplitude).sum();
+        for w in &mut waves {
+            w.amplitude *= p.amplitude as f64 / total;
+        }
+        WaveField { waves }
+    }
+
+    /// Returns the height `h(x, z)`.
+    pub fn height(&self, x: f64, z: f64) -> f64 {
+        let at = DVec2::new(x, z);
+        self.waves
+            .iter()
+            .map(|w| w.amplitude * (w.k.dot(at) + w.phase).sin())
+            .sum()
+    }
+
+    /// Returns the unit normal `normalize(−∂h/∂x, 1, −∂h/∂z)`, which points up (+y).
+    pub fn normal(&self, x: f64, z: f64) -> Vec3 {
+        let at = DVec2::new(x, z);
+        let gradient: DVec2 = self
+            .waves
+            .iter()
+            .map(|w| w.k * (w.amplitude * (w.k.dot(at) + w.phase).cos()))
+            .sum();
+        glam::DVec3::new(-gradient.x, 1.0, -gradient.y)
+            .normalize()
+            .as_vec3()
+    }
+}
+
+/// Samples the wave surface of `p` as an N×N grid mesh with analytic normals and uvs.
+///
+/// Grid vertex `(i, j)` lies at `x = −size/2 + size·i/(N−1)`, `z = −size/2 + size·j/(N−1)`,
+/// `y = h(x, z)`, with uv `(i/(N−1), j/(N−1))`. Each grid cell gives two triangles wound
+/// counter-clockwise seen from +y, so geometric normals point up like the vertex normals.
+/// Vertices are numbered in the order the triangles first use them (the order an OBJ loader
+/// rebuilds), so a mesh written to any format loads back with the same numbering.
+///
+/// # Panics
+/// If `p.n` is outside `2..=MAX_N`.
+pub fn wave_mesh(p: &WaveParams) -> MeshData {
+    assert!(
+        (2..=MAX_N).contains(&p.n),
+        "wave grid side {} outside 2..={MAX_N}",
+        p.n
+    );
+    let n = p.n as usize;
+    let grid = |i: usize, j: usize| (j * n + i) as u32;
+    let mut grid_triangles = Vec::with_capacity(2 * (n - 1) * (n - 1));
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let (a, b) = (grid(i, j), grid(i + 1, j));
+            let (c, d) = (grid(i, j + 1), grid(i + 1, j + 1));
+            grid_triangles.push([a, c, b]);
+            grid_triangles.push([b, c, d]);
+        }
+    }
+    // Renumber by first use; every grid point is used, so `order` ends up a permutation.
+    let mut number = vec![u32::MAX; n * n];
+    let mut order = Vec::with_capacity(n * n);
+    let triangles = grid_triangles
+        .iter()
+        .map(|t| {
+            t.map(|g| {
+                let slot = &mut number[g as usize];
+                if *slot == u32::MAX {
+                    *slot = order.len() as u32;
+                    order.push(g as usize);
+                }
+                *slot
+            })
+        })
+        .collect();
+    let field = WaveField::new(p);
+    let last = (n - 1) as f64;
+    let coordinate = |k: usize| p.size as f64 * (k as f64 / last - 0.5);
+    let mut mesh = MeshData {
+        triangles,
+        source: format!("wave mesh (n {}, seed {})", p.n, p.seed).into(),
+        ..Default::default()
+    };
+    for &g in &order {
+        let (i, j) = (g % n, g / n);
+        let (x, z) = (coordinate(i), coordinate(j));
+        mesh.positions
+            .push(Vec3::new(x as f32, field.height(x, z) as f32, z as f32));
+        mesh.normals.push(field.normal(x, z));
+        mesh.uvs.push(Vec2::new(
+            (i as f64 / last) as f32,
+            (j as f64 / last) as f32,
+        ));
+    }
+    mesh
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn amplitudes_sum_to_the_bound_and_directions_stay_in_the_spread() {
+        let p = WaveParams::default();
+        let field = WaveField::new(&p);
+        let sum: f64 = field.waves.iter().map(|w| w.amplitude).sum();
+        assert!((sum - p.amplitude as f64).abs() < 1e-9);
+        for w in &field.waves {
+            assert!(w.k.y.atan2(w.k.x).abs() <= p.spread as f64 + 1e-12);
+            let wavelength = TAU / w.k.length();
+            assert!(
+                (0.5 - 1e-9..=2.0 + 1e-9).contains(&wavelength),
+                "{wavelength}"
+            );
+        }
+    }
+
+    #[test]
+    fn smallest_grid_is_one_cell_numbered_by_first_use() {
+        let mesh = wave_mesh(&WaveParams {
+            n: 2,
+            ..Default::default()
+        });
+        assert_eq!(mesh.triangles, [[0, 1, 2], [2, 1, 3]]);
+        let xz: Vec<[f32; 2]> = mesh.positions.iter().map(|p| [p.x, p.z]).collect();
+        assert_eq!(xz, [[-5.0, -5.0], [-5.0, 5.0], [5.0, -5.0], [5.0, 5.0]]);
+        assert_eq!(mesh.uvs, [Vec2::ZERO, Vec2::Y, Vec2::X, Vec2::ONE]);
+    }
+}

@@ -1,0 +1,461 @@
+//! glTF 2.0 meshes: reads `.gltf` (external `.bin` files or base64 data URIs) and `.glb` into one
+//! [`MeshData`], and writes a mesh back out ([`write_gltf`]). Every fault names the file.
+//!
+//! ```lua
+//! boat = gr.mesh('boat', 'meshes/boat.glb')   -- or .gltf; the extension picks the loader
+//! ```
+//!
+//! # What is read
+//! Every mesh primitive reachable from the default scene (else scene 0; with no scene at all,
+//! every root node), with each node's TRS or matrix transform composed down the hierarchy and
+//! baked into the vertices: positions by the node's world transform, normals by its inverse
+//! transpose and renormalised (left untouched under an identity transform). A node whose
+//! transform mirrors space (negative determinant) has its triangles' winding reversed, as the
+//! spec asks, so front faces stay front faces; a node with a singular transform (zero scale)
+//! draws nothing and is skipped. Primitives in `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN`
+//! mode are read, indexed (`u8`, `u16`, `u32`) or not; `POINTS` and `LINE*` primitives are
+//! skipped. Surplus indices of a `TRIANGLES` primitive (a count not divisible by 3) are ignored.
+//! As in the OBJ loader, normals and uvs (`TEXCOORD_0`) are all-or-nothing over the merged mesh.
+//! Sparse accessors, accessors without a buffer view, node cycles and nodes with two parents are
+//! rejected, as are required extensions other than the two materials ones below.
+//!
+//! # Materials
+//! glTF's metallic-roughness model is approximated in the renderer's Phong terms. With base
+//! colour `c`, metallic `m`, roughness `r`, smoothness `s = (1 − r)²` and specular colour
+//! `F0 = mix(0.04, c, m)` (the usual dielectric 4 %):
+//! - `kd = c · (1 − m·s)`: dielectrics keep their base colour; smooth metals lose their diffuse
+//!   lobe to the mirror, rough metals keep it (our `ks` is also a perfect-mirror weight);
+//! - `ks = F0 · s`: a smooth surface mirrors with `F0`, a rough one not at all;
+//! - `shininess = 2/α² − 2` with `α = r²`, clamped to `[0, 10000]` (the Blinn-Phong exponent
+//!   matching a Beckmann lobe of roughness α, Walter et al. 2007, §5.2);
+//! - `transparency` = `KHR_materials_transmission`'s factor, `ior` = `KHR_materials_ior` (1.5
+//!   when absent, the glTF default).
+//!
+//! The glTF default material (white, fully metallic and rough) thus becomes a white diffuse
+//! surface. Factors are clamped to their glTF ranges (`ior` to at least 1). The base colour
+//! texture's image is carried as a path when it is an external URI (resolved against the file's
+//! folder); embedded images (buffer views, data URIs) leave `texture` as `None`. Alpha, emission
+//! and every other texture are ignored. When no primitive has a material, the mesh carries none;
+//! otherwise primitives without one get the glTF default material.
+
+mod buffer;
+mod write;
+
+pub use write::write_gltf;
+
+use crate::geometry::mesh::{MeshData, MeshMaterial};
+use buffer::{load_buffers, read_indices, read_uvs, read_vec3, split_glb, uri_path};
+use glam::{DAffine3, DMat3, DQuat, DVec3, Vec2, Vec3};
+use gltf::json::validation::Checked;
+use gltf::mesh::Mode;
+use gltf::{Document, Semantic};
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// Phong exponent given to a perfectly smooth glTF surface.
+const MAX_SHININESS: f32 = 10_000.0;
+
+/// A fault found while reading a glTF file; every message names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum GltfError {
+    /// The file itself could not be read (`error` is shown in the message, not as a source).
+    #[error("{}: cannot read: {error}", path.display())]
+    Read { path: PathBuf, error: io::Error },
+    /// The file is malformed: bad JSON or GLB, a missing buffer, data out of range or not finite.
+    #[error("{}: {message}", path.display())]
+    Invalid { path: PathBuf, message: String },
+    /// The file is valid glTF but needs something caustic does not read.
+    #[error("{}: unsupported: {message}", path.display())]
+    Unsupported { path: PathBuf, message: String },
+}
+
+/// Reads a `.gltf` or `.glb` file into one mesh (see the module doc for what is read).
+pub fn load_gltf(path: &Path) -> Result<MeshData, GltfError> {
+    let bytes = std::fs::read(path).map_err(|error| GltfError::Read {
+        path: path.to_owned(),
+        error,
+    })?;
+    parse_gltf(&bytes, path)
+}
+
+/// Parses glTF JSON or GLB bytes already in memory; `path` names the file in messages and
+/// locates its external buffers and images.
+pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<MeshData, GltfError> {
+    let invalid = |message: String| GltfError::Invalid {
+        path: path.to_owned(),
+        message,
+    };
+    let (json, bin) = if bytes.starts_with(buffer::GLB_MAGIC) {
+        split_glb(bytes).map_err(invalid)?
+    } else {
+        (bytes, None)
+    };
+    let root = gltf::json::Root::from_slice(json)
+        .map_err(|e| invalid(format!("invalid glTF JSON: {e}")))?;
+    let enabled = gltf::json::extensions::ENABLED_EXTENSIONS;
+    if let Some(ext) = root
+        .extensions_required
+        .iter()
+        .find(|e| !enabled.contains(&e.as_str()))
+    {
+        return Err(GltfError::Unsupported {
+            path: path.to_owned(),
+            message: format!(
+                "required extension {ext} (caustic reads {})",
+                enabled.join(", ")
+            ),
+        });
+    }
+    // gltf-json's validation indexes the accessors by POSITION without a bounds check.
+    let positions = Checked::Valid(Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let bad = prim.attributes.get(&positions).map(|i| i.value());
+            if let Some(bad) = bad.filter(|&i| i >= root.accessors.len()) {
+                return Err(invalid(format!(
+                    "mesh {m} primitive {p}: POSITION accessor {bad} does not exist"
+                )));
+            }
+        }
+    }
+    let doc = Document::from_json(root).map_err(|e| invalid(validation_message(e)))?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let buffers = load_buffers(&doc, bin, dir).map_err(invalid)?;
+    let mut parts = Vec::new();
+    let mut default_material = None;
+    for (node, world) in placements(&doc).map_err(invalid)? {
+        let Some(mesh) = node.mesh() else { continue };
+        let det = world.matrix3.determinant();
+        if det == 0.0 || !det.is_finite() {
+            continue;
+        }
+        for prim in mesh.primitives() {
+            let at = format!("mesh {} primitive {}", mesh.index(), prim.index());
+            let Some(mut part) =
+                read_primitive(&prim, &buffers).map_err(|e| GltfError::Invalid {
+                    path: path.to_owned(),
+                    message: format!("{at}: {e}"),
+                })?
+            else {
+                continue;
+            };
+            bake(&mut part, &world)
+                .map_err(|e| invalid(format!("{at} under node {}: {e}", node.index())))?;
+            if part.material.is_none() && default_material.is_none() {
+                default_material = Some(material(&prim.material(), &doc, dir).map_err(invalid)?);
+            }
+            parts.push(part);
+        }
+    }
+    merge(parts, default_material, &doc, dir, path).map_err(invalid)
+}
+
+/// Formats gltf's validation errors (at most three) as one message.
+fn validation_message(error: gltf::Error) -> String {
+    match error {
+        gltf::Error::Validation(errors) => {
+            let listed: Vec<String> = errors
+                .iter()
+                .take(3)
+                .map(|(path, e)| format!("{path}: {e}"))
+                .collect();
+            let more = errors.len().saturating_sub(3);
+            let tail = if more > 0 {
+                format!(" (and {more} more)")
+            } else {
+                String::new()
+            };
+            format!("invalid glTF: {}{tail}", listed.join("; "))
+        }
+        other => format!("invalid glTF: {other}"),
+    }
+}
+
+/// Returns each node reached from the scene's roots with its `world_from_node`, in depth-first
+/// order; fails on a node reached twice (a cycle or a shared child) or a bad transform.
+fn placements(doc: &Document) -> Result<Vec<(gltf::Node<'_>, DAffine3)>, String> {
+    let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for child in doc.nodes().flat_map(|n| n.children()) {
+                is_child[child.index()] = true;
+            }
+            doc.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+    let mut seen = vec![false; doc.nodes().len()];
+    let mut stack: Vec<_> = roots
+        .into_iter()
+        .rev()
+        .map(|n| (n, DAffine3::IDENTITY))
+        .collect();
+    let mut out = Vec::new();
+    while let Some((node, parent)) = stack.pop() {
+        let i = node.index();
+        if std::mem::replace(&mut seen[i], true) {
+            return Err(format!(
+                "node {i} is reached twice (glTF nodes must form a tree)"
+            ));
+        }
+        let world = parent * local_transform(&node)?;
+        let children: Vec<_> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+        out.push((node, world));
+    }
+    Ok(out)
+}
+
+/// Returns a node's `parent_from_node` in double precision.
+fn local_transform(node: &gltf::Node) -> Result<DAffine3, String> {
+    let d = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
+    let m = match node.transform() {
+        gltf::scene::Transform::Matrix { matrix: c } => DAffine3::from_cols(
+            d([c[0][0], c[0][1], c[0][2]]),
+            d([c[1][0], c[1][1], c[1][2]]),
+            d([c[2][0], c[2][1], c[2][2]]),
+            d([c[3][0], c[3][1], c[3][2]]),
+        ),
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => {
+            let q = DQuat::from_array(rotation.map(f64::from));
+            let length = q.length();
+            if !(length > 0.0 && length.is_finite()) {
+                return Err(format!(
+                    "node {} has a zero rotation quaternion",
+                    node.index()
+                ));
+            }
+            DAffine3::from_scale_rotation_translation(d(scale), q / length, d(translation))
+        }
+    };
+    if !m.is_finite() {
+        return Err(format!("node {} has a non-finite transform", node.index()));
+    }
+    Ok(m)
+}
+
+/// One triangle primitive's data before merging, in the primitive's own index space.
+struct Part {
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
+    triangles: Vec<[u32; 3]>,
+    material: Option<usize>,
+}
+
+/// Reads one primitive, or `None` for points and lines; checks every index against the vertices.
+fn read_primitive(prim: &gltf::Primitive, buffers: &[Vec<u8>]) -> Result<Option<Part>, String> {
+    let mode = prim.mode();
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        return Ok(None);
+    }
+    let Some(position) = prim.get(&Semantic::Positions) else {
+        return Err("has no POSITION attribute".to_owned());
+    };
+    let positions = read_vec3(&position, buffers, "position")?;
+    let count = positions.len();
+    let attribute = |semantic: Semantic, name: &str| -> Result<Option<gltf::Accessor>, String> {
+        match prim.get(&semantic) {
+            Some(a) if a.count() != count => Err(format!(
+                "{name} accessor {} has {} elements for {count} positions",
+                a.index(),
+                a.count()
+            )),
+            a => Ok(a),
+        }
+    };
+    let normals = attribute(Semantic::Normals, "NORMAL")?
+        .map(|a| read_vec3(&a, buffers, "normal"))
+        .transpose()?;
+    let uvs = attribute(Semantic::TexCoords(0), "TEXCOORD_0")?
+        .map(|a| read_uvs(&a, buffers))
+        .transpose()?;
+    let indices = match prim.indices() {
+        Some(a) => read_indices(&a, buffers)?,
+        None if count > u32::MAX as usize => {
+            return Err(format!("has {count} vertices, more than 4294967295"));
+        }
+        None => (0..count as u32).collect(),
+    };
+    if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
+        return Err(format!("index {bad} out of range ({count} vertices)"));
+    }
+    Ok(Some(Part {
+        positions,
+        normals,
+        uvs,
+        triangles: assemble(mode, &indices),
+        material: prim.material().index(),
+    }))
+}
+
+/// Returns the triangles a `TRIANGLES`, `TRIANGLE_STRIP` or `TRIANGLE_FAN` index list draws, with
+/// the winding glTF 2.0 §3.7.2.1 gives.
+fn assemble(mode: Mode, idx: &[u32]) -> Vec<[u32; 3]> {
+    let n = idx.len().saturating_sub(2);
+    match mode {
+        Mode::TriangleStrip => (0..n)
+            .map(|i| [idx[i], idx[i + 1 + i % 2], idx[i + 2 - i % 2]])
+            .collect(),
+        Mode::TriangleFan => (0..n).map(|i| [idx[i + 1], idx[i + 2], idx[0]]).collect(),
+        _ => idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+    }
+}
+
+/// Moves a primitive into the mesh's frame by `world` (invertible), keeping front faces front.
+fn bake(part: &mut Part, world: &DAffine3) -> Result<(), String> {
+    if *world == DAffine3::IDENTITY {
+        return Ok(());
+    }
+    for (i, p) in part.positions.iter_mut().enumerate() {
+        *p = world.transform_point3(p.as_dvec3()).as_vec3();
+        if !p.is_finite() {
+            return Err(format!("vertex {i} lands at a non-finite position"));
+        }
+    }
+    let normal_matrix: DMat3 = world.matrix3.inverse().transpose();
+    for n in part.normals.iter_mut().flatten() {
+        *n = (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3();
+    }
+    if world.matrix3.determinant() < 0.0 {
+        for t in &mut part.triangles {
+            t.swap(1, 2);
+        }
+    }
+    Ok(())
+}
+
+/// Merges the parts into one mesh and attaches the materials they use; `default_material` is
+/// the glTF default material, for parts that have none.
+fn merge(
+    parts: Vec<Part>,
+    default_material: Option<MeshMaterial>,
+    doc: &Document,
+    dir: &Path,
+    path: &Path,
+) -> Result<MeshData, String> {
+    let has_normals = parts.iter().all(|p| p.normals.is_some());
+    let has_uvs = parts.iter().all(|p| p.uvs.is_some());
+    let has_materials = parts.iter().any(|p| p.material.is_some());
+    let default_index = doc.materials().len();
+    let mut mesh = MeshData {
+        source: path.to_owned(),
+        ..Default::default()
+    };
+    for part in parts {
+        let base = mesh.positions.len();
+        if base + part.positions.len() > u32::MAX as usize {
+            return Err("mesh has more than 4294967295 vertices".to_owned());
+        }
+        let base = base as u32;
+        mesh.positions.extend(&part.positions);
+        if has_normals {
+            mesh.normals.extend(part.normals.iter().flatten());
+        }
+        if has_uvs {
+            mesh.uvs.extend(part.uvs.iter().flatten());
+        }
+        mesh.triangles
+            .extend(part.triangles.iter().map(|t| t.map(|i| base + i)));
+        if has_materials {
+            let m = part.material.unwrap_or(default_index) as u32;
+            let count = part.triangles.len();
+            mesh.triangle_materials
+                .extend(std::iter::repeat_n(m, count));
+        }
+    }
+    if has_materials {
+        for m in doc.materials() {
+            mesh.materials.push(material(&m, doc, dir)?);
+        }
+        mesh.materials.extend(default_material);
+    }
+    Ok(mesh)
+}
+
+/// Returns the Phong material approximating a glTF material (mapping in the module doc).
+fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMaterial, String> {
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, _] = pbr.base_color_factor();
+    let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+    let ior = m.ior().unwrap_or(1.5);
+    let factors = [
+        r,
+        g,
+        b,
+        pbr.metallic_factor(),
+        pbr.roughness_factor(),
+        transmission,
+        ior,
+    ];
+    let name = match (m.name(), m.index()) {
+        (Some(name), _) => name.to_owned(),
+        (None, Some(i)) => format!("material {i}"),
+        (None, None) => "default material".to_owned(),
+    };
+    if factors.iter().any(|f| !f.is_finite()) {
+        return Err(format!("{name} has a non-finite factor"));
+    }
+    let base = Vec3::new(r, g, b).max(Vec3::ZERO);
+    let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
+    let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
+    let smoothness = (1.0 - roughness) * (1.0 - roughness);
+    let f0 = Vec3::splat(0.04).lerp(base, metallic);
+    let alpha2 = roughness.powi(4);
+    let texture = pbr.base_color_texture().and_then(|info| {
+        let image = info.texture().source().index();
+        let uri = doc.as_json().images.get(image)?.uri.as_deref()?;
+        uri_path(uri, dir)
+    });
+    Ok(MeshMaterial {
+        name,
+        kd: base * (1.0 - metallic * smoothness),
+        ks: f0 * smoothness,
+        shininess: (2.0 / alpha2.max(1e-12) - 2.0).clamp(0.0, MAX_SHININESS),
+        transparency: transmission.clamp(0.0, 1.0),
+        ior: ior.max(1.0),
+        texture,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strips_and_fans_follow_the_spec_winding() {
+        let idx = [0, 1, 2, 3, 4];
+        let strip = assemble(Mode::TriangleStrip, &idx);
+        assert_eq!(strip, [[0, 1, 2], [1, 3, 2], [2, 3, 4]]);
+        let fan = assemble(Mode::TriangleFan, &idx);
+        assert_eq!(fan, [[1, 2, 0], [2, 3, 0], [3, 4, 0]]);
+        assert_eq!(assemble(Mode::Triangles, &idx), [[0, 1, 2]]);
+        assert!(assemble(Mode::TriangleFan, &idx[..2]).is_empty());
+    }
+
+    #[test]
+    fn mirroring_transform_reverses_winding_and_transforms_normals() {
+        let mut part = Part {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: Some(vec![Vec3::Z; 3]),
+            uvs: None,
+            triangles: vec![[0, 1, 2]],
+            material: None,
+        };
+        let mirror = DAffine3::from_scale(DVec3::new(-2.0, 1.0, 1.0));
+        bake(&mut part, &mirror).unwrap();
+        assert_eq!(
+            part.positions,
+            [Vec3::ZERO, Vec3::new(-2.0, 0.0, 0.0), Vec3::Y]
+        );
+        assert_eq!(part.triangles, [[0, 2, 1]]);
+        assert_eq!(part.normals.unwrap(), [Vec3::Z; 3]);
+    }
+}

@@ -18,6 +18,9 @@ use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::{Ray as BvhRay, RayHit};
 use std::time::Duration;
 
+/// Names the build configuration [`Bvh::build`] uses, for benchmark reports.
+pub const BUILD_CONFIG: &str = "cwbvh-medium";
+
 /// An axis-aligned box; `min <= max` on every axis for a non-empty box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds {

@@ -98,6 +98,11 @@ impl MeshGeom {
         }
     }
 
+    /// Returns the bytes of triangle data kept for tracing only, beyond the shared attributes.
+    pub fn tracer_bytes(&self) -> usize {
+        0
+    }
+
     fn vertices(&self, tri: u32) -> [Vec3A; 3] {
         self.triangles[tri as usize].map(|i| self.positions[i as usize])
     }

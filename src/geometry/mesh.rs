@@ -70,6 +70,9 @@ pub struct MeshGeom {
     pub materials: Vec<u32>,
     pub bvh: Bvh,
     pub bounds: Bounds,
+    /// The corners of each triangle, in BVH order: what traversal reads, one contiguous record
+    /// per triangle instead of an index and three scattered positions.
+    corners: Vec<[Vec3A; 3]>,
 }
 
 impl MeshGeom {
@@ -89,7 +92,7 @@ impl MeshGeom {
             })
             .collect();
         let bvh = Bvh::build(&boxes);
-        let triangles = bvh
+        let triangles: Vec<[u32; 3]> = bvh
             .order()
             .iter()
             .map(|&i| data.triangles[i as usize])
@@ -102,6 +105,10 @@ impl MeshGeom {
                 .map(|&i| first_material + data.triangle_materials[i as usize])
                 .collect()
         };
+        let corners = triangles
+            .iter()
+            .map(|t| t.map(|i| positions[i as usize]))
+            .collect();
         let bounds = boxes.iter().fold(Bounds::EMPTY, |a, &b| a.union(b));
         MeshGeom {
             positions,
@@ -111,27 +118,33 @@ impl MeshGeom {
             materials,
             bvh,
             bounds,
+            corners,
         }
     }
 
-    fn vertices(&self, tri: u32) -> [Vec3A; 3] {
-        self.triangles[tri as usize].map(|i| self.positions[i as usize])
+    /// Returns the bytes of triangle data kept for tracing only, beyond the shared attributes.
+    pub fn tracer_bytes(&self) -> usize {
+        std::mem::size_of_val(self.corners.as_slice())
     }
 
     /// Returns the closest triangle hit by an object-space ray and its barycentrics.
     pub fn intersect(&self, ray: &Ray) -> Option<(u32, TriangleHit)> {
         let shear = RayShear::new(ray);
         let mut best = None;
-        self.bvh.closest(ray, |r, i| {
-            let [a, b, c] = self.vertices(i as u32);
-            match triangle::intersect(&shear, a, b, c, r.tmin, r.tmax) {
-                Some(h) => {
-                    best = Some((i as u32, h));
-                    h.t
+        self.bvh.closest(
+            ray,
+            #[inline(always)]
+            |r, i| {
+                let [a, b, c] = self.corners[i];
+                match triangle::intersect(&shear, a, b, c, r.tmin, r.tmax) {
+                    Some(h) => {
+                        best = Some((i as u32, h));
+                        h.t
+                    }
+                    None => f32::INFINITY,
                 }
-                None => f32::INFINITY,
-            }
-        });
+            },
+        );
         best
     }
 
@@ -139,12 +152,16 @@ impl MeshGeom {
     pub fn any_hit(&self, ray: &Ray) -> Option<f32> {
         let shear = RayShear::new(ray);
         let mut found = None;
-        self.bvh.any(ray, |r, i| {
-            let [a, b, c] = self.vertices(i as u32);
-            let t = triangle::intersect(&shear, a, b, c, r.tmin, r.tmax).map(|h| h.t);
-            found = found.or(t);
-            t.unwrap_or(f32::INFINITY)
-        });
+        self.bvh.any(
+            ray,
+            #[inline(always)]
+            |r, i| {
+                let [a, b, c] = self.corners[i];
+                let t = triangle::intersect(&shear, a, b, c, r.tmin, r.tmax).map(|h| h.t);
+                found = found.or(t);
+                t.unwrap_or(f32::INFINITY)
+            },
+        );
         found
     }
 }

@@ -8,12 +8,16 @@
 use super::ray::Ray;
 use glam::Vec3A;
 
-/// The per-ray part of the watertight test: a permutation and a shear that map the ray onto +z.
+/// The per-ray part of the watertight test: the dominant axis `kz` of the direction and a shear
+/// that maps the ray onto +z.
+///
+/// The paper also swaps `kx` and `ky` when `d[kz] < 0` to keep the winding; without back-face
+/// culling that swap only negates all three edge functions and the determinant exactly (`a − b =
+/// −(b − a)` in floating point), so `t`, the barycentrics and every inside/outside decision are
+/// the same without it, and the axes can be fixed per `kz` at compile time.
 #[derive(Clone, Copy, Debug)]
 pub struct RayShear {
-    kx: usize,
-    ky: usize,
-    kz: usize,
+    kz: u8,
     sx: f32,
     sy: f32,
     sz: f32,
@@ -25,15 +29,9 @@ impl RayShear {
     pub fn new(ray: &Ray) -> RayShear {
         let d = ray.dir;
         let kz = d.abs().max_position();
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
         RayShear {
-            kx,
-            ky,
-            kz,
+            kz: kz as u8,
             sx: d[kx] / d[kz],
             sy: d[ky] / d[kz],
             sz: 1.0 / d[kz],
@@ -53,7 +51,7 @@ pub struct TriangleHit {
 /// Intersects the ray described by `shear` with triangle `(v0, v1, v2)` for `t` in `(tmin, tmax)`.
 ///
 /// Both sides of the triangle are hit (no back-face culling).
-#[inline]
+#[inline(always)]
 pub fn intersect(
     shear: &RayShear,
     v0: Vec3A,
@@ -62,16 +60,33 @@ pub fn intersect(
     tmin: f32,
     tmax: f32,
 ) -> Option<TriangleHit> {
-    let s = shear;
+    // One branch per call, predicted perfectly along a ray; each arm indexes lanes statically.
+    match shear.kz {
+        0 => intersect_axes::<1, 2, 0>(shear, v0, v1, v2, tmin, tmax),
+        1 => intersect_axes::<2, 0, 1>(shear, v0, v1, v2, tmin, tmax),
+        _ => intersect_axes::<0, 1, 2>(shear, v0, v1, v2, tmin, tmax),
+    }
+}
+
+/// Runs the watertight test with the ray-aligned axes `(KX, KY, KZ)` known at compile time.
+#[inline(always)]
+fn intersect_axes<const KX: usize, const KY: usize, const KZ: usize>(
+    s: &RayShear,
+    v0: Vec3A,
+    v1: Vec3A,
+    v2: Vec3A,
+    tmin: f32,
+    tmax: f32,
+) -> Option<TriangleHit> {
     let a = v0 - s.origin;
     let b = v1 - s.origin;
     let c = v2 - s.origin;
-    let ax = a[s.kx] - s.sx * a[s.kz];
-    let ay = a[s.ky] - s.sy * a[s.kz];
-    let bx = b[s.kx] - s.sx * b[s.kz];
-    let by = b[s.ky] - s.sy * b[s.kz];
-    let cx = c[s.kx] - s.sx * c[s.kz];
-    let cy = c[s.ky] - s.sy * c[s.kz];
+    let ax = a[KX] - s.sx * a[KZ];
+    let ay = a[KY] - s.sy * a[KZ];
+    let bx = b[KX] - s.sx * b[KZ];
+    let by = b[KY] - s.sy * b[KZ];
+    let cx = c[KX] - s.sx * c[KZ];
+    let cy = c[KY] - s.sy * c[KZ];
     let mut u = cx * by - cy * bx;
     let mut v = ax * cy - ay * cx;
     let mut w = bx * ay - by * ax;
@@ -91,9 +106,7 @@ pub fn intersect(
     if det == 0.0 {
         return None;
     }
-    let az = s.sz * a[s.kz];
-    let bz = s.sz * b[s.kz];
-    let cz = s.sz * c[s.kz];
+    let (az, bz, cz) = (s.sz * a[KZ], s.sz * b[KZ], s.sz * c[KZ]);
     let t_scaled = u * az + v * bz + w * cz;
     let inv = 1.0 / det;
     let t = t_scaled * inv;

@@ -1,22 +1,28 @@
 //! Bounding volume hierarchies: the only module that imports obvhs.
 //!
-//! A [`Bvh`] is an obvhs compressed-wide BVH (CWBVH, 8-wide nodes) built by PLOC over padded
-//! boxes. Callers own the primitives: traversal hands a callback the *BVH-order* index of each
-//! candidate (see [`Bvh::order`]) and the callback returns the hit's `t`, or infinity on a miss.
-//! Callers that store their primitives in BVH order index them directly.
+//! obvhs builds a binary BVH by PLOC over padded boxes ([`Bvh::build`]); we collapse it into a
+//! 4-wide BVH with float boxes stored axis by axis ([`wide`]), so one SSE2 slab test checks the
+//! four children of a node, and traverse that ourselves, nearest child first. Callers own the
+//! primitives: traversal hands a callback the *BVH-order* index of each candidate (see
+//! [`Bvh::order`]) and the callback returns the hit's `t`, or infinity on a miss. Callers that store
+//! their primitives in BVH order index them directly.
 //!
 //! Two things obvhs leaves to us (`../shared/docs/obvhs.md` §5): boxes are padded so flat
 //! primitives do not get zero-thickness boxes that non-conservative slab tests can miss, and the
 //! callbacks must reject `t <= tmin` themselves.
 
+mod wide;
+
 use crate::geometry::Ray;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::ray::{Ray as BvhRay, RayHit};
+use obvhs::bvh2::builder::build_bvh2;
 use std::time::Duration;
+use wide::WideBvh;
+
+/// Names the build configuration [`Bvh::build`] uses, for benchmark reports.
+pub const BUILD_CONFIG: &str = "bvh4-ploc-medium";
 
 /// An axis-aligned box; `min <= max` on every axis for a non-empty box.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,15 +67,23 @@ impl Bounds {
     }
 }
 
-/// A BVH over boxes. With fewer than two primitives there is no tree (obvhs's CWBVH finds
-/// nothing in a one-primitive tree): an empty one misses, a single primitive is always tested.
+/// A BVH over boxes. With fewer than two primitives there is no tree: an empty one misses, a
+/// single primitive is always tested.
 pub struct Bvh {
-    inner: Option<CwBvh>,
+    inner: Option<WideBvh>,
     len: usize,
 }
 
 /// The BVH order of a one-primitive BVH.
 const SINGLE: [u32; 1] = [0];
+
+/// The obvhs build settings: its medium preset with leaves of at most four primitives.
+fn build_params() -> BvhBuildParams {
+    BvhBuildParams {
+        max_prims_per_leaf: 4,
+        ..BvhBuildParams::medium_build()
+    }
+}
 
 impl Bvh {
     /// Builds a BVH over `boxes`, which must all be finite (callers check and name the culprit).
@@ -82,13 +96,9 @@ impl Bvh {
             };
         }
         let aabbs: Vec<Aabb> = boxes.iter().map(|b| b.padded()).collect();
-        let inner = build_cwbvh(
-            &aabbs,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
+        let bvh2 = build_bvh2(&aabbs, build_params(), &mut Duration::default());
         Bvh {
-            inner: Some(inner),
+            inner: Some(WideBvh::from_bvh2(&bvh2)),
             len: boxes.len(),
         }
     }
@@ -106,17 +116,14 @@ impl Bvh {
     /// Returns, for each BVH-order index, the caller's primitive index.
     pub fn order(&self) -> &[u32] {
         match &self.inner {
-            Some(b) => &b.primitive_indices,
+            Some(b) => &b.order,
             None => &SINGLE[..self.len],
         }
     }
 
     /// Returns the bytes the nodes and index take.
     pub fn bytes(&self) -> usize {
-        self.inner.as_ref().map_or(0, |b| {
-            std::mem::size_of_val(b.nodes.as_slice())
-                + std::mem::size_of_val(b.primitive_indices.as_slice())
-        })
+        self.inner.as_ref().map_or(0, WideBvh::bytes)
     }
 
     /// Finds the closest hit: `hit_fn(ray, i)` returns the `t` of BVH-order primitive `i` within
@@ -125,47 +132,29 @@ impl Bvh {
     pub fn closest(
         &self,
         ray: &Ray,
-        mut hit_fn: impl FnMut(&Ray, usize) -> f32,
+        hit_fn: impl FnMut(&Ray, usize) -> f32,
     ) -> Option<(usize, f32)> {
-        let Some(bvh) = &self.inner else {
-            let t = if self.len == 1 {
-                hit_fn(ray, 0)
-            } else {
-                f32::INFINITY
-            };
-            return (t > ray.tmin && t < ray.tmax).then_some((0, t));
-        };
-        let mut hit = RayHit::none();
-        let found = bvh.ray_traverse(to_bvh_ray(ray), &mut hit, |r, i| {
-            hit_fn(&from_bvh_ray(r), i)
-        });
-        found.then_some((hit.primitive_id as usize, hit.t))
+        match &self.inner {
+            Some(bvh) => bvh.closest(ray, hit_fn),
+            None => {
+                let mut hit_fn = hit_fn;
+                let t = if self.len == 1 {
+                    hit_fn(ray, 0)
+                } else {
+                    f32::INFINITY
+                };
+                (t > ray.tmin && t < ray.tmax).then_some((0, t))
+            }
+        }
     }
 
     /// Returns true when any primitive reports a hit with `t` in the ray's `(tmin, tmax)`.
     #[inline]
     pub fn any(&self, ray: &Ray, mut hit_fn: impl FnMut(&Ray, usize) -> f32) -> bool {
         match &self.inner {
+            Some(bvh) => bvh.any(ray, hit_fn),
             None => self.len == 1 && hit_fn(ray, 0) < ray.tmax,
-            Some(bvh) => {
-                !bvh.ray_traverse_miss(to_bvh_ray(ray), |r, i| hit_fn(&from_bvh_ray(r), i))
-            }
         }
-    }
-}
-
-#[inline]
-fn to_bvh_ray(r: &Ray) -> BvhRay {
-    BvhRay::new(r.origin, r.dir, r.tmin, r.tmax)
-}
-
-#[inline]
-fn from_bvh_ray(r: &BvhRay) -> Ray {
-    Ray {
-        origin: r.origin,
-        dir: r.direction,
-        tmin: r.tmin,
-        tmax: r.tmax,
     }
 }
 

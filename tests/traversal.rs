@@ -1,0 +1,293 @@
+//! Mesh traversal against brute force, and watertightness through the BVH.
+//!
+//! Agreement: for random rays, [`MeshGeom::intersect`] must report the same `t` (bit for bit) as a
+//! loop over every triangle with the same watertight test, and the same triangle unless another
+//! triangle is hit at exactly that `t` (a ray through a shared edge or vertex); `any_hit` must
+//! agree on hit or miss. Watertightness: rays aimed exactly at shared vertices and edge midpoints
+//! of a closed mesh (from inside) and of a height field (from above) must all hit.
+
+use caustic::geometry::Ray;
+use caustic::geometry::mesh::{MeshData, MeshGeom};
+use caustic::geometry::triangle::{self, RayShear};
+use glam::{DMat3, DVec3, Vec3, Vec3A};
+use std::collections::{BTreeSet, HashMap};
+
+/// A small deterministic generator (splitmix64), so failures reproduce.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Returns a uniform number in `[lo, hi)`.
+    fn uniform(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * ((self.next() >> 40) as f32 / (1u64 << 24) as f32)
+    }
+
+    fn unit_vector(&mut self) -> Vec3A {
+        let z = self.uniform(-1.0, 1.0);
+        let phi = self.uniform(0.0, std::f32::consts::TAU);
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+    }
+}
+
+fn mesh(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> MeshData {
+    MeshData {
+        positions,
+        triangles,
+        ..MeshData::default()
+    }
+}
+
+/// Returns every hit `(file triangle, t)` of the closest `t`, by brute force with the watertight test.
+fn brute_force(data: &MeshData, ray: &Ray) -> (f32, Vec<u32>) {
+    let shear = RayShear::new(ray);
+    let mut best = (f32::INFINITY, Vec::new());
+    for (i, t) in data.triangles.iter().enumerate() {
+        let [a, b, c] = t.map(|v| Vec3A::from(data.positions[v as usize]));
+        if let Some(h) = triangle::intersect(&shear, a, b, c, ray.tmin, ray.tmax) {
+            if h.t < best.0 {
+                best = (h.t, vec![i as u32]);
+            } else if h.t == best.0 {
+                best.1.push(i as u32);
+            }
+        }
+    }
+    best
+}
+
+/// Checks `rays` through the BVH against brute force; returns how many hit.
+fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
+    let geom = MeshGeom::new(data);
+    let order = geom.bvh.order();
+    let mut hits = 0;
+    for (k, ray) in rays.iter().enumerate() {
+        let (t, tris) = brute_force(data, ray);
+        let got = geom.intersect(ray);
+        match got {
+            None => assert!(
+                tris.is_empty(),
+                "ray {k}: BVH missed, brute force hit {tris:?} at {t}"
+            ),
+            Some((tri, h)) => {
+                hits += 1;
+                assert_eq!(h.t, t, "ray {k}: t differs");
+                let file_tri = order[tri as usize];
+                assert!(
+                    tris.contains(&file_tri),
+                    "ray {k}: triangle {file_tri} not in {tris:?}"
+                );
+            }
+        }
+        assert_eq!(
+            geom.any_hit(ray).is_some(),
+            got.is_some(),
+            "ray {k}: any_hit"
+        );
+    }
+    hits
+}
+
+/// Returns a height field over `[-1, 1]²` in xz with `n × n` vertices, wave heights in y.
+fn height_field(n: u32) -> MeshData {
+    let mut positions = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let x = -1.0 + 2.0 * i as f64 / (n - 1) as f64;
+            let z = -1.0 + 2.0 * j as f64 / (n - 1) as f64;
+            let y = 0.05 * ((4.0 * x + 1.0).sin() + (9.0 * z + 2.0).sin())
+                + 0.05 * (23.0 * (0.6 * x + 0.8 * z) + 3.0).sin();
+            positions.push(Vec3::new(x as f32, y as f32, z as f32));
+        }
+    }
+    let mut triangles = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let (a, b) = (j * n + i, j * n + i + 1);
+            let (c, d) = (a + n, b + n);
+            triangles.push([a, c, b]);
+            triangles.push([b, c, d]);
+        }
+    }
+    mesh(positions, triangles)
+}
+
+/// Returns a closed cube surface with an `n × n` grid per face, vertices welded, rotated so no
+/// edge is axis-aligned.
+fn closed_cube(n: i32) -> MeshData {
+    let rot = DMat3::from_euler(glam::EulerRot::XYZ, 0.3, 0.7, 1.1);
+    let mut index: HashMap<[i32; 3], u32> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut vertex = |p: [i32; 3]| {
+        *index.entry(p).or_insert_with(|| {
+            let q = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * (2.0 / n as f64) - 1.0;
+            positions.push((rot * q).as_vec3());
+            positions.len() as u32 - 1
+        })
+    };
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        for side in [0, n] {
+            let lattice = |u: i32, v: i32| {
+                let mut p = [0; 3];
+                p[axis] = side;
+                p[(axis + 1) % 3] = u;
+                p[(axis + 2) % 3] = v;
+                p
+            };
+            for v in 0..n {
+                for u in 0..n {
+                    let a = vertex(lattice(u, v));
+                    let b = vertex(lattice(u + 1, v));
+                    let c = vertex(lattice(u, v + 1));
+                    let d = vertex(lattice(u + 1, v + 1));
+                    triangles.push([a, b, d]);
+                    triangles.push([a, d, c]);
+                }
+            }
+        }
+    }
+    mesh(positions, triangles)
+}
+
+/// Returns the mesh's shared vertices and the midpoints of its edges (each once).
+fn targets(data: &MeshData, keep: impl Fn(Vec3A) -> bool) -> Vec<Vec3A> {
+    let mut edges = BTreeSet::new();
+    for t in &data.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edges.insert((a.min(b), a.max(b)));
+        }
+    }
+    let p = |i: u32| Vec3A::from(data.positions[i as usize]);
+    let mut out: Vec<Vec3A> = (0..data.positions.len() as u32).map(p).collect();
+    out.extend(edges.iter().map(|&(a, b)| (p(a) + p(b)) * 0.5));
+    out.retain(|&q| keep(q));
+    out
+}
+
+#[test]
+fn random_triangle_soup_matches_brute_force() {
+    let mut rng = Rng(7);
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for t in 0..2000u32 {
+        let c = Vec3::new(
+            rng.uniform(-5.0, 5.0),
+            rng.uniform(-5.0, 5.0),
+            rng.uniform(-5.0, 5.0),
+        );
+        let size = rng.uniform(0.05, 1.0);
+        for _ in 0..3 {
+            positions.push(c + Vec3::from(rng.unit_vector()) * size);
+        }
+        triangles.push([3 * t, 3 * t + 1, 3 * t + 2]);
+    }
+    let data = mesh(positions, triangles);
+    let rays: Vec<Ray> = (0..3000)
+        .map(|_| {
+            let o = Vec3A::new(
+                rng.uniform(-7.0, 7.0),
+                rng.uniform(-7.0, 7.0),
+                rng.uniform(-7.0, 7.0),
+            );
+            let d = rng.unit_vector() * rng.uniform(0.5, 2.0); // t is in units of |d|
+            Ray::new(o, d)
+        })
+        .collect();
+    let hits = check_agreement(&data, &rays);
+    assert!(
+        hits > 500,
+        "only {hits} of 3000 rays hit: the test is too weak"
+    );
+}
+
+#[test]
+fn wave_height_field_matches_brute_force() {
+    let data = height_field(65);
+    let mut rng = Rng(11);
+    let rays: Vec<Ray> = (0..2000)
+        .map(|k| {
+            let o = Vec3A::new(
+                rng.uniform(-1.2, 1.2),
+                rng.uniform(0.2, 1.0),
+                rng.uniform(-1.2, 1.2),
+            );
+            let mut d = rng.unit_vector();
+            if k % 4 != 0 {
+                d.y = -d.y.abs().max(0.3); // mostly downwards and steep, so most of those hit
+            }
+            let ray = Ray::new(o, d);
+            if k % 5 == 0 { ray.with_tmax(0.5) } else { ray }
+        })
+        .collect();
+    let hits = check_agreement(&data, &rays);
+    assert!(
+        hits > 500,
+        "only {hits} of 2000 rays hit: the test is too weak"
+    );
+}
+
+#[test]
+fn rays_at_closed_cube_vertices_and_edges_never_escape() {
+    let data = closed_cube(24);
+    let geom = MeshGeom::new(&data);
+    let aims = targets(&data, |_| true);
+    let mut rng = Rng(3);
+    let (mut rays, mut escaped) = (0, 0);
+    while rays < 1_000_000 {
+        for &target in &aims {
+            // From anywhere well inside the cube (half-width 1, rotated), every ray must hit.
+            let o = rng.unit_vector() * rng.uniform(0.0, 0.5);
+            let ray = Ray::new(o, target - o);
+            rays += 1;
+            if geom.intersect(&ray).is_none() || geom.any_hit(&ray).is_none() {
+                escaped += 1;
+            }
+        }
+    }
+    assert_eq!(
+        escaped, 0,
+        "{escaped} of {rays} rays escaped the closed cube"
+    );
+}
+
+#[test]
+fn rays_at_height_field_vertices_and_edges_never_escape() {
+    let data = height_field(129);
+    let geom = MeshGeom::new(&data);
+    // Interior targets only: a ray aimed at the outer boundary may pass outside the mesh.
+    let aims = targets(&data, |q| q.x.abs() < 0.999 && q.z.abs() < 0.999);
+    let mut rng = Rng(5);
+    let (mut rays, mut escaped) = (0, 0);
+    while rays < 1_000_000 {
+        for &target in &aims {
+            // From above the highest point (0.15) through a target on the surface to below the
+            // lowest (-0.15), inside the footprint all along: the ray must cross the surface.
+            let inside = |p: Vec3A| p.x.abs() < 1.0 && p.z.abs() < 1.0;
+            let (o, d) = loop {
+                let mut d = rng.unit_vector();
+                d.y = -d.y.abs().max(0.2);
+                let o = target - d * ((0.3 - target.y) / -d.y);
+                if inside(o) && inside(o + d * (0.5 / -d.y)) {
+                    break (o, d);
+                }
+            };
+            let ray = Ray::new(o, d);
+            rays += 1;
+            if geom.intersect(&ray).is_none() || geom.any_hit(&ray).is_none() {
+                escaped += 1;
+            }
+        }
+    }
+    assert_eq!(
+        escaped, 0,
+        "{escaped} of {rays} rays escaped the height field"
+    );
+}

@@ -160,8 +160,8 @@ fn build(data: &MeshData, mesh: &str, reps: usize) -> Result<MeshGeom, Box<dyn s
             drop(geom.take());
             let (c0, w0) = (clock::process_cpu_s(), Instant::now());
             let g = match pool {
-                Some(p) => p.install(|| MeshGeom::new(data)),
-                None => MeshGeom::new(data),
+                Some(p) => p.install(|| MeshGeom::new(data, 0)),
+                None => MeshGeom::new(data, 0),
             };
             wall.push(w0.elapsed().as_secs_f64());
             cpu.push(clock::process_cpu_s() - c0);

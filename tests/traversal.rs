@@ -64,7 +64,7 @@ fn brute_force(data: &MeshData, ray: &Ray) -> (f32, Vec<u32>) {
 
 /// Checks `rays` through the BVH against brute force; returns how many hit.
 fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
-    let geom = MeshGeom::new(data);
+    let geom = MeshGeom::new(data, 0);
     let order = geom.bvh.order();
     let mut hits = 0;
     for (k, ray) in rays.iter().enumerate() {
@@ -237,7 +237,7 @@ fn wave_height_field_matches_brute_force() {
 #[test]
 fn rays_at_closed_cube_vertices_and_edges_never_escape() {
     let data = closed_cube(24);
-    let geom = MeshGeom::new(&data);
+    let geom = MeshGeom::new(&data, 0);
     let aims = targets(&data, |_| true);
     let mut rng = Rng(3);
     let (mut rays, mut escaped) = (0, 0);
@@ -261,7 +261,7 @@ fn rays_at_closed_cube_vertices_and_edges_never_escape() {
 #[test]
 fn rays_at_height_field_vertices_and_edges_never_escape() {
     let data = height_field(129);
-    let geom = MeshGeom::new(&data);
+    let geom = MeshGeom::new(&data, 0);
     // Interior targets only: a ray aimed at the outer boundary may pass outside the mesh.
     let aims = targets(&data, |q| q.x.abs() < 0.999 && q.z.abs() < 0.999);
     let mut rng = Rng(5);

@@ -6,7 +6,7 @@ use crate::io::image::{Tonemap, write_image, write_sample_map};
 use crate::render::{Film, RenderOptions, RenderStats, Sampling, Window, render_with};
 use crate::scene::build::{build_scene, count_placements};
 use crate::scene::desc::{RenderDesc, SceneDesc};
-use crate::scene::lua::run_script;
+use crate::scene::lua::{ScriptOptions, run_script, run_script_with};
 use clap::{Args, Parser, Subcommand};
 use std::cell::Cell;
 use std::io::IsTerminal;
@@ -79,6 +79,17 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    /// What a missing or unreadable texture is: an error (default), or a warning (once per file)
+    /// with the material rendered in its kd colour.
+    #[arg(long, value_enum, default_value_t = MissingTextures::Error)]
+    pub missing_textures: MissingTextures,
+}
+
+/// The `--missing-textures` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MissingTextures {
+    Error,
+    Warn,
 }
 
 /// The `--tonemap` choices.
@@ -166,7 +177,10 @@ fn render_command(args: RenderArgs) -> Result<()> {
         };
         render_one(desc, r, &settings, &out)
     });
-    run_script(&args.scene, hook)?;
+    let options = ScriptOptions {
+        missing_textures_warn: args.missing_textures == MissingTextures::Warn,
+    };
+    run_script_with(&args.scene, hook, options)?;
     if rendered.get() == 0 {
         eprintln!(
             "warning: {} never called gr.render; no image written",
@@ -266,6 +280,7 @@ fn render_one(
         seed: settings.seed,
         sampling: settings.sampling.clone(),
         window,
+        timing: settings.stats,
     };
     let bar = if settings.progress {
         let bar = indicatif::ProgressBar::new(window.size().1 as u64);
@@ -346,6 +361,13 @@ fn print_stats(
         secs,
         rays as f64 / secs.max(1e-9) / 1e6,
         rayon::current_num_threads()
+    );
+    // Thread time summed over workers, against wall time times the workers.
+    let busy = secs * rayon::current_num_threads() as f64;
+    println!(
+        "  materials (textures, bump maps, Perlin noise): {:.3} s of thread time, {:.1}% of render time",
+        rstats.material_time.as_secs_f64(),
+        100.0 * rstats.material_time.as_secs_f64() / busy.max(1e-9)
     );
 }
 

@@ -1,10 +1,16 @@
-//! Surface materials as the renderer uses them.
+//! Surface materials as the renderer uses them: one place decides what a surface does, for eye
+//! rays and photons alike.
 //!
-//! `gr.material(kd, ks, p [, t [, ior [, s [, texture [, bump]]]]])` means: diffuse reflectance
-//! `kd` (which also multiplies the ambient light), a Phong highlight `ks·(r·v)^p`, mirror
-//! reflection weighted by `ks`, and, when `t > 0`, refraction into a medium of index `ior` with
-//! weight `t`. Textures, normal maps and Perlin-noise normals are parsed and validated but not yet
-//! simulated by the first renderer (see the materials issue).
+//! `gr.material(kd, ks, p [, t [, ior [, s [, texture [, bump]]]]])` means:
+//! - `kd`: diffuse reflectance, which also multiplies the ambient light; a `texture` replaces it
+//!   (looked up at the hit's texture coordinates, [`texture`]);
+//! - `ks`, `p`: a Phong highlight `ks·(r·v)^p` from each light, and mirror reflection weighted by
+//!   `ks`;
+//! - `t`, `ior`: with weight `t` the surface is a clear dielectric interface into a solid of index
+//!   `ior` (Fresnel reflection and refraction, [`fresnel`], with media tracked by [`medium`]);
+//!   the opaque behaviour above has weight `1 − t`;
+//! - `s`: Perlin-noise bending of the shading normal ([`perlin`]);
+//! - `bump`: an RGB tangent-space normal map or a grey height map ([`texture::BumpMap`]).
 
 pub mod fresnel;
 pub mod medium;
@@ -13,7 +19,9 @@ pub mod texture;
 
 use crate::geometry::mesh::MeshMaterial;
 use crate::scene::desc::MaterialDesc;
-use glam::Vec3A;
+use glam::{Vec2, Vec3A};
+use std::sync::Arc;
+use texture::{BumpMap, Texture};
 
 /// A material ready for shading.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,28 +31,44 @@ pub struct Material {
     pub shininess: f32,
     pub transparency: f32,
     pub ior: f32,
+    /// Scale of the Perlin-noise normal perturbation; 0 for none.
+    pub perlin_scale: f32,
+    /// Colour map replacing `kd`.
+    pub texture: Option<Arc<Texture>>,
+    /// Normal or height map.
+    pub bump: Option<Arc<BumpMap>>,
 }
 
 impl Material {
-    /// Returns the material a script described.
-    pub fn from_desc(d: &MaterialDesc) -> Material {
+    /// Returns the material a script described, with its images already loaded (or `None`).
+    pub fn from_desc(
+        d: &MaterialDesc,
+        texture: Option<Arc<Texture>>,
+        bump: Option<Arc<BumpMap>>,
+    ) -> Material {
         Material {
             kd: d.kd.into(),
             ks: d.ks.into(),
             shininess: d.shininess,
             transparency: d.transparency,
             ior: d.ior,
+            perlin_scale: d.perlin_scale,
+            texture,
+            bump,
         }
     }
 
-    /// Returns the material a mesh file defined (its texture is not used yet).
-    pub fn from_mesh(m: &MeshMaterial) -> Material {
+    /// Returns the material a mesh file defined, with its texture already loaded (or `None`).
+    pub fn from_mesh(m: &MeshMaterial, texture: Option<Arc<Texture>>) -> Material {
         Material {
             kd: m.kd.into(),
             ks: m.ks.into(),
             shininess: m.shininess,
             transparency: m.transparency,
             ior: m.ior,
+            perlin_scale: 0.0,
+            texture,
+            bump: None,
         }
     }
 
@@ -56,11 +80,83 @@ impl Material {
             shininess: 0.0,
             transparency: 0.0,
             ior: 1.0,
+            perlin_scale: 0.0,
+            texture: None,
+            bump: None,
         }
     }
 
     /// Returns true when the surface reflects like a mirror (any `ks` channel above 0).
     pub fn is_reflective(&self) -> bool {
         self.ks.max_element() > 0.0
+    }
+
+    /// Returns the diffuse reflectance at texture coordinates `uv`.
+    pub fn diffuse(&self, uv: Vec2) -> Vec3A {
+        match &self.texture {
+            Some(t) => t.colour(uv),
+            None => self.kd,
+        }
+    }
+
+    /// Returns true when the material bends shading normals (bump map or Perlin noise).
+    pub fn perturbs_normals(&self) -> bool {
+        self.bump.is_some() || self.perlin_scale > 0.0
+    }
+
+    /// Returns the shading normal at a hit: `ns` bent by the bump map (in the frame of `dpdu`)
+    /// and by Perlin noise at world point `p`, never tilted past the surface's geometric
+    /// hemisphere (`ng`, same side as `ns`), so a surface never looks lit from behind.
+    pub fn shading_normal(&self, ns: Vec3A, ng: Vec3A, p: Vec3A, uv: Vec2, dpdu: Vec3A) -> Vec3A {
+        let mut n = ns;
+        if let Some(b) = &self.bump {
+            n = texture::apply_tangent_normal(n, dpdu, b.tangent_normal(uv));
+        }
+        if self.perlin_scale > 0.0 {
+            n = perlin::perturb_normal(n, p, self.perlin_scale);
+        }
+        keep_in_hemisphere(n, ng)
+    }
+}
+
+/// Smallest cosine allowed between a shading normal and the geometric normal.
+const MIN_SHADING_COS: f32 = 0.05;
+
+/// Returns `n` tilted back towards `ng` when it leans past the hemisphere around `ng`.
+pub fn keep_in_hemisphere(n: Vec3A, ng: Vec3A) -> Vec3A {
+    let c = n.dot(ng);
+    if c >= MIN_SHADING_COS {
+        n
+    } else {
+        (n + ng * (2.0 * MIN_SHADING_COS - c)).normalize_or(ng)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shading_normals_stay_in_the_geometric_hemisphere() {
+        for k in 0..360 {
+            let a = (k as f32).to_radians();
+            let n = Vec3A::new(a.cos(), 0.3, a.sin()).normalize();
+            let kept = keep_in_hemisphere(n, Vec3A::Z);
+            assert!(
+                kept.dot(Vec3A::Z) > 0.0 && (kept.length() - 1.0).abs() < 1e-5,
+                "{n} -> {kept}"
+            );
+            if n.z >= MIN_SHADING_COS {
+                assert_eq!(kept, n);
+            }
+        }
+        // A strong Perlin perturbation on a grazing base normal still faces out.
+        let mut m = Material::fallback();
+        m.perlin_scale = 50.0;
+        for k in 0..200 {
+            let p = Vec3A::new(k as f32 * 0.0137, 0.3, 0.0);
+            let n = m.shading_normal(Vec3A::Z, Vec3A::Z, p, Vec2::ZERO, Vec3A::X);
+            assert!(n.dot(Vec3A::Z) > 0.0);
+        }
     }
 }

@@ -45,6 +45,7 @@ fn render(
         seed: 5,
         sampling,
         window: window.unwrap_or(Window::full(w, h)),
+        timing: false,
     };
     render_with(scene, camera, &opts, &|| {}).0
 }

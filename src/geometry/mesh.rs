@@ -73,6 +73,8 @@ pub struct MeshGeom {
     /// The corners of each triangle, in BVH order: what traversal reads, one contiguous record
     /// per triangle instead of an index and three scattered positions.
     corners: Vec<[Vec3A; 3]>,
+    /// Area-weighted vertex normals, computed on first use (Perlin noise needs smooth normals).
+    smooth: std::sync::OnceLock<Vec<Vec3A>>,
 }
 
 impl MeshGeom {
@@ -119,7 +121,24 @@ impl MeshGeom {
             bvh,
             bounds,
             corners,
+            smooth: std::sync::OnceLock::new(),
         }
+    }
+
+    /// Returns area-weighted vertex normals (computed once, on first call), for meshes whose file
+    /// has none; oriented like the faces' `(v1 − v0) × (v2 − v0)`.
+    pub fn smooth_normals(&self) -> &[Vec3A] {
+        self.smooth.get_or_init(|| {
+            let mut acc = vec![Vec3A::ZERO; self.positions.len()];
+            for t in &self.triangles {
+                let [a, b, c] = t.map(|i| self.positions[i as usize]);
+                let n = (b - a).cross(c - a); // length = twice the area: area weighting
+                for &i in t {
+                    acc[i as usize] += n;
+                }
+            }
+            acc.into_iter().map(|n| n.normalize_or_zero()).collect()
+        })
     }
 
     /// Returns the bytes of triangle data kept for tracing only, beyond the shared attributes.

@@ -92,3 +92,40 @@ mod tests {
         ));
     }
 }
+
+/// Returns the object-space tangent `∂p/∂u` (not normalised; it may vanish at poles and apexes)
+/// of the mapping [`analytic_uv`] uses, at `p` on face `face` of `shape`.
+pub fn analytic_dpdu(shape: LeafShape, p: Vec3A, face: u8) -> Vec3A {
+    match (shape, face) {
+        (LeafShape::Sphere, _) => Vec3A::new(p.z, 0.0, -p.x),
+        (LeafShape::Cube, f) if f / 2 == 0 => Vec3A::Z,
+        (LeafShape::Cube, _) => Vec3A::X,
+        (LeafShape::Cylinder | LeafShape::Cone, 0) => Vec3A::new(-p.y, p.x, 0.0),
+        (LeafShape::Cylinder | LeafShape::Cone, _) => Vec3A::X,
+    }
+}
+
+#[cfg(test)]
+mod dpdu_tests {
+    use super::*;
+
+    /// The tangent points where u grows: a small step along it increases u.
+    #[test]
+    fn tangents_follow_increasing_u() {
+        let cases = [
+            (LeafShape::Sphere, Vec3A::new(0.6, 0.0, 0.8), 0u8),
+            (LeafShape::Cube, Vec3A::new(0.0, 0.3, 0.4), 0),
+            (LeafShape::Cube, Vec3A::new(0.3, 1.0, 0.4), 3),
+            (LeafShape::Cube, Vec3A::new(0.3, 0.2, 1.0), 5),
+            (LeafShape::Cylinder, Vec3A::new(0.6, 0.8, 0.1), 0),
+            (LeafShape::Cylinder, Vec3A::new(0.2, 0.3, 1.0), 2),
+            (LeafShape::Cone, Vec3A::new(0.3, 0.4, 0.5), 0),
+        ];
+        for (shape, p, face) in cases {
+            let t = analytic_dpdu(shape, p, face).normalize();
+            let u0 = analytic_uv(shape, p, face).x;
+            let u1 = analytic_uv(shape, p + t * 1e-3, face).x;
+            assert!(u1 > u0, "{shape:?} face {face}: u {u0} -> {u1}");
+        }
+    }
+}

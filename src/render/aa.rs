@@ -44,7 +44,10 @@ impl<'a> PixelSampler<'a> {
             let rows: Vec<(Vec<Vec3A>, RayCounts)> = (0..=h)
                 .into_par_iter()
                 .map(|j| {
-                    let mut counts = RayCounts::default();
+                    let mut counts = RayCounts {
+                        timing: opts.timing,
+                        ..RayCounts::default()
+                    };
                     let row = (0..=w)
                         .map(|i| {
                             sampler.trace((win.x0 + i) as f32, (win.y0 + j) as f32, &mut counts)

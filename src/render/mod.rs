@@ -101,6 +101,8 @@ pub struct RenderOptions {
     pub sampling: Sampling,
     /// The part of the image to render.
     pub window: Window,
+    /// Time material evaluation for `--stats`.
+    pub timing: bool,
 }
 
 impl RenderOptions {
@@ -110,6 +112,7 @@ impl RenderOptions {
             seed: 0,
             sampling: Sampling::Stratified { spp: 1 },
             window: Window::full(width, height),
+            timing: false,
         }
     }
 }
@@ -121,6 +124,8 @@ pub struct RenderStats {
     pub shadow_rays: u64,
     pub secondary_rays: u64,
     pub time: Duration,
+    /// Thread time spent in texture, bump-map and Perlin-noise evaluation (with `timing`).
+    pub material_time: Duration,
 }
 
 /// Per-thread ray counts, summed into [`RenderStats`] once per row.
@@ -129,6 +134,11 @@ pub struct RayCounts {
     pub primary: u64,
     pub shadow: u64,
     pub secondary: u64,
+    /// Whether to time material evaluation (textures, bump maps, noise): `--stats` only, since
+    /// reading the clock twice per hit costs time of its own.
+    pub timing: bool,
+    /// Nanoseconds spent evaluating materials, when `timing`.
+    pub material_nanos: u64,
 }
 
 /// Renders `scene` through `camera` into a `width × height` film with one centre ray per pixel.
@@ -146,7 +156,12 @@ pub fn render_with(
     let start = Instant::now();
     let win = opts.window;
     let (w, h) = win.size();
-    let totals = [AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)];
+    let totals = [
+        AtomicU64::new(0),
+        AtomicU64::new(0),
+        AtomicU64::new(0),
+        AtomicU64::new(0),
+    ];
     let mut pixels = vec![Vec3A::ZERO; w as usize * h as usize];
     let mut samples = vec![0u32; w as usize * h as usize];
     let sampler = aa::PixelSampler::new(scene, camera, opts);
@@ -156,7 +171,10 @@ pub fn render_with(
         .enumerate()
         .for_each(|(row, (px_row, count_row))| {
             let y = win.y0 + row as u32;
-            let mut counts = RayCounts::default();
+            let mut counts = RayCounts {
+                timing: opts.timing,
+                ..RayCounts::default()
+            };
             for (i, (px, n)) in px_row.iter_mut().zip(count_row.iter_mut()).enumerate() {
                 let before = counts.primary;
                 *px = sampler.pixel(win.x0 + i as u32, y, &mut counts);
@@ -166,16 +184,19 @@ pub fn render_with(
             totals[0].fetch_add(counts.primary, Ordering::Relaxed);
             totals[1].fetch_add(counts.shadow, Ordering::Relaxed);
             totals[2].fetch_add(counts.secondary, Ordering::Relaxed);
+            totals[3].fetch_add(counts.material_nanos, Ordering::Relaxed);
             row_done();
         });
     let corner_counts = sampler.corner_counts();
     totals[0].fetch_add(corner_counts.primary, Ordering::Relaxed);
     totals[1].fetch_add(corner_counts.shadow, Ordering::Relaxed);
     totals[2].fetch_add(corner_counts.secondary, Ordering::Relaxed);
+    totals[3].fetch_add(corner_counts.material_nanos, Ordering::Relaxed);
     let stats = RenderStats {
         primary_rays: totals[0].load(Ordering::Relaxed),
         shadow_rays: totals[1].load(Ordering::Relaxed),
         secondary_rays: totals[2].load(Ordering::Relaxed),
+        material_time: Duration::from_nanos(totals[3].load(Ordering::Relaxed)),
         time: start.elapsed(),
     };
     let film = Film {

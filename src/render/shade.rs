@@ -74,8 +74,16 @@ pub fn radiance(
     let Some(hit) = scene.intersect(ray) else {
         return background(camera, ray.dir);
     };
-    let surf = scene.surface(ray, &hit);
+    let mut surf = scene.surface(ray, &hit);
     let mat = &scene.materials[surf.material as usize];
+    let start = counts.timing.then(std::time::Instant::now);
+    let kd = mat.diffuse(surf.uv);
+    if mat.perturbs_normals() {
+        surf.ns = mat.shading_normal(surf.ns, surf.ng, surf.p, surf.uv, surf.dpdu);
+    }
+    if let Some(start) = start {
+        counts.material_nanos += start.elapsed().as_nanos() as u64;
+    }
     let wo = -ray.dir.normalize();
     let front = surf.ng.dot(wo) > 0.0;
     let t = mat.transparency;
@@ -101,7 +109,7 @@ pub fn radiance(
         }
     }
     if t < 1.0 {
-        out += (1.0 - t) * opaque(scene, camera, &surf, wo, state, counts);
+        out += (1.0 - t) * opaque(scene, camera, &surf, kd, wo, state, counts);
     }
     out
 }
@@ -111,6 +119,7 @@ fn opaque(
     scene: &Scene,
     camera: &Camera,
     surf: &crate::scene::build::SurfaceHit,
+    kd: Vec3A,
     wo: Vec3A,
     state: PathState,
     counts: &mut RayCounts,
@@ -122,7 +131,7 @@ fn opaque(
     } else {
         (surf.ns, surf.ng)
     };
-    let mut colour = scene.ambient * mat.kd;
+    let mut colour = scene.ambient * kd;
     for light in &scene.lights {
         let to_light = light.position - surf.p;
         let d = to_light.length();
@@ -146,11 +155,11 @@ fn opaque(
         } else {
             Vec3A::ZERO
         };
-        colour += light.colour * light.attenuation(d) * (mat.kd * cos + spec);
+        colour += light.colour * light.attenuation(d) * (kd * cos + spec);
     }
     let weight = mat.ks.max_element();
     if mat.is_reflective() && state.depth < MAX_DEPTH && state.weight * weight > MIN_WEIGHT {
-        let wr = fresnel::reflect(wo, n);
+        let wr = reflect_above(wo, n, ng);
         let ray = Ray::new(offset_ray_origin(surf.p, ng, wr), wr);
         counts.secondary += 1;
         colour += mat.ks
@@ -189,7 +198,7 @@ fn dielectric(
     let f = fresnel::dielectric(cos_i, eta);
     let mut out = Vec3A::ZERO;
     if f > 0.0 && state.weight * f > MIN_WEIGHT {
-        let wr = fresnel::reflect(wo, n);
+        let wr = reflect_above(wo, n, ng);
         let ray = Ray::new(offset_ray_origin(surf.p, ng, wr), wr);
         counts.secondary += 1;
         out += f * radiance(scene, camera, &ray, state.child(f, state.media), counts);
@@ -197,6 +206,7 @@ fn dielectric(
     if f < 1.0
         && state.weight * (1.0 - f) > MIN_WEIGHT
         && let Some(wt) = fresnel::refract(wo, n, eta)
+        && wt.dot(ng) < 0.0
     {
         let ray = Ray::new(offset_ray_origin(surf.p, ng, wt), wt);
         counts.secondary += 1;
@@ -210,6 +220,17 @@ fn dielectric(
             );
     }
     out
+}
+
+/// Returns `wo` mirrored about the shading normal `n`, or about the geometric normal `ng` when a
+/// bent shading normal would send it below the surface.
+fn reflect_above(wo: Vec3A, n: Vec3A, ng: Vec3A) -> Vec3A {
+    let wr = fresnel::reflect(wo, n);
+    if wr.dot(ng) > 0.0 {
+        wr
+    } else {
+        fresnel::reflect(wo, ng)
+    }
 }
 
 /// Returns the radiance seen by continuing `dir` through a false interface at `p`.

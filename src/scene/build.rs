@@ -15,11 +15,12 @@ use crate::error::{Error, Loc, Result};
 use crate::geometry::csg::{CsgNode, CsgTree, LeafShape};
 use crate::geometry::mesh::MeshGeom;
 use crate::geometry::triangle;
-use crate::geometry::uv::analytic_uv;
+use crate::geometry::uv::{analytic_dpdu, analytic_uv};
 use crate::geometry::{Interval, Ray, cone, cube, cylinder, sphere};
 use crate::light::PointLight;
 use crate::material::Material;
 use crate::scene::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
+use crate::scene::images::ImageCache;
 use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3A};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
@@ -100,6 +101,8 @@ pub struct SurfaceHit {
     /// Texture coordinates ([`crate::geometry::uv`] for analytic shapes, interpolated on meshes,
     /// or the barycentrics `(b1, b2)` for meshes without them).
     pub uv: Vec2,
+    /// World-space `∂p/∂u`, the tangent that orients normal maps (not normalised; may be zero).
+    pub dpdu: Vec3A,
     /// Index into [`Scene::materials`].
     pub material: u32,
 }
@@ -140,7 +143,12 @@ struct Placement {
 pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
     let start = Instant::now();
     let placements = flatten(desc, render.root)?;
-    let mut materials: Vec<Material> = desc.materials.iter().map(Material::from_desc).collect();
+    let mut images = ImageCache::new(desc.missing_textures_warn);
+    let mut materials: Vec<Material> = desc
+        .materials
+        .iter()
+        .map(|m| images.material(m))
+        .collect::<Result<_>>()?;
     let fallback = materials.len() as u32;
     materials.push(Material::fallback());
 
@@ -148,6 +156,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         desc,
         fallback,
         materials,
+        images,
         meshes: Vec::new(),
         mesh_index: HashMap::new(),
         csgs: Vec::new(),
@@ -264,6 +273,7 @@ struct Builder<'a> {
     fallback: u32,
     /// The script's materials, the fallback, then each built mesh's file materials.
     materials: Vec<Material>,
+    images: ImageCache,
     meshes: Vec<MeshGeom>,
     mesh_index: HashMap<MeshId, u32>,
     csgs: Vec<CsgTree>,
@@ -476,8 +486,10 @@ impl Builder<'_> {
         }
         let first_material = self.materials.len() as u32;
         if !ids.is_empty() {
-            self.materials
-                .extend(data.materials.iter().map(Material::from_mesh));
+            for m in &data.materials {
+                let material = self.images.mesh_material(m, &desc.loc)?;
+                self.materials.push(material);
+            }
         }
         let geom = MeshGeom::new(data, first_material);
         self.meshes.push(geom);
@@ -646,7 +658,8 @@ impl Scene {
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
         let inst = &self.instances[hit.instance as usize];
         let local = object_ray(inst, ray);
-        let (p_obj, ng_obj, ns_obj, uv) = match inst.shape {
+        let perlin = self.materials[hit.material as usize].perlin_scale > 0.0;
+        let (p_obj, ng_obj, ns_obj, uv, dpdu) = match inst.shape {
             Shape::Mesh(m) => {
                 let mesh = &self.meshes[m as usize];
                 let idx = mesh.triangles[hit.prim as usize];
@@ -654,37 +667,52 @@ impl Scene {
                 let w0 = 1.0 - hit.b1 - hit.b2;
                 let p = v0 * w0 + v1 * hit.b1 + v2 * hit.b2;
                 let ng = triangle::geometric_normal(v0, v1, v2);
-                let ns = if mesh.normals.is_empty() {
+                // Perlin noise needs a continuous base normal: smooth normals when the file has none.
+                let normals = if mesh.normals.is_empty() && perlin {
+                    mesh.smooth_normals()
+                } else {
+                    &mesh.normals
+                };
+                let ns = if normals.is_empty() {
                     ng
                 } else {
-                    let [n0, n1, n2] = idx.map(|i| mesh.normals[i as usize]);
+                    let [n0, n1, n2] = idx.map(|i| normals[i as usize]);
                     n0 * w0 + n1 * hit.b1 + n2 * hit.b2
                 };
-                let uv = if mesh.uvs.is_empty() {
-                    Vec2::new(hit.b1, hit.b2)
+                let [t0, t1, t2] = if mesh.uvs.is_empty() {
+                    [Vec2::ZERO, Vec2::X, Vec2::Y]
                 } else {
-                    let [t0, t1, t2] = idx.map(|i| mesh.uvs[i as usize]);
-                    t0 * w0 + t1 * hit.b1 + t2 * hit.b2
+                    idx.map(|i| mesh.uvs[i as usize])
                 };
-                (p, ng, ns, uv)
+                let uv = t0 * w0 + t1 * hit.b1 + t2 * hit.b2;
+                (p, ng, ns, uv, triangle_dpdu([v0, v1, v2], [t0, t1, t2]))
             }
             Shape::Sphere => {
                 // Re-project onto the sphere: the hit point's error then no longer grows with t.
                 let p = local.at(hit.t);
                 let p = p / p.length();
-                (p, p, p, analytic_uv(LeafShape::Sphere, p, hit.face))
+                let (uv, dpdu) = (
+                    analytic_uv(LeafShape::Sphere, p, hit.face),
+                    analytic_dpdu(LeafShape::Sphere, p, 0),
+                );
+                (p, p, p, uv, dpdu)
             }
             Shape::Csg(c) => {
                 let p = local.at(hit.t);
-                let uv = match &self.csgs[c as usize].nodes[hit.prim as usize] {
+                let (uv, dpdu) = match &self.csgs[c as usize].nodes[hit.prim as usize] {
                     CsgNode::Leaf {
                         shape,
                         leaf_from_csg,
                         ..
-                    } => analytic_uv(*shape, leaf_from_csg.transform_point3a(p), hit.face),
-                    CsgNode::Op { .. } => Vec2::ZERO,
+                    } => {
+                        let q = leaf_from_csg.transform_point3a(p);
+                        let t =
+                            leaf_from_csg.matrix3.inverse() * analytic_dpdu(*shape, q, hit.face);
+                        (analytic_uv(*shape, q, hit.face), t)
+                    }
+                    CsgNode::Op { .. } => (Vec2::ZERO, Vec3A::ZERO),
                 };
-                (p, hit.normal, hit.normal, uv)
+                (p, hit.normal, hit.normal, uv, dpdu)
             }
             shape => {
                 let p = local.at(hit.t);
@@ -693,7 +721,11 @@ impl Scene {
                     Shape::Cylinder => LeafShape::Cylinder,
                     _ => LeafShape::Cone,
                 };
-                (p, hit.normal, hit.normal, analytic_uv(leaf, p, hit.face))
+                let (uv, dpdu) = (
+                    analytic_uv(leaf, p, hit.face),
+                    analytic_dpdu(leaf, p, hit.face),
+                );
+                (p, hit.normal, hit.normal, uv, dpdu)
             }
         };
         let p = inst.world_from_object.transform_point3a(p_obj);
@@ -715,6 +747,7 @@ impl Scene {
             ng,
             ns,
             uv,
+            dpdu: inst.world_from_object.transform_vector3a(dpdu),
             material: hit.material,
         }
     }
@@ -726,5 +759,18 @@ fn object_ray(inst: &Instance, r: &Ray) -> Ray {
         dir: inst.object_from_world.transform_vector3a(r.dir),
         tmin: r.tmin,
         tmax: r.tmax,
+    }
+}
+
+/// Returns `∂p/∂u` of a triangle from its corners and texture coordinates (an edge when the
+/// texture coordinates are degenerate).
+fn triangle_dpdu(p: [Vec3A; 3], t: [Vec2; 3]) -> Vec3A {
+    let (dp1, dp2) = (p[1] - p[0], p[2] - p[0]);
+    let (d1, d2) = (t[1] - t[0], t[2] - t[0]);
+    let det = d1.x * d2.y - d1.y * d2.x;
+    if det.abs() < 1e-20 {
+        dp1
+    } else {
+        (dp1 * d2.y - dp2 * d1.y) / det
     }
 }

@@ -177,6 +177,8 @@ pub struct SceneDesc {
     pub renders: Vec<RenderDesc>,
     /// Warnings issued while running the script (also printed to stderr as they happen).
     pub warnings: Vec<String>,
+    /// `--missing-textures=warn`: unreadable images fall back to `kd` with a warning.
+    pub missing_textures_warn: bool,
 }
 
 impl SceneDesc {

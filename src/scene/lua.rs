@@ -42,14 +42,27 @@ pub type RenderHook = Box<dyn FnMut(&SceneDesc, &RenderDesc) -> Result<()>>;
 /// Largest image `gr.render` accepts, in pixels (about 8k × 8k).
 pub const MAX_PIXELS: u64 = 1 << 26;
 
+/// How a script run treats recoverable problems.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ScriptOptions {
+    /// `--missing-textures=warn`: a missing texture or bump image is a warning (once per file) and
+    /// the material renders with `kd` instead, rather than an error.
+    pub missing_textures_warn: bool,
+}
+
 /// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
 pub fn run_script(path: &Path, hook: RenderHook) -> Result<SceneDesc> {
+    run_script_with(path, hook, ScriptOptions::default())
+}
+
+/// Runs the script at `path` with `options`.
+pub fn run_script_with(path: &Path, hook: RenderHook, options: ScriptOptions) -> Result<SceneDesc> {
     let source = std::fs::read(path).map_err(|e| Error::File {
         path: path.to_path_buf(),
         message: format!("cannot read script: {e}"),
     })?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    run_source(&source, &path.display().to_string(), &dir, hook)
+    run_source_with(&source, &path.display().to_string(), &dir, hook, options)
 }
 
 /// Runs script text named `name` (used in messages), resolving relative paths in the working
@@ -60,8 +73,23 @@ pub fn run_source(
     script_dir: &Path,
     hook: RenderHook,
 ) -> Result<SceneDesc> {
+    run_source_with(source, name, script_dir, hook, ScriptOptions::default())
+}
+
+/// Runs script text with `options` (see [`run_source`]).
+pub fn run_source_with(
+    source: &[u8],
+    name: &str,
+    script_dir: &Path,
+    hook: RenderHook,
+    options: ScriptOptions,
+) -> Result<SceneDesc> {
     let state = Rc::new(RefCell::new(State {
-        desc: SceneDesc::default(),
+        desc: SceneDesc {
+            missing_textures_warn: options.missing_textures_warn,
+            ..SceneDesc::default()
+        },
+        warned_images: std::collections::HashSet::new(),
         script_dir: script_dir.to_path_buf(),
         hook,
         mesh_cache: HashMap::new(),
@@ -84,6 +112,8 @@ struct State {
     script_dir: PathBuf,
     hook: RenderHook,
     mesh_cache: HashMap<PathBuf, MeshId>,
+    /// Missing images already warned about (`--missing-textures=warn`).
+    warned_images: std::collections::HashSet<String>,
 }
 
 impl State {
@@ -468,11 +498,19 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     if perlin_scale < 0.0 {
         return Err(a.bad(6, format!("Perlin scale must be >= 0, got {perlin_scale}")));
     }
-    let image = |i: usize, what: &str| -> mlua::Result<Option<PathBuf>> {
+    let mut image = |i: usize, what: &str| -> mlua::Result<Option<PathBuf>> {
         match a.opt_string(i)? {
             None => Ok(None),
             Some(given) => match s.resolve_input(&given) {
                 Some(p) => Ok(Some(p)),
+                None if s.desc.missing_textures_warn => {
+                    if s.warned_images.insert(given.clone()) {
+                        let message =
+                            format!("{}; rendering with kd instead", s.not_found(what, &given));
+                        s.warn(&a.loc, message);
+                    }
+                    Ok(None)
+                }
                 None => Err(a.fail(s.not_found(what, &given))),
             },
         }

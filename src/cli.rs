@@ -79,6 +79,9 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Shadow-ray samples per area or sphere light at each shaded point (soft shadows).
+    #[arg(long, value_name = "N", default_value_t = 16)]
+    pub light_samples: u32,
     /// What a missing or unreadable texture is: an error (default), or a warning (once per file)
     /// with the material rendered in its kd colour.
     #[arg(long, value_enum, default_value_t = MissingTextures::Error)]
@@ -200,6 +203,7 @@ struct RenderSettings {
     aa_map: Option<PathBuf>,
     stats: bool,
     progress: bool,
+    light_samples: u32,
 }
 
 impl RenderSettings {
@@ -240,6 +244,7 @@ impl RenderSettings {
             tonemap,
             aa_map: a.aa_map.clone(),
             stats: a.stats,
+            light_samples: a.light_samples.clamp(1, 4096),
             progress: !a.quiet && std::io::stderr().is_terminal(),
         })
     }
@@ -281,6 +286,7 @@ fn render_one(
         sampling: settings.sampling.clone(),
         window,
         timing: settings.stats,
+        light_samples: settings.light_samples,
     };
     let bar = if settings.progress {
         let bar = indicatif::ProgressBar::new(window.size().1 as u64);
@@ -294,7 +300,7 @@ fn render_one(
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let (film, rstats) = render_with(&scene, &camera, &opts, &|| bar.inc(1));
+    let (film, rstats) = render_with(&scene, &camera, None, &opts, &|| bar.inc(1));
     bar.finish_and_clear();
     write_image(&film, out, settings.tonemap)?;
     if let Some(map) = &settings.aa_map {

@@ -1,33 +1,328 @@
-//! Lights as the renderer uses them.
+//! Lights: point, one-sided parallelogram (area) and sphere lights, for direct lighting by shadow
+//! rays and for photon emission — one lighting model for both.
 //!
-//! A point light of colour `I` and falloff `(c0, c1, c2)` delivers `I / (c0 + c1·d + c2·d²)` to a
-//! point at distance `d`, as the course specifies; attenuation applies to direct light only, never
-//! to the ambient term.
+//! ```lua
+//! gr.light({0, 0.5, 0}, {0.7, 0.5, 0.9}, {1, 0, 0}, 10000, 200000)          -- point
+//! gr.area_light({0, 0.49, 0}, {1, 1, 1}, {1, 0, 0}, nil, 100000, {0.2, 0, 0}, {0, 0, 0.2})
+//! gr.sphere_light({0, 0.4, 0}, {1, 1, 1}, {1, 0, 0}, nil, nil, 0.05)
+//! ```
+//!
+//! # The lighting model
+//! - `rgb` is a **radiant intensity** `I` (W/sr, per channel) seen head-on: a point light sends
+//!   `I` in every direction; an area light sends `I·cos θ` (a Lambertian emitter of radiance
+//!   `I/A` over its area `A`, on the side of `u × v` only); a sphere light of radius `R` has
+//!   radiance `I/(πR²)`, so from afar it is a point light of intensity `I`.
+//! - Fluxes follow: `Φ = 4π·I` for point and sphere lights, `Φ = π·I` for area lights.
+//! - `falloff = (c0, c1, c2)` replaces the physical `1/d²` of every light-to-surface transfer by
+//!   `1/(c0 + c1·d + c2·d²)`, as the course does: direct irradiance is `I(θ)·cos θ_x / (c0 + c1·d +
+//!   c2·d²)`. Photons honour it through the ratio `g(d) = d²/(c0 + c1·d + c2·d²)`
+//!   ([`Light::falloff_ratio`]): a photon's power is multiplied by `g` of the distance from the light
+//!   to its first hit, so the density of direct photons equals the direct-lighting term exactly (in
+//!   expectation). `falloff = {0, 0, 1}` is physical (`g = 1`). Later bounces are physical.
+//! - `power` and `num_photons` (the extended project's arguments) only steer the photon budget:
+//!   `num_photons` is the light's photon count; lights without one share `--photons` in proportion
+//!   to `power` (or, when absent, to their flux). Their absolute brightness always comes from `rgb`,
+//!   so that direct and photon lighting agree.
+//! - Attenuation applies to light from lights only, never to the ambient term.
 
-use crate::scene::desc::LightDesc;
+use crate::scene::desc::{LightDesc, LightShape};
 use glam::Vec3A;
+use std::f32::consts::{PI, TAU};
 
-/// A point light in world space.
+/// A light in world space.
 #[derive(Clone, Debug, PartialEq)]
-pub struct PointLight {
-    pub position: Vec3A,
+pub struct Light {
+    pub shape: Shape,
+    /// Head-on radiant intensity `I` per channel.
     pub colour: Vec3A,
     pub falloff: [f32; 3],
+    /// The script's `power`, if any (photon budget weight).
+    pub power: Option<f32>,
+    /// The script's `num_photons`, if any.
+    pub photons: Option<u64>,
 }
 
-impl PointLight {
+/// The emitting geometry of a light.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    Point {
+        position: Vec3A,
+    },
+    /// A parallelogram centred at `centre` with edges `u`, `v`, emitting on the side of `u × v`.
+    Area {
+        centre: Vec3A,
+        u: Vec3A,
+        v: Vec3A,
+        normal: Vec3A,
+        area: f32,
+    },
+    Sphere {
+        centre: Vec3A,
+        radius: f32,
+    },
+}
+
+/// A point sampled on a light, as seen from a shaded point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// The point on the light.
+    pub position: Vec3A,
+    /// Radiant intensity towards the shaded point, already divided by the sample's density
+    /// (so averaging samples estimates the light's intensity).
+    pub intensity: Vec3A,
+}
+
+/// A photon leaving a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emission {
+    pub origin: Vec3A,
+    /// Unit direction of travel.
+    pub dir: Vec3A,
+    /// Normal of the emitting surface at `origin` (for ray offsets), or zero for point lights.
+    pub normal: Vec3A,
+}
+
+impl Light {
     /// Returns the light a script described.
-    pub fn from_desc(d: &LightDesc) -> PointLight {
-        PointLight {
-            position: d.position.into(),
+    pub fn from_desc(d: &LightDesc) -> Light {
+        let shape = match d.shape {
+            LightShape::Point => Shape::Point {
+                position: d.position.into(),
+            },
+            LightShape::Area { u, v } => {
+                let (u, v) = (Vec3A::from(u), Vec3A::from(v));
+                let n = u.cross(v);
+                Shape::Area {
+                    centre: d.position.into(),
+                    u,
+                    v,
+                    normal: n.normalize_or_zero(),
+                    area: n.length(),
+                }
+            }
+            LightShape::Sphere { radius } => Shape::Sphere {
+                centre: d.position.into(),
+                radius,
+            },
+        };
+        Light {
+            shape,
             colour: d.colour.into(),
             falloff: d.falloff,
+            power: d.power,
+            photons: d.photons,
         }
     }
 
-    /// Returns the attenuation factor `1 / (c0 + c1·d + c2·d²)` at distance `d`.
+    /// Returns a point light at `position` with intensity `colour` and the course's falloff.
+    pub fn point(position: Vec3A, colour: Vec3A, falloff: [f32; 3]) -> Light {
+        Light {
+            shape: Shape::Point { position },
+            colour,
+            falloff,
+            power: None,
+            photons: None,
+        }
+    }
+
+    /// Returns the attenuation `1 / (c0 + c1·d + c2·d²)` at distance `d`.
     pub fn attenuation(&self, d: f32) -> f32 {
         let [c0, c1, c2] = self.falloff;
         1.0 / (c0 + c1 * d + c2 * d * d)
+    }
+
+    /// Returns `g(d) = d² / (c0 + c1·d + c2·d²)`, the course's falloff relative to inverse square.
+    pub fn falloff_ratio(&self, d: f32) -> f32 {
+        d * d * self.attenuation(d)
+    }
+
+    /// Returns true for lights with extent (soft shadows need several samples).
+    pub fn is_area(&self) -> bool {
+        !matches!(self.shape, Shape::Point { .. })
+    }
+
+    /// Returns the total emitted flux `Φ` per channel.
+    pub fn flux(&self) -> Vec3A {
+        match self.shape {
+            Shape::Area { .. } => PI * self.colour,
+            _ => 2.0 * TAU * self.colour,
+        }
+    }
+
+    /// Returns a sample of the light for shading point `p`, from a uniform pair `u` in [0, 1)².
+    pub fn sample(&self, p: Vec3A, u: (f32, f32)) -> LightSample {
+        match self.shape {
+            Shape::Point { position } => LightSample {
+                position,
+                intensity: self.colour,
+            },
+            Shape::Area {
+                centre,
+                u: eu,
+                v: ev,
+                normal,
+                ..
+            } => {
+                let y = centre + eu * (u.0 - 0.5) + ev * (u.1 - 0.5);
+                let to_p = (p - y).normalize_or_zero();
+                LightSample {
+                    position: y,
+                    intensity: self.colour * normal.dot(to_p).max(0.0),
+                }
+            }
+            Shape::Sphere { centre, radius } => {
+                let n = uniform_sphere(u);
+                let y = centre + n * radius;
+                let to_p = (p - y).normalize_or_zero();
+                // Uniform area sampling: I(θ) · 4 (see the module doc) averages to I from afar.
+                LightSample {
+                    position: y,
+                    intensity: self.colour * 4.0 * n.dot(to_p).max(0.0),
+                }
+            }
+        }
+    }
+
+    /// Returns a photon's emission from four uniform numbers in [0, 1).
+    pub fn emit(&self, u: [f32; 4]) -> Emission {
+        match self.shape {
+            Shape::Point { position } => Emission {
+                origin: position,
+                dir: uniform_sphere((u[0], u[1])),
+                normal: Vec3A::ZERO,
+            },
+            Shape::Area {
+                centre,
+                u: eu,
+                v: ev,
+                normal,
+                ..
+            } => Emission {
+                origin: centre + eu * (u[0] - 0.5) + ev * (u[1] - 0.5),
+                dir: cosine_around(normal, (u[2], u[3])),
+                normal,
+            },
+            Shape::Sphere { centre, radius } => {
+                let n = uniform_sphere((u[0], u[1]));
+                Emission {
+                    origin: centre + n * radius,
+                    dir: cosine_around(n, (u[2], u[3])),
+                    normal: n,
+                }
+            }
+        }
+    }
+}
+
+/// Returns a uniformly distributed unit vector (pdf `1/4π`).
+pub fn uniform_sphere(u: (f32, f32)) -> Vec3A {
+    let z = 1.0 - 2.0 * u.0;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = TAU * u.1;
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Returns a cosine-distributed unit vector around unit `n` (pdf `cos θ / π`; Malley's method).
+pub fn cosine_around(n: Vec3A, u: (f32, f32)) -> Vec3A {
+    let r = u.0.sqrt();
+    let phi = TAU * u.1;
+    let (x, y) = (r * phi.cos(), r * phi.sin());
+    let z = (1.0 - u.0).max(0.0).sqrt();
+    let t = n.any_orthonormal_vector();
+    let b = n.cross(t);
+    (t * x + b * y + n * z).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{Pass, Rng};
+
+    fn area(colour: f32) -> Light {
+        Light {
+            shape: Shape::Area {
+                centre: Vec3A::ZERO,
+                u: Vec3A::X * 0.5,
+                v: Vec3A::Z * 2.0,
+                normal: -Vec3A::Y,
+                area: 1.0,
+            },
+            colour: Vec3A::splat(colour),
+            falloff: [0.0, 0.0, 1.0],
+            power: None,
+            photons: None,
+        }
+    }
+
+    #[test]
+    fn samples_average_to_the_intensity_the_model_defines() {
+        let mut rng = Rng::new(1, Pass::Pixel, 0);
+        let n = 200_000;
+        // Area light seen from straight below at distance 1000: I·cos 0 = I.
+        let l = area(2.0);
+        let p = Vec3A::new(0.0, -1000.0, 0.0);
+        let mean: Vec3A = (0..n)
+            .map(|_| l.sample(p, (rng.next_f32(), rng.next_f32())).intensity)
+            .sum::<Vec3A>()
+            / n as f32;
+        assert!((mean.x - 2.0).abs() < 0.01, "{mean}");
+        // From 60° off the normal: I·cos 60°.
+        let p = Vec3A::new(
+            1000.0 * 60f32.to_radians().sin(),
+            -1000.0 * 60f32.to_radians().cos(),
+            0.0,
+        );
+        let mean: Vec3A = (0..n)
+            .map(|_| l.sample(p, (rng.next_f32(), rng.next_f32())).intensity)
+            .sum::<Vec3A>()
+            / n as f32;
+        assert!((mean.x - 1.0).abs() < 0.01, "{mean}");
+        // Behind the one-sided light: nothing.
+        assert_eq!(
+            l.sample(Vec3A::new(0.0, 5.0, 0.0), (0.3, 0.6)).intensity,
+            Vec3A::ZERO
+        );
+        // A sphere light from afar is a point light of intensity I.
+        let s = Light {
+            shape: Shape::Sphere {
+                centre: Vec3A::ZERO,
+                radius: 0.5,
+            },
+            ..area(3.0)
+        };
+        let p = Vec3A::new(0.0, 0.0, 1e4);
+        let mean: Vec3A = (0..n)
+            .map(|_| s.sample(p, (rng.next_f32(), rng.next_f32())).intensity)
+            .sum::<Vec3A>()
+            / n as f32;
+        assert!((mean.x - 3.0).abs() < 0.03, "{mean}");
+    }
+
+    #[test]
+    fn emission_directions_follow_their_densities() {
+        let mut rng = Rng::new(2, Pass::Photon, 0);
+        let n = 200_000;
+        let (mut mean_cos, mut above) = (0.0f64, 0usize);
+        for _ in 0..n {
+            let d = cosine_around(Vec3A::Y, (rng.next_f32(), rng.next_f32()));
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            mean_cos += d.y as f64;
+            above += usize::from(d.y >= 0.0);
+            let s = uniform_sphere((rng.next_f32(), rng.next_f32()));
+            assert!((s.length() - 1.0).abs() < 1e-5);
+        }
+        // E[cos θ] under cos θ/π is 2/3.
+        assert!((mean_cos / n as f64 - 2.0 / 3.0).abs() < 0.005 && above == n);
+    }
+
+    #[test]
+    fn falloff_ratio_makes_photons_agree_with_direct_light() {
+        let l = Light::point(Vec3A::ZERO, Vec3A::ONE, [1.0, 0.5, 0.25]);
+        for d in [0.1f32, 1.0, 7.0] {
+            // Photon irradiance Φ/(4π d²)·g(d) equals I/(c0 + c1 d + c2 d²) for I = 1.
+            let photon = l.flux().x / (4.0 * PI * d * d) * l.falloff_ratio(d);
+            assert!((photon - l.attenuation(d)).abs() < 1e-6 * l.attenuation(d).max(1.0));
+        }
+        assert_eq!(area(1.0).flux(), Vec3A::splat(PI));
     }
 }

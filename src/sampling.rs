@@ -15,6 +15,14 @@ pub enum Pass {
     Pixel = 1,
     /// Photon emission and scattering.
     Photon = 2,
+    /// Samples keyed by an image-plane position (adaptive anti-aliasing's corner and refinement
+    /// rays), so that every tile computes the same value for a shared point.
+    Point = 3,
+}
+
+/// Returns the key of image-plane position `(x, y)` for [`Pass::Point`] streams.
+pub fn point_key(x: f32, y: f32) -> u64 {
+    ((x.to_bits() as u64) << 32) | y.to_bits() as u64
 }
 
 /// A PCG32 random stream.

@@ -46,8 +46,9 @@ fn render(
         sampling,
         window: window.unwrap_or(Window::full(w, h)),
         timing: false,
+        light_samples: 16,
     };
-    render_with(scene, camera, &opts, &|| {}).0
+    render_with(scene, camera, None, &opts, &|| {}).0
 }
 
 fn rmse(a: &Film, b: &Film, pixels: impl Iterator<Item = usize>) -> f64 {

@@ -157,3 +157,65 @@ fn simple_lua_spheres_are_lit_towards_the_lights_and_dark_away_from_them() {
         "background must not be constant"
     );
 }
+
+#[test]
+fn area_light_irradiance_matches_quadrature_and_casts_soft_shadows() {
+    // A 1×1 area light 2 units above a floor, facing down; physical falloff {0, 0, 1}.
+    let src = r#"
+        m = gr.material({1, 1, 1}, {0, 0, 0}, 0)
+        root = gr.node('root')
+        floor = gr.cube('floor'); floor:set_material(m); floor:scale(40, 1, 40); floor:translate(-20, -1, -20)
+        root:add_child(floor)
+        blocker = gr.nh_box('blocker', {-3.2, 0.8, -0.5}, 1); blocker:set_material(m); root:add_child(blocker)
+        l = gr.area_light({0, 2, 0}, {1, 1, 1}, {0, 0, 1}, nil, nil, {1, 0, 0}, {0, 0, 1})  -- u × v = -y
+        gr.render(root, 'x.png', 48, 48, {0, 6, 0.01}, {0, -1, 0}, {0, 0, -1}, 80, {0, 0, 0}, {l})
+    "#;
+    let d = common::run_lua(src).unwrap();
+    let r = &d.renders[0];
+    let scene = caustic::scene::build::build_scene(&d, r).unwrap();
+    let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
+    let mut opts = caustic::render::RenderOptions::new(r.width, r.height);
+    opts.light_samples = 1024;
+    let (film, _) = caustic::render::render_with(&scene, &camera, None, &opts, &|| {});
+    // Irradiance at floor point p from the light (radiance I/A = 1), by a 200×200 midpoint rule.
+    let quadrature = |p: Vec3A| {
+        let n = 200;
+        let mut e = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let y = Vec3A::new(
+                    -0.5 + (i as f32 + 0.5) / n as f32,
+                    2.0,
+                    -0.5 + (j as f32 + 0.5) / n as f32,
+                );
+                let w = y - p;
+                let d2 = w.length_squared();
+                let cos = w.y / d2.sqrt();
+                e += (cos * cos / d2) as f64 / (n * n) as f64;
+            }
+        }
+        e as f32
+    };
+    for (x, y) in [(24, 24), (30, 20), (36, 36), (12, 30)] {
+        let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+        let p = ray.at(-ray.origin.y / ray.dir.y);
+        if p.x < -2.0 {
+            continue; // near the blocker
+        }
+        let want = quadrature(p);
+        let got = film.get(x, y).x;
+        assert!(
+            (got - want).abs() < 0.02 * want,
+            "pixel ({x}, {y}) at {p}: {got} vs quadrature {want}"
+        );
+    }
+    // The blocker's shadow is soft: along a line through it, values rise from the umbra through
+    // intermediate penumbra values to full light, never jumping straight from dark to lit.
+    let row: Vec<f32> = (0..48).map(|x| film.get(x, 24).x).collect();
+    let lit = row.iter().cloned().fold(0.0, f32::max);
+    let partial = row
+        .iter()
+        .filter(|&&v| v > 0.1 * lit && v < 0.6 * lit)
+        .count();
+    assert!(partial >= 2, "no penumbra in {row:?}");
+}

@@ -11,17 +11,15 @@
 //! corners. Flat areas thus cost about one ray per pixel, and edges up to `(2^d + 1)²`. It draws
 //! no random numbers, so it is deterministic by construction.
 
+use super::shade::Tracer;
 use super::{RayCounts, RenderOptions, Sampling, shade};
-use crate::camera::Camera;
-use crate::sampling::{Pass, Rng, stratified_2d};
-use crate::scene::Scene;
+use crate::sampling::{Pass, Rng, point_key, stratified_2d};
 use glam::Vec3A;
 use rayon::prelude::*;
 
 /// Samples pixels of one render; shared by the worker threads.
 pub struct PixelSampler<'a> {
-    scene: &'a Scene,
-    camera: &'a Camera,
+    tracer: &'a Tracer<'a>,
     opts: &'a RenderOptions,
     /// Adaptive mode: radiance at every pixel corner of the window, `(w + 1) × (h + 1)` row-major.
     corners: Vec<Vec3A>,
@@ -30,10 +28,9 @@ pub struct PixelSampler<'a> {
 
 impl<'a> PixelSampler<'a> {
     /// Prepares sampling; in adaptive mode traces every corner ray of the window (in parallel).
-    pub fn new(scene: &'a Scene, camera: &'a Camera, opts: &'a RenderOptions) -> PixelSampler<'a> {
+    pub fn new(tracer: &'a Tracer<'a>, opts: &'a RenderOptions) -> PixelSampler<'a> {
         let mut sampler = PixelSampler {
-            scene,
-            camera,
+            tracer,
             opts,
             corners: Vec::new(),
             corner_counts: RayCounts::default(),
@@ -50,7 +47,11 @@ impl<'a> PixelSampler<'a> {
                     };
                     let row = (0..=w)
                         .map(|i| {
-                            sampler.trace((win.x0 + i) as f32, (win.y0 + j) as f32, &mut counts)
+                            sampler.trace_point(
+                                (win.x0 + i) as f32,
+                                (win.y0 + j) as f32,
+                                &mut counts,
+                            )
                         })
                         .collect();
                     (row, counts)
@@ -84,15 +85,18 @@ impl<'a> PixelSampler<'a> {
     }
 
     /// Returns the radiance along the camera ray through image-plane position `(x, y)`.
-    fn trace(&self, x: f32, y: f32, counts: &mut RayCounts) -> Vec3A {
+    fn trace(&self, x: f32, y: f32, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
         counts.primary += 1;
-        shade::radiance(
-            self.scene,
-            self.camera,
-            &self.camera.ray(x, y),
-            shade::PathState::camera(),
-            counts,
-        )
+        let ray = self.tracer.camera.ray(x, y);
+        self.tracer
+            .radiance(&ray, shade::PathState::camera(), rng, counts)
+    }
+
+    /// Returns the radiance through `(x, y)` with the random stream of that image-plane point, so
+    /// every tile computes the same value for a corner it shares.
+    fn trace_point(&self, x: f32, y: f32, counts: &mut RayCounts) -> Vec3A {
+        let mut rng = Rng::new(self.opts.seed, Pass::Point, point_key(x, y));
+        self.trace(x, y, &mut rng, counts)
     }
 
     /// Returns the value of pixel `(x, y)` (full-image coordinates).
@@ -105,7 +109,7 @@ impl<'a> PixelSampler<'a> {
                 let positions = stratified_2d(&mut rng, spp);
                 let sum: Vec3A = positions
                     .iter()
-                    .map(|&(u, v)| self.trace(x as f32 + u, y as f32 + v, counts))
+                    .map(|&(u, v)| self.trace(x as f32 + u, y as f32 + v, &mut rng, counts))
                     .sum();
                 sum / spp as f32
             }
@@ -149,11 +153,11 @@ impl<'a> PixelSampler<'a> {
         }
         let half = sq.size * 0.5;
         let (x, y) = (sq.x, sq.y);
-        let top = self.trace(x + half, y, counts);
-        let left = self.trace(x, y + half, counts);
-        let mid = self.trace(x + half, y + half, counts);
-        let right = self.trace(x + sq.size, y + half, counts);
-        let bottom = self.trace(x + half, y + sq.size, counts);
+        let top = self.trace_point(x + half, y, counts);
+        let left = self.trace_point(x, y + half, counts);
+        let mid = self.trace_point(x + half, y + half, counts);
+        let right = self.trace_point(x + sq.size, y + half, counts);
+        let bottom = self.trace_point(x + half, y + sq.size, counts);
         let sub = |x, y| Square { x, y, size: half };
         let d = depth - 1;
         (self.refine(sub(x, y), [c[0], top, left, mid], threshold, d, counts)

@@ -17,6 +17,7 @@
 //! a cropped window equals the same window of the full render.
 
 pub mod aa;
+pub mod gi;
 pub mod shade;
 
 use crate::camera::Camera;
@@ -103,6 +104,8 @@ pub struct RenderOptions {
     pub window: Window,
     /// Time material evaluation for `--stats`.
     pub timing: bool,
+    /// Shadow-ray samples per area or sphere light at each shaded point.
+    pub light_samples: u32,
 }
 
 impl RenderOptions {
@@ -113,6 +116,7 @@ impl RenderOptions {
             sampling: Sampling::Stratified { spp: 1 },
             window: Window::full(width, height),
             timing: false,
+            light_samples: 16,
         }
     }
 }
@@ -143,13 +147,20 @@ pub struct RayCounts {
 
 /// Renders `scene` through `camera` into a `width × height` film with one centre ray per pixel.
 pub fn render(scene: &Scene, camera: &Camera, width: u32, height: u32) -> (Film, RenderStats) {
-    render_with(scene, camera, &RenderOptions::new(width, height), &|| {})
+    render_with(
+        scene,
+        camera,
+        None,
+        &RenderOptions::new(width, height),
+        &|| {},
+    )
 }
 
 /// Renders the window `opts.window` of the image; `row_done` is called once per finished row.
 pub fn render_with(
     scene: &Scene,
     camera: &Camera,
+    gi: Option<&gi::Gi>,
     opts: &RenderOptions,
     row_done: &(dyn Fn() + Sync),
 ) -> (Film, RenderStats) {
@@ -164,7 +175,13 @@ pub fn render_with(
     ];
     let mut pixels = vec![Vec3A::ZERO; w as usize * h as usize];
     let mut samples = vec![0u32; w as usize * h as usize];
-    let sampler = aa::PixelSampler::new(scene, camera, opts);
+    let tracer = shade::Tracer {
+        scene,
+        camera,
+        light_samples: opts.light_samples,
+        gi,
+    };
+    let sampler = aa::PixelSampler::new(&tracer, opts);
     pixels
         .par_chunks_mut(w as usize)
         .zip(samples.par_chunks_mut(w as usize))

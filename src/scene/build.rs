@@ -17,7 +17,7 @@ use crate::geometry::mesh::MeshGeom;
 use crate::geometry::triangle;
 use crate::geometry::uv::{analytic_dpdu, analytic_uv};
 use crate::geometry::{Interval, Ray, cone, cube, cylinder, sphere};
-use crate::light::PointLight;
+use crate::light::Light;
 use crate::material::Material;
 use crate::scene::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
 use crate::scene::images::ImageCache;
@@ -127,7 +127,7 @@ pub struct Scene {
     pub meshes: Vec<MeshGeom>,
     pub csgs: Vec<CsgTree>,
     pub materials: Vec<Material>,
-    pub lights: Vec<PointLight>,
+    pub lights: Vec<Light>,
     pub ambient: Vec3A,
     pub tlas: Bvh,
     pub stats: BuildStats,
@@ -186,7 +186,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         lights: render
             .lights
             .iter()
-            .map(|l| PointLight::from_desc(&desc.lights[l.0 as usize]))
+            .map(|l| Light::from_desc(&desc.lights[l.0 as usize]))
             .collect(),
         ambient: render.ambient.into(),
         tlas,

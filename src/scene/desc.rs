@@ -117,10 +117,24 @@ pub struct MaterialDesc {
     pub loc: Loc,
 }
 
-/// A point light as `gr.light(pos, rgb, falloff [, power [, num_photons]])` gives it.
+/// The emitting shape of a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightShape {
+    /// `gr.light`.
+    Point,
+    /// `gr.area_light`: a one-sided parallelogram centred at the position with edges `u`, `v`,
+    /// emitting on the side of `u × v`.
+    Area { u: Vec3, v: Vec3 },
+    /// `gr.sphere_light`.
+    Sphere { radius: f32 },
+}
+
+/// A light as `gr.light(pos, rgb, falloff [, power [, num_photons]])`, `gr.area_light` or
+/// `gr.sphere_light` gives it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightDesc {
-    /// World-space position (lights are not part of the scene graph).
+    pub shape: LightShape,
+    /// World-space position (lights are not part of the scene graph); the centre of area lights.
     pub position: Vec3,
     /// Intensity per channel.
     pub colour: Vec3,

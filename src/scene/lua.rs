@@ -26,7 +26,8 @@ use crate::error::{Error, Loc, Result};
 use crate::io::{gltf, obj};
 use crate::scene::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
 use crate::scene::desc::{
-    CameraDesc, CsgOp, LightDesc, MaterialDesc, MeshDesc, MeshId, NodeKind, RenderDesc, SceneDesc,
+    CameraDesc, CsgOp, LightDesc, LightShape, MaterialDesc, MeshDesc, MeshId, NodeKind, RenderDesc,
+    SceneDesc,
 };
 use glam::{DAffine3, DVec3};
 use mlua::{Lua, LuaOptions, MetaMethod, MultiValue, StdLib, Table, UserData, Value};
@@ -247,6 +248,8 @@ fn install_gr(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()> {
         ("difference", |l, s, a| gr_csg(l, s, a, CsgOp::Difference)),
         ("material", gr_material),
         ("light", gr_light),
+        ("area_light", gr_area_light),
+        ("sphere_light", gr_sphere_light),
         ("render", gr_render),
         ("add_child", gr_add_child),
         ("set_material", gr_set_material),
@@ -301,6 +304,8 @@ const GR_NAMES: &[&str] = &[
     "difference",
     "material",
     "light",
+    "area_light",
+    "sphere_light",
     "render",
 ];
 
@@ -533,6 +538,29 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
 }
 
 fn gr_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    new_light(lua, s, a, LightShape::Point)
+}
+
+/// `gr.area_light(pos, rgb, falloff, power, num_photons, u, v)`: power and num_photons may be nil.
+fn gr_area_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let u = a.vec3(6)?;
+    let v = a.vec3(7)?;
+    if u.cross(v).length_squared() <= f32::MIN_POSITIVE {
+        return Err(a.bad(
+            7,
+            "the edges u and v must span a parallelogram (not zero or parallel)",
+        ));
+    }
+    new_light(lua, s, a, LightShape::Area { u, v })
+}
+
+/// `gr.sphere_light(pos, rgb, falloff, power, num_photons, radius)`.
+fn gr_sphere_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let radius = positive(a, 6, "radius")? as f32;
+    new_light(lua, s, a, LightShape::Sphere { radius })
+}
+
+fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Result<Value> {
     let position = a.vec3(1)?;
     let colour = a.colour(2)?;
     let falloff = a.vec3(3)?;
@@ -559,6 +587,7 @@ fn gr_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     }
     let id = crate::scene::desc::LightId(s.desc.lights.len() as u32);
     s.desc.lights.push(LightDesc {
+        shape,
         position,
         colour,
         falloff: falloff.to_array(),

@@ -1,0 +1,435 @@
+//! The implicit balanced kd-tree over a [`PhotonMap`]'s positions: build, k-nearest and radius
+//! queries, and the invariant check.
+//!
+//! The index range `lo..hi` is a subtree. If it holds at most [`LEAF_SIZE`] photons it is a leaf
+//! bucket (split axis [`AXIS_NONE`](super::store::AXIS_NONE) on each of its photons), otherwise its
+//! root is photon `m = lo + (hi - lo) / 2`, whose code word names the split axis `a`, and
+//! `pos[lo..m][a] <= pos[m][a] <= pos[m + 1..hi][a]`. The split axis is the one along which the
+//! range's bounding box is longest (the lowest axis on ties), so coplanar photons are never split
+//! across their plane, and the median split keeps the depth at `log2(n / LEAF_SIZE)` however many
+//! photons share a coordinate.
+//!
+//! Queries descend the near side first and visit the far side only if the box of the far cell
+//! (tracked per axis, Arya & Mount 1993) is within the current bound. The bound test is `d2 <=
+//! bound`, where `bound` is the query radius, or for a full k-nearest heap the largest float below
+//! its current maximum, so ties at the query radius are found and ties with the k-th distance are
+//! skipped without changing the distances returned. Cell distances are computed from the same
+//! coordinate differences as photon distances, so pruning never drops a photon whose computed
+//! distance passes the bound.
+
+use super::store::{self, AXIS_NONE, PowerCodec};
+use super::{Photon, PhotonId, PhotonMap};
+use glam::Vec3A;
+
+/// Largest index range stored as a leaf bucket (searched linearly, no split).
+pub const LEAF_SIZE: usize = 8;
+/// Smallest range whose two subtrees are built in parallel.
+const PARALLEL_MIN: usize = 1 << 14;
+
+/// A photon during the build, compact and in one piece so `select_nth` moves it whole.
+#[derive(Clone, Copy)]
+struct Record {
+    pos: [f32; 3],
+    code: u32,
+    power: u32,
+}
+
+/// Returns the squared distance between `a` and `b`, as `(a - b).length_squared()` computes it.
+#[inline(always)]
+fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
+    let (dx, dy, dz) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+    dx * dx + dy * dy + dz * dz
+}
+
+/// Returns the axis along which the positions spread furthest (the lowest axis on ties).
+fn widest_axis(points: impl Iterator<Item = [f32; 3]>) -> u32 {
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in points {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let ext = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+    let mut best = 0;
+    for a in 1..3 {
+        if ext[a] > ext[best] {
+            best = a;
+        }
+    }
+    best as u32
+}
+
+/// Orders `recs` as a kd-subtree (see the module doc), in parallel for large ranges.
+fn build_subtree(recs: &mut [Record]) {
+    let n = recs.len();
+    if n <= LEAF_SIZE {
+        return; // Records start with axis AXIS_NONE.
+    }
+    let axis = widest_axis(recs.iter().map(|r| r.pos));
+    let a = axis as usize;
+    let m = n / 2;
+    recs.select_nth_unstable_by(m, |x, y| x.pos[a].total_cmp(&y.pos[a]));
+    recs[m].code = store::with_axis(recs[m].code, axis);
+    let (left, rest) = recs.split_at_mut(m);
+    let right = &mut rest[1..];
+    if n >= PARALLEL_MIN {
+        rayon::join(|| build_subtree(left), || build_subtree(right));
+    } else {
+        build_subtree(left);
+        build_subtree(right);
+    }
+}
+
+impl PhotonMap {
+    /// Returns the map of `photons`, built in parallel on the current rayon pool; the result is
+    /// the same for any number of threads.
+    ///
+    /// Photons with a NaN or infinite position are skipped (a tracer bug: debug builds assert).
+    pub fn build(photons: Vec<Photon>) -> PhotonMap {
+        use rayon::prelude::*;
+        let finite = |p: &&Photon| {
+            let ok = p.position.is_finite();
+            debug_assert!(ok, "photon at {}", p.position);
+            ok
+        };
+        let max_exponent = photons
+            .par_iter()
+            .filter(finite)
+            .map(|p| store::power_exponent(p.power))
+            .max()
+            .unwrap_or(i32::MIN);
+        let codec = PowerCodec::new(max_exponent);
+        let mut recs: Vec<Record> = photons
+            .par_iter()
+            .filter(finite)
+            .map(|p| Record {
+                pos: p.position.to_array(),
+                code: store::encode_code(p.dir, p.normal, p.direct),
+                power: codec.encode(p.power),
+            })
+            .collect();
+        drop(photons);
+        recs.truncate(u32::MAX as usize);
+        build_subtree(&mut recs);
+        let mut map = PhotonMap {
+            pos: recs.par_iter().map(|r| r.pos).collect(),
+            code: recs.par_iter().map(|r| r.code).collect(),
+            power: recs.par_iter().map(|r| r.power).collect(),
+            codec,
+        };
+        // Collecting a handful of items may leave spare capacity; large maps are exact already.
+        map.pos.shrink_to_fit();
+        map.code.shrink_to_fit();
+        map.power.shrink_to_fit();
+        map
+    }
+
+    /// Writes the k nearest photons to p with squared distance <= max_d2 to `out` (cleared first),
+    /// in any order; returns the largest squared distance found (0 if none).
+    ///
+    /// Among photons tied at the k-th distance, which ones are returned is unspecified. A NaN
+    /// query point or `max_d2` finds nothing.
+    pub fn knn(&self, p: Vec3A, k: usize, max_d2: f32, out: &mut Vec<(f32, PhotonId)>) -> f32 {
+        out.clear();
+        if k == 0 || self.is_empty() || max_d2.is_nan() || max_d2 < 0.0 {
+            return 0.0;
+        }
+        out.reserve(k.min(self.len()));
+        let mut heap = Heap {
+            items: out,
+            k,
+            bound: max_d2,
+        };
+        self.knn_in(0, self.len(), p.to_array(), [0.0; 3], &mut heap);
+        out.first().map_or(0.0, |e| e.0)
+    }
+
+    /// Adds the photons of subtree `lo..hi` that beat the heap's bound; `off` is the per-axis
+    /// offset from `q` to the subtree's cell.
+    fn knn_in(
+        &self,
+        mut lo: usize,
+        mut hi: usize,
+        q: [f32; 3],
+        mut off: [f32; 3],
+        heap: &mut Heap,
+    ) {
+        let pos = &self.pos[..];
+        loop {
+            let n = hi - lo;
+            if n <= LEAF_SIZE {
+                for (i, &x) in pos[lo..hi].iter().enumerate() {
+                    let d2 = dist2(x, q);
+                    if d2 <= heap.bound {
+                        heap.push(d2, (lo + i) as u32);
+                    }
+                }
+                return;
+            }
+            let m = lo + n / 2;
+            let a = store::code_axis(self.code[m]) as usize;
+            let split = pos[m];
+            let d = q[a] - split[a];
+            let (near, far) = if d <= 0.0 {
+                ((lo, m), (m + 1, hi))
+            } else {
+                ((m + 1, hi), (lo, m))
+            };
+            self.knn_in(near.0, near.1, q, off, heap);
+            let d2 = dist2(split, q);
+            if d2 <= heap.bound {
+                heap.push(d2, m as u32);
+            }
+            off[a] = d;
+            if off[0] * off[0] + off[1] * off[1] + off[2] * off[2] > heap.bound {
+                return;
+            }
+            (lo, hi) = far;
+        }
+    }
+
+    /// Writes every photon with squared distance <= r2 from p to `out` (cleared first).
+    ///
+    /// The order is unspecified. A NaN query point or `r2` finds nothing.
+    pub fn within(&self, p: Vec3A, r2: f32, out: &mut Vec<(f32, PhotonId)>) {
+        out.clear();
+        if self.is_empty() || r2.is_nan() || r2 < 0.0 {
+            return;
+        }
+        self.within_in(0, self.len(), p.to_array(), [0.0; 3], r2, out);
+    }
+
+    /// Adds the photons of subtree `lo..hi` within `r2` of `q`; `off` as in [`Self::knn_in`].
+    fn within_in(
+        &self,
+        mut lo: usize,
+        mut hi: usize,
+        q: [f32; 3],
+        mut off: [f32; 3],
+        r2: f32,
+        out: &mut Vec<(f32, PhotonId)>,
+    ) {
+        let pos = &self.pos[..];
+        loop {
+            let n = hi - lo;
+            if n <= LEAF_SIZE {
+                for (i, &x) in pos[lo..hi].iter().enumerate() {
+                    let d2 = dist2(x, q);
+                    if d2 <= r2 {
+                        out.push((d2, PhotonId((lo + i) as u32)));
+                    }
+                }
+                return;
+            }
+            let m = lo + n / 2;
+            let a = store::code_axis(self.code[m]) as usize;
+            let split = pos[m];
+            let d = q[a] - split[a];
+            let (near, far) = if d <= 0.0 {
+                ((lo, m), (m + 1, hi))
+            } else {
+                ((m + 1, hi), (lo, m))
+            };
+            self.within_in(near.0, near.1, q, off, r2, out);
+            let d2 = dist2(split, q);
+            if d2 <= r2 {
+                out.push((d2, PhotonId(m as u32)));
+            }
+            off[a] = d;
+            if off[0] * off[0] + off[1] * off[1] + off[2] * off[2] > r2 {
+                return;
+            }
+            (lo, hi) = far;
+        }
+    }
+
+    /// Checks the kd-tree invariants (see the module doc); returns the first violation found.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.len();
+        if self.code.len() != n || self.power.len() != n {
+            return Err(format!(
+                "array lengths differ: {n} positions, {} codes, {} powers",
+                self.code.len(),
+                self.power.len()
+            ));
+        }
+        if n > u32::MAX as usize {
+            return Err(format!("{n} photons do not fit PhotonId"));
+        }
+        for (i, (p, &c)) in self.pos.iter().zip(&self.code).enumerate() {
+            if !p.iter().all(|x| x.is_finite()) {
+                return Err(format!("photon {i} at {p:?} is not finite"));
+            }
+            if !store::code_is_valid(c) {
+                return Err(format!("photon {i} has direction code {c:#x} out of range"));
+            }
+        }
+        let mut stack = vec![(0, n)];
+        while let Some((lo, hi)) = stack.pop() {
+            self.validate_node(lo, hi)?;
+            if hi - lo > LEAF_SIZE {
+                let m = lo + (hi - lo) / 2;
+                stack.push((lo, m));
+                stack.push((m + 1, hi));
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks one subtree's root: its axis, and the coordinates on both sides of its split.
+    fn validate_node(&self, lo: usize, hi: usize) -> Result<(), String> {
+        if hi - lo <= LEAF_SIZE {
+            return match (lo..hi).find(|&i| store::code_axis(self.code[i]) != AXIS_NONE) {
+                Some(i) => Err(format!("leaf photon {i} of {lo}..{hi} has a split axis")),
+                None => Ok(()),
+            };
+        }
+        let m = lo + (hi - lo) / 2;
+        let axis = store::code_axis(self.code[m]);
+        let widest = widest_axis(self.pos[lo..hi].iter().copied());
+        if axis != widest {
+            return Err(format!(
+                "node {m} of {lo}..{hi} splits on axis {axis}, widest is {widest}"
+            ));
+        }
+        let (a, s) = (axis as usize, self.pos[m][axis as usize]);
+        if let Some(i) = (lo..m).find(|&i| self.pos[i][a] > s) {
+            return Err(format!(
+                "photon {i} left of node {m} is above its split {s}"
+            ));
+        }
+        if let Some(i) = (m + 1..hi).find(|&i| self.pos[i][a] < s) {
+            return Err(format!(
+                "photon {i} right of node {m} is below its split {s}"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A bounded max-heap of the k nearest photons found so far, kept in the caller's `Vec`.
+struct Heap<'a> {
+    items: &'a mut Vec<(f32, PhotonId)>,
+    k: usize,
+    /// Largest squared distance still accepted: the query's `max_d2` until k photons are found,
+    /// then the largest float below the k-th distance.
+    bound: f32,
+}
+
+impl Heap<'_> {
+    /// Adds photon `id` at squared distance `d2 <= self.bound`, evicting the farthest if full.
+    #[inline(always)]
+    fn push(&mut self, d2: f32, id: u32) {
+        let h = &mut *self.items;
+        let x = (d2, PhotonId(id));
+        if h.len() < self.k {
+            h.push(x);
+            let mut i = h.len() - 1;
+            while i > 0 {
+                let parent = (i - 1) / 2;
+                if h[parent].0 >= d2 {
+                    break;
+                }
+                h[i] = h[parent];
+                i = parent;
+            }
+            h[i] = x;
+            if h.len() < self.k {
+                return;
+            }
+        } else {
+            let n = h.len();
+            let mut i = 0;
+            loop {
+                let mut c = 2 * i + 1;
+                if c >= n {
+                    break;
+                }
+                if c + 1 < n && h[c + 1].0 > h[c].0 {
+                    c += 1;
+                }
+                if h[c].0 <= d2 {
+                    break;
+                }
+                h[i] = h[c];
+                i = c;
+            }
+            h[i] = x;
+        }
+        self.bound = h[0].0.next_down();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{Pass, Rng};
+
+    fn photon(position: Vec3A) -> Photon {
+        Photon {
+            position,
+            power: Vec3A::splat(1e-3),
+            dir: Vec3A::Y,
+            normal: Vec3A::Y,
+            direct: false,
+        }
+    }
+
+    #[test]
+    fn widest_axis_prefers_the_lowest_on_ties() {
+        let pts = [[0.0, 0.0, 0.0], [1.0, 1.0, 0.5]];
+        assert_eq!(widest_axis(pts.into_iter()), 0);
+        let pts = [[0.0, 0.0, 0.0], [0.5, 1.0, 1.0]];
+        assert_eq!(widest_axis(pts.into_iter()), 1);
+        assert_eq!(widest_axis([[2.0; 3]; 5].into_iter()), 0);
+    }
+
+    #[test]
+    fn heap_keeps_the_k_smallest_and_its_bound() {
+        let mut v = Vec::new();
+        let mut h = Heap {
+            items: &mut v,
+            k: 3,
+            bound: 10.0,
+        };
+        for (i, d) in [5.0, 1.0, 7.0, 3.0, 3.0, 0.5].into_iter().enumerate() {
+            if d <= h.bound {
+                h.push(d, i as u32);
+            }
+        }
+        assert_eq!(h.bound, 3f32.next_down());
+        let mut d: Vec<f32> = v.iter().map(|e| e.0).collect();
+        d.sort_by(f32::total_cmp);
+        assert_eq!(d, [0.5, 1.0, 3.0]);
+    }
+
+    #[test]
+    fn validate_catches_a_broken_split() {
+        let mut r = Rng::new(5, Pass::Photon, 0);
+        let photons = (0..1000)
+            .map(|_| photon(Vec3A::new(r.next_f32(), r.next_f32(), r.next_f32())))
+            .collect();
+        let mut map = PhotonMap::build(photons);
+        assert_eq!(map.validate(), Ok(()));
+        let m = map.len() / 2;
+        let a = store::code_axis(map.code[m]) as usize;
+        map.pos[0][a] = 2.0;
+        assert!(map.validate().is_err());
+    }
+
+    #[test]
+    fn all_duplicates_build_a_balanced_tree_and_query_fast() {
+        let map = PhotonMap::build(vec![photon(Vec3A::ONE); 100_000]);
+        assert_eq!(map.validate(), Ok(()));
+        let mut out = Vec::new();
+        assert_eq!(map.knn(Vec3A::ONE, 50, f32::INFINITY, &mut out), 0.0);
+        assert_eq!(out.len(), 50);
+        // Ties with the k-th distance are pruned, so the query stays near one root-to-leaf path.
+        let start = std::time::Instant::now();
+        for _ in 0..1000 {
+            map.knn(Vec3A::ONE, 50, f32::INFINITY, &mut out);
+        }
+        assert!(start.elapsed().as_secs_f64() < 0.5, "{:?}", start.elapsed());
+    }
+}

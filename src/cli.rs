@@ -3,6 +3,8 @@
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
+use crate::render::gi::{Gi, GiSettings, Indirect};
+use crate::render::plan::{GiMode, plan};
 use crate::render::{Film, RenderOptions, RenderStats, Sampling, Window, render_with};
 use crate::scene::build::{build_scene, count_placements};
 use crate::scene::desc::{RenderDesc, SceneDesc};
@@ -30,6 +32,26 @@ pub enum Command {
     Info(InfoArgs),
     /// Assemble tiles rendered with --crop into the full image.
     Stitch(StitchArgs),
+    /// Trace a scene's photons and draw them from its camera (global: dots; caustic: crosses).
+    Photons(PhotonsArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct PhotonsArgs {
+    /// The Lua scene script.
+    pub scene: PathBuf,
+    /// The picture to write (default: the script's image name with `_photons` added).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<PathBuf>,
+    /// Photons per map.
+    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    pub photons: u64,
+    /// Seed of the photon streams.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// Draw at this multiple of the script's image size.
+    #[arg(long, value_name = "F", default_value_t = 1.0)]
+    pub scale: f64,
 }
 
 #[derive(Debug, Args)]
@@ -82,6 +104,25 @@ pub struct RenderArgs {
     /// Shadow-ray samples per area or sphere light at each shaded point (soft shadows).
     #[arg(long, value_name = "N", default_value_t = 16)]
     pub light_samples: u32,
+    /// Photon mapping: auto (when a light has power or num_photons), on, or off (ambient term).
+    #[arg(long, value_enum, default_value_t = GiArg::Auto)]
+    pub gi: GiArg,
+    /// Photons per map, shared by lights without num_photons in proportion to their power.
+    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    pub photons: u64,
+    /// Indirect diffuse light: gather (final gathering, accurate) or direct (the global map seen
+    /// directly, fast and blotchy).
+    #[arg(long, value_enum, default_value_t = IndirectArg::Gather)]
+    pub indirect: IndirectArg,
+    /// Final-gather rays per shaded point.
+    #[arg(long, value_name = "N", default_value_t = 64)]
+    pub gather_rays: u32,
+    /// Nearest photons per density estimate.
+    #[arg(long, value_name = "K", default_value_t = 50)]
+    pub photon_k: usize,
+    /// Multiply every light's photon count by F, the scene's num_photons included (previews).
+    #[arg(long, value_name = "F", default_value_t = 1.0)]
+    pub photon_scale: f64,
     /// What a missing or unreadable texture is: an error (default), or a warning (once per file)
     /// with the material rendered in its kd colour.
     #[arg(long, value_enum, default_value_t = MissingTextures::Error)]
@@ -93,6 +134,21 @@ pub struct RenderArgs {
 pub enum MissingTextures {
     Error,
     Warn,
+}
+
+/// The `--gi` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GiArg {
+    Auto,
+    On,
+    Off,
+}
+
+/// The `--indirect` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum IndirectArg {
+    Gather,
+    Direct,
 }
 
 /// The `--tonemap` choices.
@@ -137,6 +193,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render_command(args),
         Command::Info(args) => info_command(args),
         Command::Stitch(args) => crate::io::image::stitch(&args.tiles, &args.output),
+        Command::Photons(args) => photons_command(args),
     }
 }
 
@@ -204,6 +261,8 @@ struct RenderSettings {
     stats: bool,
     progress: bool,
     light_samples: u32,
+    gi_mode: GiMode,
+    gi: GiSettings,
 }
 
 impl RenderSettings {
@@ -218,6 +277,12 @@ impl RenderSettings {
             return Err(Error::Usage(
                 "--aa-threshold must be >= 0 and --aa-depth at most 8".into(),
             ));
+        }
+        if !(a.photon_scale >= 0.0 && a.photon_scale <= 1e3) {
+            return Err(Error::Usage(format!(
+                "--photon-scale must be in [0, 1000], got {}",
+                a.photon_scale
+            )));
         }
         if !a.exposure.is_finite() {
             return Err(Error::Usage("--exposure must be finite".into()));
@@ -245,6 +310,24 @@ impl RenderSettings {
             aa_map: a.aa_map.clone(),
             stats: a.stats,
             light_samples: a.light_samples.clamp(1, 4096),
+            gi_mode: match a.gi {
+                GiArg::Auto => GiMode::Auto,
+                GiArg::On => GiMode::On,
+                GiArg::Off => GiMode::Off,
+            },
+            gi: GiSettings {
+                seed: a.seed,
+                photons: a.photons,
+                photon_scale: a.photon_scale,
+                k: a.photon_k.clamp(1, 10_000),
+                indirect: match a.indirect {
+                    IndirectArg::Gather => Indirect::Gather {
+                        rays: a.gather_rays.clamp(1, 65_536),
+                    },
+                    IndirectArg::Direct => Indirect::Direct,
+                },
+                ..GiSettings::default()
+            },
             progress: !a.quiet && std::io::stderr().is_terminal(),
         })
     }
@@ -300,7 +383,18 @@ fn render_one(
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let (film, rstats) = render_with(&scene, &camera, None, &opts, &|| bar.inc(1));
+    let plan = plan(&scene, settings.gi_mode);
+    let gi = plan.photon_maps.then(|| {
+        let gi_settings = GiSettings {
+            caustics: plan.caustics,
+            ..settings.gi.clone()
+        };
+        bar.set_message(format!("tracing photons for {}", out.display()));
+        let gi = Gi::build(&scene, &gi_settings);
+        bar.set_message(format!("rendering {}", out.display()));
+        gi
+    });
+    let (film, rstats) = render_with(&scene, &camera, gi.as_ref(), &opts, &|| bar.inc(1));
     bar.finish_and_clear();
     write_image(&film, out, settings.tonemap)?;
     if let Some(map) = &settings.aa_map {
@@ -314,6 +408,10 @@ fn render_one(
     );
     if settings.stats {
         print_stats(&scene, &film, &rstats, r, out);
+        println!("  effects: {}", plan.reasons.join("; "));
+        if let Some(gi) = &gi {
+            print_photon_stats(gi);
+        }
     }
     Ok(())
 }
@@ -374,6 +472,91 @@ fn print_stats(
         "  materials (textures, bump maps, Perlin noise): {:.3} s of thread time, {:.1}% of render time",
         rstats.material_time.as_secs_f64(),
         100.0 * rstats.material_time.as_secs_f64() / busy.max(1e-9)
+    );
+}
+
+fn photons_command(args: PhotonsArgs) -> Result<()> {
+    if !(args.scale > 0.0 && args.scale <= 16.0) {
+        return Err(Error::Usage(format!(
+            "--scale must be in (0, 16], got {}",
+            args.scale
+        )));
+    }
+    let count = Rc::new(Cell::new(0u32));
+    let counter = Rc::clone(&count);
+    let output = args.output.clone();
+    let (photons, seed, scale) = (args.photons, args.seed, args.scale);
+    let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
+        counter.set(counter.get() + 1);
+        let out = match &output {
+            Some(o) if counter.get() == 1 => o.clone(),
+            Some(_) => {
+                return Err(Error::at(
+                    &r.loc,
+                    "this script renders more than one image, so -o cannot name its output",
+                ));
+            }
+            None => {
+                let stem = r
+                    .output
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                r.output.with_file_name(format!("{stem}_photons.png"))
+            }
+        };
+        let (w, h) = scaled_size(r, scale);
+        let scene = build_scene(desc, r)?;
+        let camera = Camera::new(&r.camera, w, h);
+        let plan = plan(&scene, GiMode::On);
+        let settings = GiSettings {
+            seed,
+            photons,
+            caustics: plan.caustics,
+            ..GiSettings::default()
+        };
+        let gi = Gi::build(&scene, &settings);
+        let film = crate::render::photon_view::photon_image(&scene, &camera, &gi, w, h);
+        write_image(&film, &out, Tonemap::Clamp)?;
+        eprintln!(
+            "wrote {} ({} global, {} caustic photons)",
+            out.display(),
+            gi.global.len(),
+            gi.caustic.as_ref().map_or(0, |c| c.len())
+        );
+        Ok(())
+    });
+    run_script(&args.scene, hook)?;
+    Ok(())
+}
+
+fn print_photon_stats(gi: &Gi) {
+    let s = &gi.stats;
+    for (name, counts, map) in [
+        ("global", &s.global, Some(&gi.global)),
+        ("caustic", &s.caustic, gi.caustic.as_ref()),
+    ] {
+        let emitted: u64 = counts.iter().map(|c| c.emitted).sum();
+        let stored: u64 = counts.iter().map(|c| c.stored).sum();
+        let per_light: Vec<String> = counts
+            .iter()
+            .map(|c| format!("{}/{}", c.stored, c.emitted))
+            .collect();
+        let bytes = map.map_or(0, |m| m.bytes());
+        println!(
+            "  {name} map: {emitted} photons emitted, {stored} stored (per light stored/emitted: {}), {:.1} bytes per photon",
+            per_light.join(", "),
+            bytes as f64 / stored.max(1) as f64
+        );
+    }
+    let lookups = s.lookups.load(std::sync::atomic::Ordering::Relaxed);
+    let used = s.photons_used.load(std::sync::atomic::Ordering::Relaxed);
+    println!(
+        "  photon phases: trace {:.3} s, kd-tree build {:.3} s; {} estimates, {:.1} photons per lookup",
+        s.trace_time.as_secs_f64(),
+        s.build_time.as_secs_f64(),
+        lookups,
+        used as f64 / lookups.max(1) as f64
     );
 }
 

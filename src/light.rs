@@ -8,11 +8,18 @@
 //! ```
 //!
 //! # The lighting model
-//! - `rgb` is a **radiant intensity** `I` (W/sr, per channel) seen head-on: a point light sends
-//!   `I` in every direction; an area light sends `I·cos θ` (a Lambertian emitter of radiance
-//!   `I/A` over its area `A`, on the side of `u × v` only); a sphere light of radius `R` has
-//!   radiance `I/(πR²)`, so from afar it is a point light of intensity `I`.
-//! - Fluxes follow: `Φ = 4π·I` for point and sphere lights, `Φ = π·I` for area lights.
+//! - The course shades with `kd·I·cos θ·att(d)`, i.e. it treats `kd` as a reflectance and `rgb` as
+//!   `1/π` of a physical radiant intensity (a Lambertian surface of reflectance `kd` under
+//!   irradiance `E` has radiance `kd·E/π`). caustic keeps that formula for direct light, so the
+//!   A4 scenes look as they should, and gives lights the physical intensity it implies:
+//!   `I_phys = π·rgb` (W/sr per channel) seen head-on. A point light sends `I_phys` in every
+//!   direction; an area light sends `I_phys·cos θ` (a Lambertian emitter over its area, on the
+//!   side of `u × v` only); a sphere light of radius `R` has radiance `I_phys/(πR²)`, so from afar
+//!   it is a point light. [`Light::sample`] reports intensities in the course's units (`rgb`).
+//! - Fluxes follow: `Φ = 4π·I_phys` for point and sphere lights, `Φ = π·I_phys` for area lights
+//!   ([`Light::flux`]). Photon estimates turn irradiance into radiance with `kd·E/π`, so direct
+//!   light and photon light agree; pbrt's closed sphere (kd 0.5, `I_phys = π`, that is `rgb = 1`)
+//!   has radiance 1.
 //! - `falloff = (c0, c1, c2)` replaces the physical `1/d²` of every light-to-surface transfer by
 //!   `1/(c0 + c1·d + c2·d²)`, as the course does: direct irradiance is `I(θ)·cos θ_x / (c0 + c1·d +
 //!   c2·d²)`. Photons honour it through the ratio `g(d) = d²/(c0 + c1·d + c2·d²)`
@@ -141,11 +148,11 @@ impl Light {
         !matches!(self.shape, Shape::Point { .. })
     }
 
-    /// Returns the total emitted flux `Φ` per channel.
+    /// Returns the total emitted flux `Φ` per channel (physical units: `I_phys = π·rgb`).
     pub fn flux(&self) -> Vec3A {
         match self.shape {
-            Shape::Area { .. } => PI * self.colour,
-            _ => 2.0 * TAU * self.colour,
+            Shape::Area { .. } => PI * PI * self.colour,
+            _ => 2.0 * TAU * PI * self.colour,
         }
     }
 
@@ -319,10 +326,11 @@ mod tests {
     fn falloff_ratio_makes_photons_agree_with_direct_light() {
         let l = Light::point(Vec3A::ZERO, Vec3A::ONE, [1.0, 0.5, 0.25]);
         for d in [0.1f32, 1.0, 7.0] {
-            // Photon irradiance Φ/(4π d²)·g(d) equals I/(c0 + c1 d + c2 d²) for I = 1.
+            // Photon irradiance Φ/(4π d²)·g(d) equals π·I/(c0 + c1 d + c2 d²) for rgb I = 1, whose
+            // Lambertian radiance kd·E/π is the course's kd·I·att(d).
             let photon = l.flux().x / (4.0 * PI * d * d) * l.falloff_ratio(d);
-            assert!((photon - l.attenuation(d)).abs() < 1e-6 * l.attenuation(d).max(1.0));
+            assert!((photon - PI * l.attenuation(d)).abs() < 1e-5 * l.attenuation(d).max(1.0));
         }
-        assert_eq!(area(1.0).flux(), Vec3A::splat(PI));
+        assert_eq!(area(1.0).flux(), Vec3A::splat(PI * PI));
     }
 }

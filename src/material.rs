@@ -23,6 +23,14 @@ use glam::{Vec2, Vec3A};
 use std::sync::Arc;
 use texture::{BumpMap, Texture};
 
+/// The weights of a material's behaviours ([`Material::lobes`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lobes {
+    pub diffuse: Vec3A,
+    pub mirror: Vec3A,
+    pub dielectric: f32,
+}
+
 /// A material ready for shading.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -97,6 +105,24 @@ impl Material {
             Some(t) => t.colour(uv),
             None => self.kd,
         }
+    }
+
+    /// Returns the weights of the material's three behaviours for a surface of diffuse colour
+    /// `kd`: Lambertian `(1 − t)·kd`, mirror `(1 − t)·ks` and dielectric `t` (Fresnel then splits
+    /// the last into reflection and refraction). Eye rays weight their terms by these, and photons
+    /// choose among them with these probabilities.
+    pub fn lobes(&self, kd: Vec3A) -> Lobes {
+        let opaque = 1.0 - self.transparency;
+        Lobes {
+            diffuse: kd * opaque,
+            mirror: self.ks * opaque,
+            dielectric: self.transparency,
+        }
+    }
+
+    /// Returns true when the surface can scatter light specularly (a caustic caster).
+    pub fn is_specular(&self) -> bool {
+        self.transparency > 0.0 || (self.transparency < 1.0 && self.ks.max_element() > 0.0)
     }
 
     /// Returns true when the material bends shading normals (bump map or Perlin noise).

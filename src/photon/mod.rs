@@ -56,8 +56,10 @@
 //! assert!((r2 - 0.0049).abs() < 1e-6);
 //! ```
 
+pub mod estimate;
 pub mod kdtree;
 pub mod store;
+pub mod trace;
 
 use glam::Vec3A;
 pub use store::{MAX_ANGLE_ERROR_DEG, MAX_POWER_REL_ERROR};

@@ -1,32 +1,240 @@
 //! Global illumination from photon maps: caustics and indirect diffuse light at a shaded point.
 //!
-//! This module holds the photon maps of one render and answers [`Gi::diffuse`]: the light a
-//! diffuse surface receives other than directly from the lights.
+//! [`Gi::build`] runs the photon phases (trace, then build the kd-trees) for one render;
+//! [`Gi::diffuse`] answers what a diffuse surface receives other than directly from the lights:
+//! - caustics: a density estimate of the caustic map at the point;
+//! - indirect diffuse light, in one of two modes ([`Indirect`]):
+//!   - `Gather` (the default; Jensen's final gathering): `rays` cosine-distributed rays from the
+//!     point; where each lands, the global map's radiance estimate (all its photons) is the
+//!     incoming radiance. Points reached after more than one specular bounce use the direct mode.
+//!   - `Direct`: the global map's estimate at the point itself, from photons that made at least
+//!     one diffuse bounce (direct light and caustics come from shadow rays and the caustic map).
+//!     Fast and blotchy: the original project's method.
+//!
+//! Estimates use the `k` nearest photons within a maximum radius, reject photons whose stored
+//! normal disagrees with the surface's (light leaking round corners and through thin walls), and
+//! weight them with a [`Filter`] that integrates to one.
 
 use super::RayCounts;
 use super::shade::Tracer;
-use crate::sampling::Rng;
+use crate::geometry::{Ray, offset_ray_origin};
+use crate::light::cosine_around;
+use crate::photon::estimate::Filter;
+use crate::photon::trace::{LightCounts, MapKind, photon_budget, trace_map};
+use crate::photon::{PhotonId, PhotonMap};
+use crate::sampling::{Rng, stratified_2d};
+use crate::scene::Scene;
 use glam::Vec3A;
+use std::cell::RefCell;
+use std::f32::consts::FRAC_1_PI;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// How the indirect diffuse term is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Indirect {
+    /// Final gathering with this many rays per shaded point.
+    Gather { rays: u32 },
+    /// The global map's estimate at the point (photons after a diffuse bounce only).
+    Direct,
+}
+
+/// Settings of the photon phases and estimates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GiSettings {
+    pub seed: u64,
+    /// Photons emitted for each map, shared by lights without `num_photons`.
+    pub photons: u64,
+    /// Multiplies every light's photon count, `num_photons` included (previews, tests).
+    pub photon_scale: f64,
+    /// Nearest photons per estimate.
+    pub k: usize,
+    /// Largest search radius of the global map as a fraction of the scene's diagonal (the caustic
+    /// map uses half of it).
+    pub max_radius: f32,
+    pub filter: Filter,
+    pub indirect: Indirect,
+    /// Whether to trace the caustic map (the effect plan turns it off without specular surfaces).
+    pub caustics: bool,
+}
+
+impl Default for GiSettings {
+    fn default() -> GiSettings {
+        GiSettings {
+            seed: 0,
+            photons: 200_000,
+            photon_scale: 1.0,
+            k: 50,
+            max_radius: 0.05,
+            filter: Filter::Epanechnikov,
+            indirect: Indirect::Gather { rays: 64 },
+            caustics: true,
+        }
+    }
+}
+
+/// Counters of the photon phases, for `--stats`.
+#[derive(Debug, Default)]
+pub struct GiStats {
+    pub global: Vec<LightCounts>,
+    pub caustic: Vec<LightCounts>,
+    pub trace_time: Duration,
+    pub build_time: Duration,
+    /// Estimates made and photons they used (updated while rendering).
+    pub lookups: AtomicU64,
+    pub photons_used: AtomicU64,
+}
 
 /// The photon maps of one render and how shading uses them.
-#[derive(Debug, Default)]
-pub struct Gi {}
+#[derive(Debug)]
+pub struct Gi {
+    pub global: PhotonMap,
+    pub caustic: Option<PhotonMap>,
+    pub settings: GiSettings,
+    global_r2: f32,
+    caustic_r2: f32,
+    pub stats: GiStats,
+}
+
+thread_local! {
+    static FOUND: RefCell<Vec<(f32, PhotonId)>> = const { RefCell::new(Vec::new()) };
+}
 
 impl Gi {
+    /// Traces and stores the photons of `scene` (both cores) and builds their kd-trees.
+    pub fn build(scene: &Scene, settings: &GiSettings) -> Gi {
+        let budget: Vec<u64> = photon_budget(&scene.lights, settings.photons)
+            .into_iter()
+            .map(|n| (n as f64 * settings.photon_scale).round() as u64)
+            .collect();
+        let start = Instant::now();
+        let global = trace_map(scene, &budget, MapKind::Global, settings.seed);
+        let caustic = settings
+            .caustics
+            .then(|| trace_map(scene, &budget, MapKind::Caustic, settings.seed));
+        let trace_time = start.elapsed();
+        let start = Instant::now();
+        let global_map = PhotonMap::build(global.photons);
+        let caustic_map = caustic
+            .as_ref()
+            .map(|c| PhotonMap::build(c.photons.clone()));
+        let build_time = start.elapsed();
+        let extent = scene.extent().max(f32::MIN_POSITIVE);
+        let r = settings.max_radius * extent;
+        Gi {
+            global: global_map,
+            caustic: caustic_map.filter(|m| !m.is_empty()),
+            settings: settings.clone(),
+            global_r2: r * r,
+            caustic_r2: 0.25 * r * r,
+            stats: GiStats {
+                global: global.per_light,
+                caustic: caustic.map(|c| c.per_light).unwrap_or_default(),
+                trace_time,
+                build_time,
+                ..GiStats::default()
+            },
+        }
+    }
+
+    /// Returns the irradiance at `p` on a surface with normal `n` (facing the side the light
+    /// arrives from) estimated from `map`; `indirect_only` skips photons that made no diffuse
+    /// bounce.
+    pub fn irradiance(
+        &self,
+        map: &PhotonMap,
+        max_d2: f32,
+        p: Vec3A,
+        n: Vec3A,
+        indirect_only: bool,
+    ) -> Vec3A {
+        FOUND.with_borrow_mut(|found| {
+            let r2 = map.knn(p, self.settings.k, max_d2, found);
+            self.stats.lookups.fetch_add(1, Ordering::Relaxed);
+            self.stats
+                .photons_used
+                .fetch_add(found.len() as u64, Ordering::Relaxed);
+            if found.is_empty() || r2 <= 0.0 {
+                return Vec3A::ZERO;
+            }
+            let mut e = Vec3A::ZERO;
+            for &(d2, id) in found.iter() {
+                let ph = map.get(id);
+                // Photons from another surface (round a corner, behind a thin wall) do not count.
+                if ph.normal.dot(n) < 0.7 || ph.dir.dot(n) <= 0.0 || (indirect_only && ph.direct) {
+                    continue;
+                }
+                e += ph.power * self.settings.filter.weight(d2, r2);
+            }
+            e
+        })
+    }
+
+    /// Returns the global map's irradiance estimate at `p` (all photons).
+    pub fn global_irradiance(&self, p: Vec3A, n: Vec3A) -> Vec3A {
+        self.irradiance(&self.global, self.global_r2, p, n, false)
+    }
+
+    /// Returns the caustic map's irradiance estimate at `p` (zero without a caustic map).
+    pub fn caustic_irradiance(&self, p: Vec3A, n: Vec3A) -> Vec3A {
+        match &self.caustic {
+            Some(c) => self.irradiance(c, self.caustic_r2, p, n, false),
+            None => Vec3A::ZERO,
+        }
+    }
+
     /// Returns the caustic and indirect light leaving a diffuse surface of colour `kd` at `p`
     /// (normals `n`, `ng` facing the viewer), eye-path depth `depth`.
     #[allow(clippy::too_many_arguments)]
     pub fn diffuse(
         &self,
-        _tracer: &Tracer,
-        _p: Vec3A,
-        _n: Vec3A,
-        _ng: Vec3A,
-        _kd: Vec3A,
-        _depth: u32,
-        _rng: &mut Rng,
-        _counts: &mut RayCounts,
+        tracer: &Tracer,
+        p: Vec3A,
+        n: Vec3A,
+        ng: Vec3A,
+        kd: Vec3A,
+        depth: u32,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
     ) -> Vec3A {
-        Vec3A::ZERO
+        let mut e = self.caustic_irradiance(p, ng);
+        match self.settings.indirect {
+            Indirect::Gather { rays } if depth <= 1 => {
+                let mut sum = Vec3A::ZERO;
+                for u in stratified_2d(rng, rays) {
+                    let d = cosine_around(n, u);
+                    if d.dot(ng) <= 0.0 {
+                        continue;
+                    }
+                    counts.secondary += 1;
+                    sum += self
+                        .gathered_radiance(tracer.scene, &Ray::new(offset_ray_origin(p, ng, d), d));
+                }
+                // Cosine-distributed rays: E = π · mean(L).
+                e += sum * (std::f32::consts::PI / rays as f32);
+            }
+            _ => e += self.irradiance(&self.global, self.global_r2, p, ng, true),
+        }
+        kd * FRAC_1_PI * e
+    }
+
+    /// Returns the radiance a final-gather ray brings back: the global map's estimate of the
+    /// diffuse radiance leaving the surface it hits (nothing from the background).
+    fn gathered_radiance(&self, scene: &Scene, ray: &Ray) -> Vec3A {
+        let Some(hit) = scene.intersect(ray) else {
+            return Vec3A::ZERO;
+        };
+        let surf = scene.surface(ray, &hit);
+        let mat = &scene.materials[surf.material as usize];
+        let kd = mat.lobes(mat.diffuse(surf.uv)).diffuse;
+        if kd.max_element() <= 0.0 {
+            return Vec3A::ZERO;
+        }
+        let ng = if surf.ng.dot(ray.dir) > 0.0 {
+            -surf.ng
+        } else {
+            surf.ng
+        };
+        kd * FRAC_1_PI * self.global_irradiance(surf.p, ng)
     }
 }

@@ -18,6 +18,8 @@
 
 pub mod aa;
 pub mod gi;
+pub mod photon_view;
+pub mod plan;
 pub mod shade;
 
 use crate::camera::Camera;

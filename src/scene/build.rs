@@ -72,6 +72,8 @@ pub struct Instance {
     pub mesh_materials: bool,
     /// The geometry node this instance places.
     pub node: NodeId,
+    /// World-space bounding box.
+    pub bounds: Bounds,
 }
 
 /// A ray's closest intersection, enough to compute the surface on demand.
@@ -450,6 +452,7 @@ impl Builder<'_> {
             material,
             mesh_materials,
             node: p.node,
+            bounds,
         });
         self.bounds.push(bounds);
         Ok(())
@@ -572,6 +575,41 @@ impl Builder<'_> {
 }
 
 impl Scene {
+    /// Returns every material index an instance can shade with (its own, its mesh file's, or its
+    /// CSG operands').
+    pub fn instance_materials(&self, inst: &Instance) -> Vec<u32> {
+        match inst.shape {
+            Shape::Mesh(m) if inst.mesh_materials => {
+                let mut ids = self.meshes[m as usize].materials.clone();
+                ids.sort_unstable();
+                ids.dedup();
+                ids
+            }
+            Shape::Csg(c) => self.csgs[c as usize]
+                .nodes
+                .iter()
+                .filter_map(|n| match n {
+                    CsgNode::Leaf { material, .. } => Some(*material),
+                    CsgNode::Op { .. } => None,
+                })
+                .collect(),
+            _ => vec![inst.material],
+        }
+    }
+
+    /// Returns the diagonal of the box holding every instance (0 for an empty scene).
+    pub fn extent(&self) -> f32 {
+        let b = self
+            .instances
+            .iter()
+            .fold(Bounds::EMPTY, |a, i| a.union(i.bounds));
+        if b.is_finite() {
+            (b.max - b.min).length()
+        } else {
+            0.0
+        }
+    }
+
     /// Returns the closest hit with `t` in the ray's `(tmin, tmax)`.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let mut best = None;

@@ -1,0 +1,380 @@
+//! Photon tracing: emission from the lights, scattering by the materials, storage at diffuse
+//! surfaces into the global and caustic maps (Jensen).
+//!
+//! - **Global photons** leave each light with its emission distribution ([`Light::emit`]) and are
+//!   stored at every surface with a diffuse part. At each hit a photon takes one of the material's
+//!   behaviours ([`crate::material::Material::lobes`]) with probability equal to its weight
+//!   (Russian roulette on albedo), or is absorbed; its power is divided by that probability, so
+//!   it stays an unbiased estimate.
+//! - **Caustic photons** are aimed at the scene's specular objects (mirrors and dielectrics): each
+//!   is sent into a cone around one of their bounding spheres, chosen in proportion to the cones'
+//!   solid angles, and weighted by the inverse of the resulting direction density (a projection map
+//!   without the map). Only paths light → specular⁺ → diffuse are kept: the photon is stored at the
+//!   first diffuse surface after at least one specular bounce and stops there.
+//! - Power is flux in watts, already divided by the light's photon count, and multiplied once by the
+//!   light's falloff ratio `g(d)` at the first hit ([`Light::falloff_ratio`]).
+//! - Media are tracked as for eye rays ([`MediumStack`]); false interfaces are crossed unchanged.
+//! - Photon `k` of light `l` draws from the stream `(seed, Pass::Photon, l·2⁴⁰ + map·2³⁹ + k)`:
+//!   the maps do not depend on the thread count, and tracing runs on all cores.
+
+use super::Photon;
+use crate::geometry::{Ray, offset_ray_origin};
+use crate::light::Light;
+use crate::material::fresnel;
+use crate::material::medium::MediumStack;
+use crate::render::shade::reflect_above;
+use crate::sampling::{Pass, Rng};
+use crate::scene::Scene;
+use glam::Vec3A;
+use rayon::prelude::*;
+use std::f32::consts::TAU;
+
+/// Most surface interactions a photon path may have.
+pub const MAX_BOUNCES: u32 = 12;
+/// Least photons a light gets when the budget is shared, so a dim light over a pool still casts
+/// caustics: this fraction of an equal share.
+const MIN_SHARE: f64 = 0.1;
+
+/// Which map a photon path is traced for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapKind {
+    Global = 0,
+    Caustic = 1,
+}
+
+/// Counts for one light, printed by `--stats`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LightCounts {
+    pub emitted: u64,
+    pub stored: u64,
+}
+
+/// The photons of one map with per-light counts.
+#[derive(Clone, Debug, Default)]
+pub struct TracedMap {
+    pub photons: Vec<Photon>,
+    pub per_light: Vec<LightCounts>,
+}
+
+/// Returns each light's photon count: its own `num_photons`, or a share of `total` in proportion to
+/// its `power` (its flux's mean when it has none), at least a tenth of an equal share.
+pub fn photon_budget(lights: &[Light], total: u64) -> Vec<u64> {
+    let weight = |l: &Light| {
+        l.power
+            .map(f64::from)
+            .unwrap_or_else(|| l.flux().element_sum() as f64 / 3.0)
+            .max(0.0)
+    };
+    let sharing: Vec<usize> = (0..lights.len())
+        .filter(|&i| lights[i].photons.is_none())
+        .collect();
+    let sum: f64 = sharing.iter().map(|&i| weight(&lights[i])).sum();
+    let floor = MIN_SHARE / sharing.len().max(1) as f64;
+    lights
+        .iter()
+        .map(|l| match l.photons {
+            Some(n) => n,
+            None => {
+                let share = if sum > 0.0 {
+                    weight(l) / sum
+                } else {
+                    1.0 / sharing.len() as f64
+                };
+                (share.max(floor) * total as f64).round() as u64
+            }
+        })
+        .collect()
+}
+
+/// A cone of directions around a specular object's bounding sphere, seen from an emission point.
+#[derive(Clone, Copy, Debug)]
+struct Cone {
+    axis: Vec3A,
+    cos_max: f32,
+    solid_angle: f32,
+}
+
+impl Cone {
+    fn towards(origin: Vec3A, centre: Vec3A, radius: f32) -> Cone {
+        let to = centre - origin;
+        let d = to.length();
+        if d <= radius * 1.0001 {
+            return Cone {
+                axis: Vec3A::Z,
+                cos_max: -1.0,
+                solid_angle: 2.0 * TAU,
+            };
+        }
+        let sin = radius / d;
+        let cos_max = (1.0 - sin * sin).max(0.0).sqrt();
+        Cone {
+            axis: to / d,
+            cos_max,
+            solid_angle: TAU * (1.0 - cos_max),
+        }
+    }
+
+    fn contains(&self, dir: Vec3A) -> bool {
+        dir.dot(self.axis) >= self.cos_max
+    }
+
+    fn sample(&self, u: (f32, f32)) -> Vec3A {
+        let cos = 1.0 - u.0 * (1.0 - self.cos_max);
+        let sin = (1.0 - cos * cos).max(0.0).sqrt();
+        let phi = TAU * u.1;
+        let t = self.axis.any_orthonormal_vector();
+        let b = self.axis.cross(t);
+        (t * (sin * phi.cos()) + b * (sin * phi.sin()) + self.axis * cos).normalize()
+    }
+}
+
+/// Returns the bounding spheres (centre, radius) of every instance that can scatter specularly.
+pub fn specular_targets(scene: &Scene) -> Vec<(Vec3A, f32)> {
+    scene
+        .instances
+        .iter()
+        .filter(|inst| {
+            scene
+                .instance_materials(inst)
+                .iter()
+                .any(|&m| scene.materials[m as usize].is_specular())
+        })
+        .map(|inst| {
+            let c = (inst.bounds.min + inst.bounds.max) * 0.5;
+            (c, (inst.bounds.max - c).length() * 1.001 + 1e-6)
+        })
+        .collect()
+}
+
+/// Traces the photons of `kind` for every light: `budget[l]` emitted by light `l`.
+pub fn trace_map(scene: &Scene, budget: &[u64], kind: MapKind, seed: u64) -> TracedMap {
+    let targets = if kind == MapKind::Caustic {
+        specular_targets(scene)
+    } else {
+        Vec::new()
+    };
+    let mut out = TracedMap::default();
+    if kind == MapKind::Caustic && targets.is_empty() {
+        out.per_light = vec![LightCounts::default(); scene.lights.len()];
+        return out;
+    }
+    const CHUNK: u64 = 4096;
+    for (l, light) in scene.lights.iter().enumerate() {
+        let n = budget.get(l).copied().unwrap_or(0);
+        let chunks: Vec<Vec<Photon>> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut photons = Vec::new();
+                for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                    let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
+                    let mut rng = Rng::new(seed, Pass::Photon, key);
+                    trace_one(scene, light, n, kind, &targets, &mut rng, &mut photons);
+                }
+                photons
+            })
+            .collect();
+        let before = out.photons.len();
+        for c in chunks {
+            out.photons.extend(c);
+        }
+        out.per_light.push(LightCounts {
+            emitted: n,
+            stored: (out.photons.len() - before) as u64,
+        });
+    }
+    out
+}
+
+/// Traces one photon of `light` (one of `n`), appending what it stores to `out`.
+fn trace_one(
+    scene: &Scene,
+    light: &Light,
+    n: u64,
+    kind: MapKind,
+    targets: &[(Vec3A, f32)],
+    rng: &mut Rng,
+    out: &mut Vec<Photon>,
+) {
+    let u = [
+        rng.next_f32(),
+        rng.next_f32(),
+        rng.next_f32(),
+        rng.next_f32(),
+    ];
+    let e = light.emit(u);
+    let (dir, mut power) = match kind {
+        MapKind::Global => (e.dir, light.flux() / n as f32),
+        MapKind::Caustic => {
+            // Aim at one specular object's cone, chosen by solid angle; weight by 1 / density.
+            let cones: Vec<Cone> = targets
+                .iter()
+                .map(|&(c, r)| Cone::towards(e.origin, c, r))
+                .collect();
+            let total: f32 = cones.iter().map(|c| c.solid_angle).sum();
+            let mut pick = rng.next_f32() * total;
+            let cone = cones
+                .iter()
+                .find(|c| {
+                    pick -= c.solid_angle;
+                    pick < 0.0
+                })
+                .unwrap_or(&cones[cones.len() - 1]);
+            let dir = cone.sample((rng.next_f32(), rng.next_f32()));
+            let covering = cones.iter().filter(|c| c.contains(dir)).count().max(1) as f32;
+            // Intensity towards dir: the light's emitted radiance integrated over its area, per
+            // steradian (see `Light::sample`, which uses the same definition).
+            let intensity = light.sample(e.origin + dir, (u[0], u[1])).intensity;
+            let intensity = if e.normal == Vec3A::ZERO {
+                light.colour
+            } else {
+                intensity
+            };
+            // Physical intensity is π times the course's (see crate::light).
+            (
+                dir,
+                intensity * (std::f32::consts::PI * total / (covering * n as f32)),
+            )
+        }
+    };
+    if power.max_element() <= 0.0 {
+        return;
+    }
+    let start = if e.normal == Vec3A::ZERO {
+        e.origin
+    } else {
+        offset_ray_origin(e.origin, e.normal, dir)
+    };
+    let mut ray = Ray::new(start, dir);
+    let mut media = MediumStack::air();
+    let mut first = true;
+    let mut diffuse_bounced = false;
+    let mut specular_bounced = false;
+    for _ in 0..MAX_BOUNCES {
+        let Some(hit) = scene.intersect(&ray) else {
+            return;
+        };
+        let mut surf = scene.surface(&ray, &hit);
+        if first {
+            power *= light.falloff_ratio(hit.t * ray.dir.length());
+            first = false;
+        }
+        let mat = &scene.materials[surf.material as usize];
+        let kd = mat.diffuse(surf.uv);
+        if mat.perturbs_normals() {
+            surf.ns = mat.shading_normal(surf.ns, surf.ng, surf.p, surf.uv, surf.dpdu);
+        }
+        let wo = -ray.dir.normalize();
+        let front = surf.ng.dot(wo) > 0.0;
+        let (n, ng) = if front {
+            (surf.ns, surf.ng)
+        } else {
+            (-surf.ns, -surf.ng)
+        };
+        let crossing = (mat.transparency > 0.0).then(|| media.cross(surf.material, mat.ior, front));
+        if let Some(c) = crossing
+            && c.is_false()
+        {
+            media = c.after;
+            ray = Ray::new(offset_ray_origin(surf.p, surf.ng, ray.dir), ray.dir);
+            continue;
+        }
+        let lobes = mat.lobes(kd);
+        if lobes.diffuse.max_element() > 0.0 {
+            let store = match kind {
+                MapKind::Global => true,
+                MapKind::Caustic => specular_bounced,
+            };
+            if store {
+                out.push(Photon {
+                    position: surf.p,
+                    power,
+                    dir: wo,
+                    normal: ng,
+                    direct: !diffuse_bounced,
+                });
+            }
+        }
+        // Russian roulette over the material's behaviours.
+        let (pd, pm, pt) = (
+            lobes.diffuse.max_element(),
+            lobes.mirror.max_element(),
+            lobes.dielectric,
+        );
+        let scale = (pd + pm + pt).max(1.0);
+        let (pd, pm, pt) = (pd / scale, pm / scale, pt / scale);
+        let xi = rng.next_f32();
+        let next = if xi < pd {
+            if kind == MapKind::Caustic {
+                return; // caustic paths end at their first diffuse surface
+            }
+            diffuse_bounced = true;
+            power *= lobes.diffuse / pd;
+            let d = crate::light::cosine_around(n, (rng.next_f32(), rng.next_f32()));
+            if d.dot(ng) <= 0.0 {
+                return;
+            }
+            d
+        } else if xi < pd + pm {
+            specular_bounced = true;
+            power *= lobes.mirror / pm;
+            reflect_above(wo, n, ng)
+        } else if xi < pd + pm + pt {
+            specular_bounced = true;
+            let c = crossing.expect("dielectric weight implies a crossing");
+            let f = fresnel::dielectric(n.dot(wo).max(0.0), c.n_from / c.n_to);
+            match fresnel::refract(wo, n, c.n_from / c.n_to) {
+                Some(wt) if rng.next_f32() >= f && wt.dot(ng) < 0.0 => {
+                    media = c.after;
+                    wt
+                }
+                _ => reflect_above(wo, n, ng),
+            }
+        } else {
+            return;
+        };
+        ray = Ray::new(offset_ray_origin(surf.p, ng, next), next);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budgets_follow_power_with_a_floor_and_explicit_counts() {
+        let mut a = Light::point(Vec3A::ZERO, Vec3A::ONE, [1.0, 0.0, 0.0]);
+        let mut b = a.clone();
+        a.power = Some(99.0);
+        b.power = Some(1.0);
+        let mut c = a.clone();
+        c.photons = Some(1234);
+        let budget = photon_budget(&[a, b, c], 100_000);
+        assert_eq!(budget[2], 1234, "an explicit count wins");
+        assert_eq!(budget[0], 99_000);
+        assert_eq!(
+            budget[1], 5_000,
+            "the dim light gets at least a tenth of an equal share"
+        );
+    }
+
+    #[test]
+    fn cone_samples_stay_inside_and_cover_it_uniformly() {
+        let cone = Cone::towards(Vec3A::ZERO, Vec3A::new(0.0, 0.0, 10.0), 2.0);
+        let mut rng = Rng::new(0, Pass::Photon, 1);
+        let n = 100_000;
+        let mut mean_cos = 0.0f64;
+        for _ in 0..n {
+            let d = cone.sample((rng.next_f32(), rng.next_f32()));
+            assert!(cone.contains(d) || d.dot(cone.axis) > cone.cos_max - 1e-6);
+            mean_cos += d.dot(cone.axis) as f64;
+        }
+        // Uniform in solid angle: cos θ uniform on [cos_max, 1].
+        let want = (1.0 + cone.cos_max as f64) / 2.0;
+        assert!(
+            (mean_cos / n as f64 - want).abs() < 1e-4,
+            "{} vs {want}",
+            mean_cos / n as f64
+        );
+        assert!((cone.solid_angle - TAU * (1.0 - (1.0f32 - 0.04).sqrt())).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,279 @@
+//! Photon mapping against closed forms: irradiance from photons equals the direct-lighting term,
+//! pbrt's closed sphere, caustics only where a specular surface makes them, determinism.
+
+mod common;
+
+use caustic::render::gi::{Gi, GiSettings, Indirect};
+use caustic::render::plan::{GiMode, plan};
+use caustic::scene::build::build_scene;
+use common::{caustic, out_dir, run_lua};
+use glam::Vec3A;
+use std::path::Path;
+
+/// A floor (top face y = 0) under a point light at height 2, with falloff `f`.
+fn floor_scene(falloff: &str) -> caustic::scene::Scene {
+    let src = format!(
+        "m = gr.material({{0.5, 0.5, 0.5}}, {{0,0,0}}, 0)\nroot = gr.node('root')\n\
+         f = gr.cube('f'); f:set_material(m); f:scale(60, 1, 60); f:translate(-30, -1, -30); root:add_child(f)\n\
+         gr.render(root, 'x.png', 4, 4, {{0,5,5}}, {{0,-1,-1}}, {{0,1,0}}, 50, {{0,0,0}}, \
+         {{gr.light({{0, 2, 0}}, {{1, 0.8, 0.6}}, {falloff})}})"
+    );
+    let d = run_lua(&src).unwrap();
+    build_scene(&d, &d.renders[0]).unwrap()
+}
+
+#[test]
+fn photon_irradiance_on_a_plane_matches_the_closed_form_and_the_direct_term() {
+    for (falloff, c) in [
+        ("{0, 0, 1}", [0.0f32, 0.0, 1.0]),
+        ("{1, 0.5, 0.25}", [1.0, 0.5, 0.25]),
+    ] {
+        let scene = floor_scene(falloff);
+        let settings = GiSettings {
+            photons: 1_000_000,
+            k: 1000,
+            max_radius: 0.1,
+            caustics: false,
+            ..GiSettings::default()
+        };
+        let gi = Gi::build(&scene, &settings);
+        let light = &scene.lights[0];
+        let mut errors = Vec::new();
+        for i in 0..24 {
+            let a = i as f32 * 0.7;
+            let r = 0.1 + 0.05 * i as f32;
+            let p = Vec3A::new(r * a.cos(), 0.0, r * a.sin());
+            let to = Vec3A::new(0.0, 2.0, 0.0) - p;
+            let d = to.length();
+            let cos = to.y / d;
+            // Closed form: π·rgb·cos θ / (c0 + c1 d + c2 d²): the irradiance whose Lambertian radiance
+            // kd·E/π is the direct-lighting term kd·rgb·cos θ·att(d) (see crate::light).
+            let want = std::f32::consts::PI * Vec3A::new(1.0, 0.8, 0.6) * cos
+                / (c[0] + c[1] * d + c[2] * d * d);
+            assert!((want.x - std::f32::consts::PI * light.attenuation(d) * cos).abs() < 1e-5);
+            let got = gi.global_irradiance(p, Vec3A::Y);
+            errors.push(((got - want) / want).x);
+            assert!((got.y / got.x - 0.8).abs() < 0.01, "colour ratio {got}");
+        }
+        let mean = errors.iter().sum::<f32>() / errors.len() as f32;
+        let worst = errors.iter().fold(0.0f32, |a, e| a.max(e.abs()));
+        assert!(
+            mean.abs() < 0.02,
+            "falloff {falloff}: mean relative error {mean}"
+        );
+        // Each estimate from k = 1000 photons has about 3% noise: a 4σ bound per point.
+        assert!(
+            worst < 0.12,
+            "falloff {falloff}: worst relative error {worst}"
+        );
+    }
+}
+
+#[test]
+fn closed_sphere_has_radiance_one_with_final_gathering() {
+    // pbrt's test: inside a closed sphere of radius 1 with kd 0.5 and a point light of intensity
+    // π at its centre (rgb 1 in the course's units, see crate::light), direct radiance is 0.5 and
+    // interreflection brings it to 0.5/(1−0.5) = 1.
+    let src = "m = gr.material({0.5, 0.5, 0.5}, {0,0,0}, 0)\n\
+               s = gr.nh_sphere('s', {0,0,0}, 1); s:set_material(m)\n\
+               gr.render(s, 'x.png', 6, 6, {0,0,0.3}, {0.2,-0.1,-1}, {0,1,0}, 60, {0,0,0}, \
+               {gr.light({0,0,0}, {1, 1, 1}, {0,0,1}, nil, 300000)})";
+    let d = run_lua(src).unwrap();
+    let r = &d.renders[0];
+    let scene = build_scene(&d, r).unwrap();
+    assert!(plan(&scene, GiMode::Auto).photon_maps);
+    let gi = Gi::build(
+        &scene,
+        &GiSettings {
+            indirect: Indirect::Gather { rays: 256 },
+            ..GiSettings::default()
+        },
+    );
+    let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
+    let (film, _) = caustic::render::render_with(
+        &scene,
+        &camera,
+        Some(&gi),
+        &caustic::render::RenderOptions::new(r.width, r.height),
+        &|| {},
+    );
+    let mean = film.pixels.iter().map(|p| p.x).sum::<f32>() / film.pixels.len() as f32;
+    assert!((mean - 1.0).abs() < 0.025, "mean radiance {mean}");
+    for p in &film.pixels {
+        assert!((p.x - 1.0).abs() < 0.06, "pixel {p}");
+    }
+}
+
+fn cornell(empty: bool) -> (caustic::scene::Scene, Gi) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
+    let src = std::fs::read_to_string(&path).unwrap();
+    let src = if empty {
+        format!("EMPTY = true\n{src}")
+    } else {
+        src
+    };
+    let d = run_lua(&src).unwrap();
+    let scene = build_scene(&d, &d.renders[0]).unwrap();
+    let p = plan(&scene, GiMode::Auto);
+    let gi = Gi::build(
+        &scene,
+        &GiSettings {
+            photons: 100_000,
+            caustics: p.caustics,
+            ..GiSettings::default()
+        },
+    );
+    (scene, gi)
+}
+
+#[test]
+fn glass_ball_focuses_a_caustic_and_an_empty_box_has_no_caustic_map() {
+    let (scene, gi) = cornell(false);
+    let caustic_map = gi
+        .caustic
+        .as_ref()
+        .expect("a glass ball makes a caustic map");
+    assert!(
+        caustic_map.len() > 10_000,
+        "{} caustic photons",
+        caustic_map.len()
+    );
+    // On the floor under the ball the caustic is brighter than the lamp's direct light there.
+    let light = &scene.lights[0];
+    let mut best = (0.0f32, Vec3A::ZERO);
+    for i in 0..41 {
+        for j in 0..41 {
+            let p = Vec3A::new(-1.0 + i as f32 * 0.05, -1.0, -1.0 + j as f32 * 0.05);
+            let e = gi.caustic_irradiance(p, Vec3A::Y).x;
+            if e > best.0 {
+                best = (e, p);
+            }
+        }
+    }
+    let (e_caustic, p) = best;
+    let to = Vec3A::new(0.0, 0.99, 0.0) - p;
+    // The lamp seen as a point (irradiance π·rgb·cos/d², see crate::light).
+    let e_direct_unshadowed =
+        std::f32::consts::PI * light.colour.x * (to.y / to.length()) / to.length_squared();
+    assert!(
+        e_caustic > 2.0 * e_direct_unshadowed,
+        "focus at {p}: caustic {e_caustic} vs the lamp's unshadowed direct {e_direct_unshadowed}"
+    );
+    assert!(
+        p.x.abs() < 0.6 && p.z.abs() < 0.7,
+        "the focus {p} lies under the ball"
+    );
+    // Without the ball: no specular surface, no caustic map at all.
+    let (scene, gi) = cornell(true);
+    assert!(!plan(&scene, GiMode::Auto).caustics);
+    assert!(gi.caustic.is_none());
+}
+
+#[test]
+fn photon_renders_are_identical_for_one_and_two_threads() {
+    let dir = out_dir("photon-threads");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
+    let run = |threads: &str, name: &str| {
+        let png = dir.join(name);
+        let out = caustic()
+            .arg("render")
+            .arg(&scene)
+            .args([
+                "--scale",
+                "0.1",
+                "--photons",
+                "20000",
+                "--gather-rays",
+                "8",
+                "-q",
+                "--threads",
+                threads,
+                "-o",
+            ])
+            .arg(&png)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        std::fs::read(png).unwrap()
+    };
+    assert!(
+        run("1", "a.png") == run("2", "b.png"),
+        "photon-mapped image differs between 1 and 2 threads"
+    );
+}
+
+#[test]
+fn the_original_projects_scenes_render_with_photon_maps() {
+    let project = common::corpus("tengyucai__Computer-Graphics/Project");
+    let dir = out_dir("photon-corpus");
+    for name in [
+        "room2",
+        "csg",
+        "texture",
+        "perlin",
+        "bump",
+        "cylinder",
+        "refraction",
+    ] {
+        let png = dir.join(format!("{name}.png"));
+        let out = caustic()
+            .current_dir(&project)
+            .arg("render")
+            .arg(format!("Assets/{name}.lua"))
+            .args([
+                "--scale",
+                "0.08",
+                "--photons",
+                "20000",
+                "--photon-scale",
+                "0.005",
+                "--gather-rays",
+                "8",
+                "-q",
+                "--stats",
+                "-o",
+            ])
+            .arg(&png)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(stdout.contains("photon maps: on"), "{name}: {stdout}");
+    }
+}
+
+#[test]
+fn photon_viewer_draws_both_maps() {
+    let dir = out_dir("photon-viewer");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
+    let png = dir.join("p.png");
+    let out = caustic()
+        .arg("photons")
+        .arg(&scene)
+        .args(["--scale", "0.25", "--photons", "20000", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("global") && err.contains("caustic"), "{err}");
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (100, 100));
+    let bright = img
+        .pixels()
+        .filter(|p| p.0.iter().any(|&c| c > 100))
+        .count();
+    assert!(bright > 200, "only {bright} photon pixels");
+}

@@ -6,7 +6,8 @@
 //! - indirect diffuse light, in one of two modes ([`Indirect`]):
 //!   - `Gather` (the default; Jensen's final gathering): `rays` cosine-distributed rays from the
 //!     point; where each lands, the global map's radiance estimate (all its photons) is the
-//!     incoming radiance. Points reached after more than one specular bounce use the direct mode.
+//!     incoming radiance. Points reached after more than [`MAX_GATHER_DEPTH`] specular bounces
+//!     use the direct mode.
 //!   - `Direct`: the global map's estimate at the point itself, from photons that made at least
 //!     one diffuse bounce (direct light and caustics come from shadow rays and the caustic map).
 //!     Fast and blotchy: the original project's method.
@@ -29,6 +30,10 @@ use std::cell::RefCell;
 use std::f32::consts::FRAC_1_PI;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
+
+/// Deepest eye-path depth (specular bounces) at which final gathering is used; deeper points
+/// see the global map directly. Surfaces seen through a glass ball are at depth 2.
+pub const MAX_GATHER_DEPTH: u32 = 3;
 
 /// How the indirect diffuse term is computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -199,7 +204,7 @@ impl Gi {
     ) -> Vec3A {
         let mut e = self.caustic_irradiance(p, ng);
         match self.settings.indirect {
-            Indirect::Gather { rays } if depth <= 1 => {
+            Indirect::Gather { rays } if depth <= MAX_GATHER_DEPTH => {
                 let mut sum = Vec3A::ZERO;
                 for u in stratified_2d(rng, rays) {
                     let d = cosine_around(n, u);

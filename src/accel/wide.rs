@@ -9,6 +9,7 @@
 use crate::geometry::Ray;
 use glam::Vec3A;
 use obvhs::bvh2::Bvh2;
+use std::mem::MaybeUninit;
 
 /// Stack entries that live on the thread stack; deeper trees (pathological scenes) use the heap.
 const STACK: usize = 96;
@@ -63,6 +64,60 @@ struct Entry {
     index: u32,
     count: u32,
     t: f32,
+}
+
+/// A traversal stack over borrowed slots that are never initialised up front, so a ray pays
+/// nothing for the capacity it does not use (zeroing the fixed array cost every ray 1 KiB of stores).
+struct Stack<'a> {
+    slots: &'a mut [MaybeUninit<Entry>],
+    /// Slots `..len` hold entries written by `push` or `insert_sorted`; the rest may be
+    /// uninitialised.
+    len: usize,
+}
+
+impl Stack<'_> {
+    /// Returns entry `i`.
+    ///
+    /// # Panics
+    /// When `i >= len`.
+    #[inline(always)]
+    fn get(&self, i: usize) -> Entry {
+        assert!(i < self.len);
+        // SAFETY: slots below `len` have been written (the invariant of `len`).
+        unsafe { self.slots[i].assume_init() }
+    }
+
+    /// Pushes `e`.
+    ///
+    /// # Panics
+    /// When the stack is full (the tree is deeper than its stack length allows: a bug).
+    #[inline(always)]
+    fn push(&mut self, e: Entry) {
+        self.slots[self.len].write(e);
+        self.len += 1;
+    }
+
+    /// Pushes `e` among the entries from `base` up, which stay sorted by `t`, nearest on top.
+    #[inline(always)]
+    fn insert_sorted(&mut self, base: usize, e: Entry) {
+        let mut j = self.len;
+        self.push(e);
+        while j > base && self.get(j - 1).t < e.t {
+            let moved = self.get(j - 1);
+            self.slots[j].write(moved);
+            j -= 1;
+        }
+        self.slots[j].write(e);
+    }
+
+    /// Pops the top entry, if any.
+    #[inline(always)]
+    fn pop(&mut self) -> Option<Entry> {
+        let top = self.len.checked_sub(1)?;
+        let e = self.get(top);
+        self.len = top;
+        Some(e)
+    }
 }
 
 impl WideBvh {
@@ -129,13 +184,21 @@ impl WideBvh {
         std::mem::size_of_val(self.nodes.as_slice()) + std::mem::size_of_val(self.order.as_slice())
     }
 
-    /// Runs `f` with a traversal stack long enough for this tree.
+    /// Runs `f` with an empty traversal stack long enough for this tree.
     #[inline(always)]
-    fn with_stack<R>(&self, f: impl FnOnce(&mut [Entry]) -> R) -> R {
+    fn with_stack<R>(&self, f: impl FnOnce(Stack) -> R) -> R {
         if self.stack_len <= STACK {
-            f(&mut [Entry::default(); STACK])
+            f(Stack {
+                slots: &mut [const { MaybeUninit::uninit() }; STACK],
+                len: 0,
+            })
         } else {
-            f(&mut vec![Entry::default(); self.stack_len])
+            let mut heap = Vec::new();
+            heap.resize_with(self.stack_len, MaybeUninit::uninit);
+            f(Stack {
+                slots: &mut heap,
+                len: 0,
+            })
         }
     }
 
@@ -151,8 +214,7 @@ impl WideBvh {
         let mut best = None;
         self.with_stack(
             #[inline(always)]
-            |stack| {
-                let mut sp = 0;
+            |mut stack| {
                 let mut cur = Entry {
                     t: ray.tmin,
                     ..Entry::default()
@@ -170,20 +232,14 @@ impl WideBvh {
                             // Continue with the nearest child; push the others, nearest on top.
                             let mut near = child(mask.trailing_zeros() as usize);
                             mask &= mask - 1;
-                            let base = sp;
+                            let base = stack.len;
                             while mask != 0 {
                                 let mut e = child(mask.trailing_zeros() as usize);
                                 mask &= mask - 1;
                                 if e.t < near.t {
                                     std::mem::swap(&mut e, &mut near);
                                 }
-                                let mut j = sp;
-                                while j > base && stack[j - 1].t < e.t {
-                                    stack[j] = stack[j - 1];
-                                    j -= 1;
-                                }
-                                stack[j] = e;
-                                sp += 1;
+                                stack.insert_sorted(base, e);
                             }
                             cur = near;
                             continue;
@@ -198,13 +254,13 @@ impl WideBvh {
                         }
                     }
                     loop {
-                        if sp == 0 {
-                            return best;
-                        }
-                        sp -= 1;
-                        if stack[sp].t <= r.tmax {
-                            cur = stack[sp];
-                            break;
+                        match stack.pop() {
+                            None => return best,
+                            Some(e) if e.t <= r.tmax => {
+                                cur = e;
+                                break;
+                            }
+                            Some(_) => {}
                         }
                     }
                 }
@@ -218,8 +274,7 @@ impl WideBvh {
         let pre = SlabRay::new(ray);
         self.with_stack(
             #[inline(always)]
-            |stack| {
-                let mut sp = 0;
+            |mut stack| {
                 let mut cur = Entry::default();
                 loop {
                     if cur.count == 0 {
@@ -234,8 +289,7 @@ impl WideBvh {
                             cur = child(mask.trailing_zeros());
                             mask &= mask - 1;
                             while mask != 0 {
-                                stack[sp] = child(mask.trailing_zeros());
-                                sp += 1;
+                                stack.push(child(mask.trailing_zeros()));
                                 mask &= mask - 1;
                             }
                             continue;
@@ -247,11 +301,10 @@ impl WideBvh {
                             }
                         }
                     }
-                    if sp == 0 {
-                        return false;
+                    match stack.pop() {
+                        None => return false,
+                        Some(e) => cur = e,
                     }
-                    sp -= 1;
-                    cur = stack[sp];
                 }
             },
         )

@@ -3,12 +3,15 @@
 //! Agreement: for random rays, [`MeshGeom::intersect`] must report the same `t` (bit for bit) as a
 //! loop over every triangle with the same watertight test, and the same triangle unless another
 //! triangle is hit at exactly that `t` (a ray through a shared edge or vertex); `any_hit` must
-//! agree on hit or miss. Watertightness: rays aimed exactly at shared vertices and edge midpoints
-//! of a closed mesh (from inside) and of a height field (from above) must all hit.
+//! agree on hit or miss. Every node-test kernel ([`Kernel`]: scalar with scalar triangle tests,
+//! SSE2 and AVX2 with 4-wide triangle tests) must give bit-identical hits. Watertightness: rays
+//! aimed exactly at shared vertices and edge midpoints of a closed mesh (from inside) and of a
+//! height field (from above) must all hit, with every kernel.
 
+use caustic::accel::Kernel;
 use caustic::geometry::Ray;
 use caustic::geometry::mesh::{MeshData, MeshGeom};
-use caustic::geometry::triangle::{self, RayShear};
+use caustic::geometry::triangle::{self, RayShear, TriangleHit};
 use glam::{DMat3, DVec3, Vec3, Vec3A};
 use std::collections::{BTreeSet, HashMap};
 
@@ -62,10 +65,44 @@ fn brute_force(data: &MeshData, ray: &Ray) -> (f32, Vec<u32>) {
     best
 }
 
-/// Checks `rays` through the BVH against brute force; returns how many hit.
+/// The kernels to test: all three, clamped to what this CPU runs (duplicates are harmless).
+const KERNELS: [Kernel; 3] = [Kernel::Scalar, Kernel::Sse2, Kernel::Avx2];
+
+/// Returns a hit as bits, for exact comparison.
+fn bits(h: Option<(u32, TriangleHit)>) -> Option<(u32, [u32; 3])> {
+    h.map(|(i, h)| (i, [h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()]))
+}
+
+/// Checks `rays` through the BVH against brute force with every kernel, and the kernels against
+/// each other bit for bit; returns how many rays hit.
 fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
-    let geom = MeshGeom::new(data, 0);
+    let mut geom = MeshGeom::new(data, 0);
+    let mut first: Option<Vec<_>> = None;
+    let mut hits = 0;
+    for kernel in KERNELS {
+        let used = geom.bvh.set_kernel(kernel);
+        hits = check_kernel(data, &geom, rays);
+        let results: Vec<_> = rays
+            .iter()
+            .map(|r| (bits(geom.intersect(r)), geom.any_hit(r).map(f32::to_bits)))
+            .collect();
+        match &first {
+            None => first = Some(results),
+            Some(f) => {
+                for (k, (a, b)) in f.iter().zip(&results).enumerate() {
+                    assert_eq!(a, b, "ray {k}: {used:?} differs from the scalar kernel");
+                }
+            }
+        }
+    }
+    hits
+}
+
+/// Checks `rays` through the BVH, with its current kernel, against brute force; returns how
+/// many hit.
+fn check_kernel(data: &MeshData, geom: &MeshGeom, rays: &[Ray]) -> usize {
     let order = geom.bvh.order();
+    let kernel = geom.bvh.kernel();
     let mut hits = 0;
     for (k, ray) in rays.iter().enumerate() {
         let (t, tris) = brute_force(data, ray);
@@ -73,22 +110,22 @@ fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
         match got {
             None => assert!(
                 tris.is_empty(),
-                "ray {k}: BVH missed, brute force hit {tris:?} at {t}"
+                "ray {k}, {kernel:?}: BVH missed, brute force hit {tris:?} at {t}"
             ),
             Some((tri, h)) => {
                 hits += 1;
-                assert_eq!(h.t, t, "ray {k}: t differs");
+                assert_eq!(h.t, t, "ray {k}, {kernel:?}: t differs");
                 let file_tri = order[tri as usize];
                 assert!(
                     tris.contains(&file_tri),
-                    "ray {k}: triangle {file_tri} not in {tris:?}"
+                    "ray {k}, {kernel:?}: triangle {file_tri} not in {tris:?}"
                 );
             }
         }
         assert_eq!(
             geom.any_hit(ray).is_some(),
             got.is_some(),
-            "ray {k}: any_hit"
+            "ray {k}, {kernel:?}: any_hit"
         );
     }
     hits
@@ -237,11 +274,13 @@ fn wave_height_field_matches_brute_force() {
 #[test]
 fn rays_at_closed_cube_vertices_and_edges_never_escape() {
     let data = closed_cube(24);
-    let geom = MeshGeom::new(&data, 0);
+    let mut geom = MeshGeom::new(&data, 0);
     let aims = targets(&data, |_| true);
     let mut rng = Rng(3);
-    let (mut rays, mut escaped) = (0, 0);
+    let (mut rays, mut escaped, mut pass) = (0, 0, 0);
     while rays < 1_000_000 {
+        geom.bvh.set_kernel(KERNELS[pass % KERNELS.len()]);
+        pass += 1;
         for &target in &aims {
             // From anywhere well inside the cube (half-width 1, rotated), every ray must hit.
             let o = rng.unit_vector() * rng.uniform(0.0, 0.5);
@@ -261,12 +300,14 @@ fn rays_at_closed_cube_vertices_and_edges_never_escape() {
 #[test]
 fn rays_at_height_field_vertices_and_edges_never_escape() {
     let data = height_field(129);
-    let geom = MeshGeom::new(&data, 0);
+    let mut geom = MeshGeom::new(&data, 0);
     // Interior targets only: a ray aimed at the outer boundary may pass outside the mesh.
     let aims = targets(&data, |q| q.x.abs() < 0.999 && q.z.abs() < 0.999);
     let mut rng = Rng(5);
-    let (mut rays, mut escaped) = (0, 0);
+    let (mut rays, mut escaped, mut pass) = (0, 0, 0);
     while rays < 1_000_000 {
+        geom.bvh.set_kernel(KERNELS[pass % KERNELS.len()]);
+        pass += 1;
         for &target in &aims {
             // From above the highest point (0.15) through a target on the surface to below the
             // lowest (-0.15), inside the footprint all along: the ray must cross the surface.

@@ -1,28 +1,35 @@
 //! Bounding volume hierarchies: the only module that imports obvhs.
 //!
-//! obvhs builds a binary BVH by PLOC over padded boxes ([`Bvh::build`]); we collapse it into a
-//! 4-wide BVH with float boxes stored axis by axis ([`wide`]), so one SSE2 slab test checks the
-//! four children of a node, and traverse that ourselves, nearest child first. Callers own the
-//! primitives: traversal hands a callback the *BVH-order* index of each candidate (see
-//! [`Bvh::order`]) and the callback returns the hit's `t`, or infinity on a miss. Callers that store
-//! their primitives in BVH order index them directly.
+//! obvhs builds a binary BVH by PLOC over padded boxes ([`Bvh::build`]); we collapse it into an
+//! 8-wide BVH with float boxes stored axis by axis ([`wide`]), so one AVX2 slab test (two SSE2
+//! ones, or a scalar loop, see [`Kernel`]) checks the eight children of a node, and traverse
+//! that ourselves, nearest child first. Leaves hold at most [`MAX_LEAF`] primitives.
+//!
+//! Callers own the primitives: traversal hands a callback either a whole leaf ([`Bvh::closest_leaf`],
+//! [`Bvh::any_leaf`]; see [`Bvh::leaves`]) or each *BVH-order* index of a candidate ([`Bvh::closest`],
+//! [`Bvh::any`]; see [`Bvh::order`]), and the callback returns the hit's `t`, or infinity on a miss.
+//! Callers that store their primitives in BVH order index them directly.
 //!
 //! Two things obvhs leaves to us (`../shared/docs/obvhs.md` §5): boxes are padded so flat
 //! primitives do not get zero-thickness boxes that non-conservative slab tests can miss, and the
 //! callbacks must reject `t <= tmin` themselves.
 
+mod ploc;
+mod stack;
 mod wide;
+
+pub use wide::{Kernel, Leaf};
 
 use crate::geometry::Ray;
 use glam::Vec3A;
-use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::builder::build_bvh2;
-use std::time::Duration;
 use wide::WideBvh;
 
 /// Names the build configuration [`Bvh::build`] uses, for benchmark reports.
-pub const BUILD_CONFIG: &str = "bvh4-ploc-medium";
+pub const BUILD_CONFIG: &str = "bvh8-ploc-medium";
+
+/// The most primitives a leaf holds (one 4-wide SIMD test of triangles).
+pub const MAX_LEAF: usize = 4;
 
 /// An axis-aligned box; `min <= max` on every axis for a non-empty box.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,16 +81,9 @@ pub struct Bvh {
     len: usize,
 }
 
-/// The BVH order of a one-primitive BVH.
+/// The BVH order and the leaf of a one-primitive BVH.
 const SINGLE: [u32; 1] = [0];
-
-/// The obvhs build settings: its medium preset with leaves of at most four primitives.
-fn build_params() -> BvhBuildParams {
-    BvhBuildParams {
-        max_prims_per_leaf: 4,
-        ..BvhBuildParams::medium_build()
-    }
-}
+const SINGLE_LEAF: [Leaf; 1] = [Leaf { first: 0, count: 1 }];
 
 impl Bvh {
     /// Builds a BVH over `boxes`, which must all be finite (callers check and name the culprit).
@@ -96,9 +96,8 @@ impl Bvh {
             };
         }
         let aabbs: Vec<Aabb> = boxes.iter().map(|b| b.padded()).collect();
-        let bvh2 = build_bvh2(&aabbs, build_params(), &mut Duration::default());
         Bvh {
-            inner: Some(WideBvh::from_bvh2(&bvh2)),
+            inner: Some(ploc::build(&aabbs)),
             len: boxes.len(),
         }
     }
@@ -121,9 +120,55 @@ impl Bvh {
         }
     }
 
-    /// Returns the bytes the nodes and index take.
+    /// Returns the leaves by leaf id: disjoint runs of BVH-order indices covering them all.
+    pub fn leaves(&self) -> &[Leaf] {
+        match &self.inner {
+            Some(b) => &b.leaves,
+            None => &SINGLE_LEAF[..self.len],
+        }
+    }
+
+    /// Returns the bytes the nodes, leaves and index take.
     pub fn bytes(&self) -> usize {
         self.inner.as_ref().map_or(0, WideBvh::bytes)
+    }
+
+    /// Returns the node test in use.
+    pub fn kernel(&self) -> Kernel {
+        self.inner.as_ref().map_or(Kernel::best(), WideBvh::kernel)
+    }
+
+    /// Uses node test `k`, or the fastest this CPU runs if it lacks `k` (for tests and
+    /// benchmarks; [`Bvh::build`] picks the fastest); returns the one in use.
+    pub fn set_kernel(&mut self, k: Kernel) -> Kernel {
+        self.inner
+            .as_mut()
+            .map_or(k.min(Kernel::best()), |b| b.set_kernel(k))
+    }
+
+    /// Finds the closest hit leaf by leaf: `leaf_fn(ray, leaf)` returns the smallest `t` in the
+    /// ray's `(tmin, tmax)` among the primitives of leaf `leaf` (an index into [`Bvh::leaves`]),
+    /// or infinity; the ray it sees has the closest `t` found so far as its `tmax`.
+    #[inline]
+    pub fn closest_leaf(&self, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, u32) -> f32) {
+        match &self.inner {
+            Some(bvh) => bvh.closest(ray, leaf_fn),
+            None => {
+                if self.len == 1 {
+                    leaf_fn(ray, 0);
+                }
+            }
+        }
+    }
+
+    /// Returns true when `leaf_fn(ray, leaf)` reports a hit in the ray's `(tmin, tmax)` for some
+    /// leaf (an index into [`Bvh::leaves`]).
+    #[inline]
+    pub fn any_leaf(&self, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, u32) -> bool) -> bool {
+        match &self.inner {
+            Some(bvh) => bvh.any(ray, leaf_fn),
+            None => self.len == 1 && leaf_fn(ray, 0),
+        }
     }
 
     /// Finds the closest hit: `hit_fn(ray, i)` returns the `t` of BVH-order primitive `i` within
@@ -132,29 +177,33 @@ impl Bvh {
     pub fn closest(
         &self,
         ray: &Ray,
-        hit_fn: impl FnMut(&Ray, usize) -> f32,
+        mut hit_fn: impl FnMut(&Ray, usize) -> f32,
     ) -> Option<(usize, f32)> {
-        match &self.inner {
-            Some(bvh) => bvh.closest(ray, hit_fn),
-            None => {
-                let mut hit_fn = hit_fn;
-                let t = if self.len == 1 {
-                    hit_fn(ray, 0)
-                } else {
-                    f32::INFINITY
-                };
-                (t > ray.tmin && t < ray.tmax).then_some((0, t))
+        let leaves = self.leaves();
+        let mut best = None;
+        self.closest_leaf(ray, |r, leaf| {
+            let l = leaves[leaf as usize];
+            let mut r = *r;
+            for i in l.first as usize..(l.first + l.count) as usize {
+                let t = hit_fn(&r, i);
+                if t > r.tmin && t < r.tmax {
+                    best = Some((i, t));
+                    r.tmax = t;
+                }
             }
-        }
+            r.tmax
+        });
+        best
     }
 
     /// Returns true when any primitive reports a hit with `t` in the ray's `(tmin, tmax)`.
     #[inline]
     pub fn any(&self, ray: &Ray, mut hit_fn: impl FnMut(&Ray, usize) -> f32) -> bool {
-        match &self.inner {
-            Some(bvh) => bvh.any(ray, hit_fn),
-            None => self.len == 1 && hit_fn(ray, 0) < ray.tmax,
-        }
+        let leaves = self.leaves();
+        self.any_leaf(ray, |r, leaf| {
+            let l = leaves[leaf as usize];
+            (l.first as usize..(l.first + l.count) as usize).any(|i| hit_fn(r, i) < r.tmax)
+        })
     }
 }
 
@@ -169,7 +218,8 @@ mod tests {
         }
     }
 
-    /// Brute force and BVH agree on the closest of many boxes (each box reports its entry t).
+    /// Brute force and BVH agree on the closest of many boxes (each box reports its entry t),
+    /// with every node test.
     #[test]
     fn closest_matches_brute_force() {
         let boxes: Vec<Bounds> = (0..200)
@@ -182,7 +232,7 @@ mod tests {
                 ))
             })
             .collect();
-        let bvh = Bvh::build(&boxes);
+        let mut bvh = Bvh::build(&boxes);
         let slab = |b: &Bounds, r: &Ray| -> f32 {
             let t0 = (b.min - r.origin) / r.dir;
             let t1 = (b.max - r.origin) / r.dir;
@@ -194,21 +244,27 @@ mod tests {
                 f32::INFINITY
             }
         };
-        for k in 0..500 {
-            let f = k as f32;
-            let ray = Ray::new(
-                Vec3A::new(0.0, 0.0, 0.0),
-                Vec3A::new((f * 0.37).sin(), (f * 0.91).cos(), (f * 0.13).sin() + 0.01).normalize(),
-            );
-            let brute = boxes
-                .iter()
-                .map(|b| slab(b, &ray))
-                .fold(f32::INFINITY, f32::min);
-            let order = bvh.order().to_vec();
-            let got = bvh
-                .closest(&ray, |r, i| slab(&boxes[order[i] as usize], r))
-                .map(|h| h.1);
-            assert_eq!(got.unwrap_or(f32::INFINITY), brute, "ray {k}");
+        for kernel in [Kernel::Scalar, Kernel::Sse2, Kernel::Avx2] {
+            bvh.set_kernel(kernel);
+            for k in 0..500 {
+                let f = k as f32;
+                let ray = Ray::new(
+                    Vec3A::new(0.0, 0.0, 0.0),
+                    Vec3A::new((f * 0.37).sin(), (f * 0.91).cos(), (f * 0.13).sin() + 0.01)
+                        .normalize(),
+                );
+                let brute = boxes
+                    .iter()
+                    .map(|b| slab(b, &ray))
+                    .fold(f32::INFINITY, f32::min);
+                let order = bvh.order().to_vec();
+                let got = bvh
+                    .closest(&ray, |r, i| slab(&boxes[order[i] as usize], r))
+                    .map(|h| h.1);
+                assert_eq!(got.unwrap_or(f32::INFINITY), brute, "{kernel:?}, ray {k}");
+                let any = bvh.any(&ray, |r, i| slab(&boxes[order[i] as usize], r));
+                assert_eq!(any, brute.is_finite(), "{kernel:?}, ray {k}");
+            }
         }
     }
 
@@ -219,5 +275,43 @@ mod tests {
         let one = Bvh::build(&[unit_box(Vec3A::ZERO)]);
         assert_eq!(one.closest(&ray, |_, _| 4.5), Some((0, 4.5)));
         assert!(one.any(&ray, |_, _| 4.5));
+        assert_eq!(one.leaves(), &[Leaf { first: 0, count: 1 }]);
+    }
+
+    /// Leaves cover every BVH-order index once, each leaf inside the box of its node slot.
+    #[test]
+    fn leaves_partition_the_order() {
+        let boxes: Vec<Bounds> = (0..1000)
+            .map(|i| {
+                let c = Vec3A::new((i % 10) as f32, ((i / 10) % 10) as f32, (i / 100) as f32);
+                unit_box(c)
+            })
+            .collect();
+        let bvh = Bvh::build(&boxes);
+        let mut seen = vec![0; boxes.len()];
+        for l in bvh.leaves() {
+            assert!((1..=MAX_LEAF as u32).contains(&l.count));
+            for i in l.first..l.first + l.count {
+                seen[bvh.order()[i as usize] as usize] += 1;
+            }
+        }
+        assert!(seen.iter().all(|&s| s == 1));
+        let inner = bvh.inner.as_ref().unwrap();
+        for n in &inner.nodes {
+            for (slot, &c) in n.child.iter().enumerate() {
+                if c & wide::LEAF == 0 || n.planes[0][slot] > n.planes[1][slot] {
+                    continue;
+                }
+                let l = inner.leaves[(c & !wide::LEAF) as usize];
+                for i in l.first..l.first + l.count {
+                    let b = boxes[inner.order[i as usize] as usize];
+                    for a in 0..3 {
+                        assert!(n.planes[2 * a][slot] <= b.min[a]);
+                        assert!(b.max[a] <= n.planes[2 * a + 1][slot]);
+                    }
+                }
+            }
+        }
+        assert!(inner.stack_len <= 256);
     }
 }

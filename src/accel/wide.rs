@@ -1,47 +1,48 @@
-//! The 4-wide BVH we trace: obvhs's binary BVH collapsed so that each node holds up to four
-//! children whose float boxes are stored plane by plane, one SSE2 lane per child.
+//! The 8-wide BVH we trace: each node holds up to eight children whose float boxes are stored
+//! plane by plane, one lane per child, so one AVX2 slab test (or two SSE2 ones) checks all eight.
 //!
-//! Traversal tests the four children of a node with one 4-wide slab test, continues with the
-//! nearest child it enters and keeps the others on a stack, nearest on top (the single-ray scheme
-//! of Embree's BVH4 kernels, Wald et al., "Embree: A Kernel Framework for Efficient CPU Ray
-//! Tracing", 2014). A popped entry is skipped when the closest hit found so far lies in front of it.
+//! Traversal continues with the nearest child it enters and keeps the others on a stack, nearest
+//! on top (the single-ray scheme of Embree's BVH4/BVH8 kernels, Wald et al., "Embree: A Kernel
+//! Framework for Efficient CPU Ray Tracing", 2014). A popped entry is skipped when the closest hit
+//! found so far lies in front of it. Every kernel ([`Kernel`]) evaluates the same IEEE operations
+//! in the same order, so all of them visit the same nodes and report the same hits.
 
+use super::stack::{Entry, Stack};
 use crate::geometry::Ray;
 use glam::Vec3A;
-use obvhs::bvh2::Bvh2;
-use std::mem::MaybeUninit;
 
-/// Stack entries that live on the thread stack; deeper trees (pathological scenes) use the heap.
-const STACK: usize = 96;
+/// Children per node.
+pub(super) const WIDTH: usize = 8;
 
-/// A node: up to four children, each an inner node or a leaf (a run of BVH-order primitives).
+/// Marks a child that is a leaf; the other bits are its leaf id.
+pub(super) const LEAF: u32 = 1 << 31;
+
+/// A node: up to eight children, each an inner node or a leaf.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub(super) struct Node {
     /// Child boxes by plane: min x, max x, min y, max y, min z, max z; one lane per child. An
     /// empty slot holds the inverted box (min +∞, max −∞), which no ray enters.
-    planes: [[f32; 4]; 6],
-    /// Per child: the inner node's index, or the leaf's first BVH-order primitive.
-    index: [u32; 4],
-    /// Per child: 0 for an inner node, else the leaf's primitive count.
-    count: [u32; 4],
+    pub(super) planes: [[f32; WIDTH]; 6],
+    /// Per child: the inner node's index, or [`LEAF`] | the leaf's id.
+    pub(super) child: [u32; WIDTH],
 }
 
 impl Node {
-    const EMPTY: Node = Node {
+    pub(super) const EMPTY: Node = Node {
         planes: [
-            [f32::INFINITY; 4],
-            [f32::NEG_INFINITY; 4],
-            [f32::INFINITY; 4],
-            [f32::NEG_INFINITY; 4],
-            [f32::INFINITY; 4],
-            [f32::NEG_INFINITY; 4],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
         ],
-        index: [0; 4],
-        count: [0; 4],
+        child: [0; WIDTH],
     };
 
-    fn set_box(&mut self, slot: usize, min: Vec3A, max: Vec3A) {
+    /// Stores child `slot`'s box.
+    pub(super) fn set_box(&mut self, slot: usize, min: Vec3A, max: Vec3A) {
         for axis in 0..3 {
             self.planes[2 * axis][slot] = min[axis];
             self.planes[2 * axis + 1][slot] = max[axis];
@@ -49,266 +50,224 @@ impl Node {
     }
 }
 
-/// A 4-wide BVH over the primitives of an obvhs [`Bvh2`], root at node 0.
-pub(super) struct WideBvh {
-    nodes: Vec<Node>,
-    /// For each BVH-order index, the caller's primitive index (obvhs's `primitive_indices`).
-    pub order: Vec<u32>,
-    /// Stack entries a traversal can need: three per level below the root, plus one.
-    stack_len: usize,
+/// A run of BVH-order primitives that the traversal hands to the caller at once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Leaf {
+    /// The first BVH-order primitive.
+    pub first: u32,
+    /// The number of primitives, 1 to [`super::MAX_LEAF`].
+    pub count: u32,
 }
 
-/// A child waiting on the traversal stack, with the ray's entry distance into its box.
-#[derive(Clone, Copy, Debug, Default)]
-struct Entry {
-    index: u32,
-    count: u32,
-    t: f32,
+/// The SIMD code that tests a node's eight boxes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Kernel {
+    /// One box at a time (any CPU).
+    Scalar,
+    /// Two 4-wide SSE2 tests (every x86-64 CPU).
+    Sse2,
+    /// One 8-wide AVX2 test (chosen at run time where the CPU has AVX2).
+    Avx2,
 }
 
-/// A traversal stack over borrowed slots that are never initialised up front, so a ray pays
-/// nothing for the capacity it does not use (zeroing the fixed array cost every ray 1 KiB of stores).
-struct Stack<'a> {
-    slots: &'a mut [MaybeUninit<Entry>],
-    /// Slots `..len` hold entries written by `push` or `insert_sorted`; the rest may be
-    /// uninitialised.
-    len: usize,
-}
-
-impl Stack<'_> {
-    /// Returns entry `i`.
-    ///
-    /// # Panics
-    /// When `i >= len`.
-    #[inline(always)]
-    fn get(&self, i: usize) -> Entry {
-        assert!(i < self.len);
-        // SAFETY: slots below `len` have been written (the invariant of `len`).
-        unsafe { self.slots[i].assume_init() }
-    }
-
-    /// Pushes `e`.
-    ///
-    /// # Panics
-    /// When the stack is full (the tree is deeper than its stack length allows: a bug).
-    #[inline(always)]
-    fn push(&mut self, e: Entry) {
-        self.slots[self.len].write(e);
-        self.len += 1;
-    }
-
-    /// Pushes `e` among the entries from `base` up, which stay sorted by `t`, nearest on top.
-    #[inline(always)]
-    fn insert_sorted(&mut self, base: usize, e: Entry) {
-        let mut j = self.len;
-        self.push(e);
-        while j > base && self.get(j - 1).t < e.t {
-            let moved = self.get(j - 1);
-            self.slots[j].write(moved);
-            j -= 1;
+impl Kernel {
+    /// Returns the fastest kernel this CPU runs.
+    pub fn best() -> Kernel {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                Kernel::Avx2
+            } else {
+                Kernel::Sse2
+            }
         }
-        self.slots[j].write(e);
+        #[cfg(not(target_arch = "x86_64"))]
+        Kernel::Scalar
     }
+}
 
-    /// Pops the top entry, if any.
-    #[inline(always)]
-    fn pop(&mut self) -> Option<Entry> {
-        let top = self.len.checked_sub(1)?;
-        let e = self.get(top);
-        self.len = top;
-        Some(e)
-    }
+/// An 8-wide BVH, root at node 0.
+pub(super) struct WideBvh {
+    pub(super) nodes: Vec<Node>,
+    /// The leaves, by leaf id.
+    pub(super) leaves: Vec<Leaf>,
+    /// For each BVH-order index, the caller's primitive index.
+    pub(super) order: Vec<u32>,
+    /// Stack entries a traversal can need: `WIDTH - 1` per level below the root, plus one.
+    pub(super) stack_len: usize,
+    /// The node test in use; never one the CPU lacks (checked by [`WideBvh::set_kernel`]).
+    kernel: Kernel,
 }
 
 impl WideBvh {
-    /// Collapses `bvh2` (at least one node) into 4-wide nodes: each node takes its two children
-    /// and then repeatedly opens the inner child with the largest surface until it has four.
-    pub(super) fn from_bvh2(bvh2: &Bvh2) -> WideBvh {
-        let src = &bvh2.nodes;
-        let mut nodes = vec![Node::EMPTY];
-        let mut max_level = 1;
-        if src[0].prim_count > 0 {
-            // A leaf at the root: one node with one leaf child.
-            let r = &src[0];
-            nodes[0].set_box(0, r.aabb.min, r.aabb.max);
-            nodes[0].index[0] = r.first_index;
-            nodes[0].count[0] = r.prim_count;
-        } else {
-            // (source inner node, our node, level); a work list rather than recursion, so a
-            // degenerate, very deep tree cannot overflow the thread's stack.
-            let mut work = vec![(0usize, 0usize, 1usize)];
-            while let Some((at, me, level)) = work.pop() {
-                max_level = max_level.max(level);
-                let first = src[at].first_index as usize;
-                let mut kids = vec![first, first + 1];
-                while kids.len() < 4 {
-                    let widest = kids
-                        .iter()
-                        .enumerate()
-                        .filter(|&(_, &k)| src[k].prim_count == 0)
-                        .max_by(|a, b| {
-                            src[*a.1]
-                                .aabb
-                                .half_area()
-                                .total_cmp(&src[*b.1].aabb.half_area())
-                        });
-                    let Some((pos, &k)) = widest else { break };
-                    let f = src[k].first_index as usize;
-                    kids[pos] = f;
-                    kids.push(f + 1);
+    /// Wraps built nodes (root at 0), choosing the fastest kernel; `depth` counts node levels.
+    pub(super) fn new(nodes: Vec<Node>, leaves: Vec<Leaf>, order: Vec<u32>, depth: usize) -> Self {
+        WideBvh {
+            nodes,
+            leaves,
+            order,
+            stack_len: (WIDTH - 1) * depth + 1,
+            kernel: Kernel::best(),
+        }
+    }
+
+    /// Returns the bytes the nodes, leaves and order take.
+    pub(super) fn bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice())
+            + std::mem::size_of_val(self.leaves.as_slice())
+            + std::mem::size_of_val(self.order.as_slice())
+    }
+
+    pub(super) fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+
+    /// Uses `k`, or the fastest kernel this CPU runs if it lacks `k`; returns the one in use.
+    pub(super) fn set_kernel(&mut self, k: Kernel) -> Kernel {
+        self.kernel = k.min(Kernel::best());
+        self.kernel
+    }
+
+    /// Finds the closest hit: `leaf_fn(ray, leaf)` returns the smallest `t` below the ray's
+    /// current `tmax` among the leaf's primitives, or infinity; the ray it sees carries the
+    /// closest `t` so far as `tmax`.
+    #[inline(always)]
+    pub(super) fn closest(&self, ray: &Ray, leaf_fn: impl FnMut(&Ray, u32) -> f32) {
+        match self.kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `kernel` is `Avx2` only where `Kernel::best` detected AVX2.
+            Kernel::Avx2 => unsafe { closest_avx2(self, ray, leaf_fn) },
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Sse2 => closest_with::<Sse2>(self, ray, leaf_fn),
+            _ => closest_with::<Scalar>(self, ray, leaf_fn),
+        }
+    }
+
+    /// Returns true when `leaf_fn(ray, leaf)` reports a hit for some leaf the ray reaches.
+    #[inline(always)]
+    pub(super) fn any(&self, ray: &Ray, leaf_fn: impl FnMut(&Ray, u32) -> bool) -> bool {
+        match self.kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `kernel` is `Avx2` only where `Kernel::best` detected AVX2.
+            Kernel::Avx2 => unsafe { any_avx2(self, ray, leaf_fn) },
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Sse2 => any_with::<Sse2>(self, ray, leaf_fn),
+            _ => any_with::<Scalar>(self, ray, leaf_fn),
+        }
+    }
+}
+
+/// [`closest_with`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn closest_avx2(bvh: &WideBvh, ray: &Ray, leaf_fn: impl FnMut(&Ray, u32) -> f32) {
+    closest_with::<Avx2>(bvh, ray, leaf_fn)
+}
+
+/// [`any_with`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn any_avx2(bvh: &WideBvh, ray: &Ray, leaf_fn: impl FnMut(&Ray, u32) -> bool) -> bool {
+    any_with::<Avx2>(bvh, ray, leaf_fn)
+}
+
+/// Closest-hit traversal with node test `T`.
+#[inline(always)]
+fn closest_with<T: NodeTest>(bvh: &WideBvh, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, u32) -> f32) {
+    let pre = SlabRay::new(ray);
+    let mut r = *ray;
+    Stack::with_capacity(
+        bvh.stack_len,
+        #[inline(always)]
+        |mut stack| {
+            let mut cur = Entry {
+                child: 0,
+                t: ray.tmin,
+            };
+            loop {
+                if cur.child & LEAF == 0 {
+                    let node = &bvh.nodes[cur.child as usize];
+                    let (mut mask, tnear) = T::enter(&pre, node, r.tmax);
+                    if mask != 0 {
+                        let child = |c: u32| Entry {
+                            child: node.child[c as usize],
+                            t: tnear[c as usize],
+                        };
+                        // Continue with the nearest child; push the others, nearest on top.
+                        let mut near = child(mask.trailing_zeros());
+                        mask &= mask - 1;
+                        let base = stack.len();
+                        while mask != 0 {
+                            let mut e = child(mask.trailing_zeros());
+                            mask &= mask - 1;
+                            if e.t < near.t {
+                                std::mem::swap(&mut e, &mut near);
+                            }
+                            stack.insert_sorted(base, e);
+                        }
+                        cur = near;
+                        continue;
+                    }
+                } else {
+                    let t = leaf_fn(&r, cur.child & !LEAF);
+                    if t < r.tmax {
+                        r.tmax = t;
+                    }
                 }
-                for (slot, &k) in kids.iter().enumerate() {
-                    let n = &src[k];
-                    nodes[me].set_box(slot, n.aabb.min, n.aabb.max);
-                    if n.prim_count > 0 {
-                        nodes[me].index[slot] = n.first_index;
-                        nodes[me].count[slot] = n.prim_count;
-                    } else {
-                        nodes[me].index[slot] = nodes.len() as u32;
-                        nodes.push(Node::EMPTY);
-                        work.push((k, nodes.len() - 1, level + 1));
+                loop {
+                    match stack.pop() {
+                        None => return,
+                        Some(e) if e.t <= r.tmax => {
+                            cur = e;
+                            break;
+                        }
+                        Some(_) => {}
                     }
                 }
             }
-        }
-        nodes.shrink_to_fit();
-        WideBvh {
-            nodes,
-            order: bvh2.primitive_indices.clone(),
-            stack_len: 3 * max_level + 1,
-        }
-    }
+        },
+    )
+}
 
-    /// Returns the bytes the nodes and the order take.
-    pub(super) fn bytes(&self) -> usize {
-        std::mem::size_of_val(self.nodes.as_slice()) + std::mem::size_of_val(self.order.as_slice())
-    }
-
-    /// Runs `f` with an empty traversal stack long enough for this tree.
-    #[inline(always)]
-    fn with_stack<R>(&self, f: impl FnOnce(Stack) -> R) -> R {
-        if self.stack_len <= STACK {
-            f(Stack {
-                slots: &mut [const { MaybeUninit::uninit() }; STACK],
-                len: 0,
-            })
-        } else {
-            let mut heap = Vec::new();
-            heap.resize_with(self.stack_len, MaybeUninit::uninit);
-            f(Stack {
-                slots: &mut heap,
-                len: 0,
-            })
-        }
-    }
-
-    /// Finds the closest hit; see [`super::Bvh::closest`].
-    #[inline(always)]
-    pub(super) fn closest(
-        &self,
-        ray: &Ray,
-        mut hit_fn: impl FnMut(&Ray, usize) -> f32,
-    ) -> Option<(usize, f32)> {
-        let pre = SlabRay::new(ray);
-        let mut r = *ray;
-        let mut best = None;
-        self.with_stack(
-            #[inline(always)]
-            |mut stack| {
-                let mut cur = Entry {
-                    t: ray.tmin,
-                    ..Entry::default()
-                };
-                loop {
-                    if cur.count == 0 {
-                        let node = &self.nodes[cur.index as usize];
-                        let (mut mask, tnear) = pre.enter(node, r.tmax);
-                        if mask != 0 {
-                            let child = |c: usize| Entry {
-                                index: node.index[c],
-                                count: node.count[c],
-                                t: tnear[c],
-                            };
-                            // Continue with the nearest child; push the others, nearest on top.
-                            let mut near = child(mask.trailing_zeros() as usize);
-                            mask &= mask - 1;
-                            let base = stack.len;
-                            while mask != 0 {
-                                let mut e = child(mask.trailing_zeros() as usize);
-                                mask &= mask - 1;
-                                if e.t < near.t {
-                                    std::mem::swap(&mut e, &mut near);
-                                }
-                                stack.insert_sorted(base, e);
-                            }
-                            cur = near;
-                            continue;
-                        }
-                    } else {
-                        for i in cur.index..cur.index + cur.count {
-                            let t = hit_fn(&r, i as usize);
-                            if t < r.tmax {
-                                best = Some((i as usize, t));
-                                r.tmax = t;
-                            }
-                        }
-                    }
-                    loop {
-                        match stack.pop() {
-                            None => return best,
-                            Some(e) if e.t <= r.tmax => {
-                                cur = e;
-                                break;
-                            }
-                            Some(_) => {}
-                        }
-                    }
-                }
-            },
-        )
-    }
-
-    /// Returns true when some primitive reports a hit; see [`super::Bvh::any`].
-    #[inline(always)]
-    pub(super) fn any(&self, ray: &Ray, mut hit_fn: impl FnMut(&Ray, usize) -> f32) -> bool {
-        let pre = SlabRay::new(ray);
-        self.with_stack(
-            #[inline(always)]
-            |mut stack| {
-                let mut cur = Entry::default();
-                loop {
-                    if cur.count == 0 {
-                        let node = &self.nodes[cur.index as usize];
-                        let (mut mask, _) = pre.enter(node, ray.tmax);
-                        if mask != 0 {
-                            let child = |c: u32| Entry {
-                                index: node.index[c as usize],
-                                count: node.count[c as usize],
+/// Any-hit traversal with node test `T`: children in lane order, no sorting.
+#[inline(always)]
+fn any_with<T: NodeTest>(
+    bvh: &WideBvh,
+    ray: &Ray,
+    mut leaf_fn: impl FnMut(&Ray, u32) -> bool,
+) -> bool {
+    let pre = SlabRay::new(ray);
+    Stack::with_capacity(
+        bvh.stack_len,
+        #[inline(always)]
+        |mut stack| {
+            let mut cur = 0;
+            loop {
+                if cur & LEAF == 0 {
+                    let node = &bvh.nodes[cur as usize];
+                    let (mut mask, _) = T::enter(&pre, node, ray.tmax);
+                    if mask != 0 {
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        mask &= mask - 1;
+                        while mask != 0 {
+                            stack.push(Entry {
+                                child: node.child[mask.trailing_zeros() as usize],
                                 t: 0.0,
-                            };
-                            cur = child(mask.trailing_zeros());
+                            });
                             mask &= mask - 1;
-                            while mask != 0 {
-                                stack.push(child(mask.trailing_zeros()));
-                                mask &= mask - 1;
-                            }
-                            continue;
                         }
-                    } else {
-                        for i in cur.index..cur.index + cur.count {
-                            if hit_fn(ray, i as usize) < ray.tmax {
-                                return true;
-                            }
-                        }
+                        continue;
                     }
-                    match stack.pop() {
-                        None => return false,
-                        Some(e) => cur = e,
-                    }
+                } else if leaf_fn(ray, cur & !LEAF) {
+                    return true;
                 }
-            },
-        )
-    }
+                match stack.pop() {
+                    None => return false,
+                    Some(e) => cur = e.child,
+                }
+            }
+        },
+    )
 }
 
 /// Returns `1/x`, or `±1/ε` for `|x| <= ε`, so slab distances stay finite (obvhs's rule).
@@ -321,9 +280,9 @@ fn safe_inverse(x: f32) -> f32 {
 }
 
 /// A ray prepared for slab tests: reciprocal direction and which plane of each axis comes first.
-struct SlabRay {
-    origin: Vec3A,
-    inv_dir: Vec3A,
+pub(super) struct SlabRay {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
     /// Per axis, the plane row (`Node::planes`) the ray meets first and last.
     near: [usize; 3],
     far: [usize; 3],
@@ -332,113 +291,216 @@ struct SlabRay {
 
 impl SlabRay {
     #[inline(always)]
-    fn new(r: &Ray) -> SlabRay {
-        let inv_dir = Vec3A::new(
+    pub(super) fn new(r: &Ray) -> SlabRay {
+        let inv_dir = [
             safe_inverse(r.dir.x),
             safe_inverse(r.dir.y),
             safe_inverse(r.dir.z),
-        );
+        ];
         let neg = |a: usize| (inv_dir[a] < 0.0) as usize;
         SlabRay {
-            origin: r.origin,
+            origin: r.origin.to_array(),
             inv_dir,
             near: [neg(0), 2 + neg(1), 4 + neg(2)],
             far: [1 - neg(0), 3 - neg(1), 5 - neg(2)],
             tmin: r.tmin,
         }
     }
+}
 
-    /// Returns the mask of `node`'s children whose boxes the ray overlaps within
-    /// `[tmin, tmax]`, and the entry distance into each.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn enter(&self, node: &Node, tmax: f32) -> (u32, [f32; 4]) {
-        use std::arch::x86_64::*;
-        let p = &node.planes;
-        let mut tnear = [0.0f32; 4];
-        // SAFETY: SSE2 is part of the x86-64 baseline; `Node` is 64-byte aligned, so every plane
-        // row (16 bytes at a multiple of 16) suits an aligned load, and `tnear` takes an unaligned store.
-        let mask = unsafe {
-            let dist = |row: usize, axis: usize| {
-                _mm_mul_ps(
-                    _mm_sub_ps(_mm_load_ps(p[row].as_ptr()), _mm_set1_ps(self.origin[axis])),
-                    _mm_set1_ps(self.inv_dir[axis]),
-                )
-            };
-            let near = _mm_max_ps(
-                _mm_max_ps(dist(self.near[0], 0), dist(self.near[1], 1)),
-                _mm_max_ps(dist(self.near[2], 2), _mm_set1_ps(self.tmin)),
-            );
-            let far = _mm_min_ps(
-                _mm_min_ps(dist(self.far[0], 0), dist(self.far[1], 1)),
-                _mm_min_ps(dist(self.far[2], 2), _mm_set1_ps(tmax)),
-            );
-            _mm_storeu_ps(tnear.as_mut_ptr(), near);
-            _mm_movemask_ps(_mm_cmple_ps(near, far)) as u32
-        };
-        (mask, tnear)
-    }
+/// A node test: the mask of the children whose boxes the ray overlaps within `[tmin, tmax]`,
+/// and the entry distance into each (lanes outside the mask are unspecified).
+pub(super) trait NodeTest {
+    fn enter(ray: &SlabRay, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]);
+}
 
-    /// Returns the mask of `node`'s children whose boxes the ray overlaps within
-    /// `[tmin, tmax]`, and the entry distance into each.
-    #[cfg(not(target_arch = "x86_64"))]
+/// The portable node test.
+pub(super) struct Scalar;
+
+impl NodeTest for Scalar {
     #[inline(always)]
-    fn enter(&self, node: &Node, tmax: f32) -> (u32, [f32; 4]) {
+    fn enter(s: &SlabRay, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
         let p = &node.planes;
-        let mut tnear = [0.0f32; 4];
+        let mut tnear = [0.0f32; WIDTH];
         let mut mask = 0;
-        for c in 0..4 {
-            let d = |row: usize, axis: usize| (p[row][c] - self.origin[axis]) * self.inv_dir[axis];
-            let near = d(self.near[0], 0)
-                .max(d(self.near[1], 1))
-                .max(d(self.near[2], 2).max(self.tmin));
-            let far = d(self.far[0], 0)
-                .min(d(self.far[1], 1))
-                .min(d(self.far[2], 2).min(tmax));
-            tnear[c] = near;
+        // `max`/`min` spelled as comparisons to match the SIMD instructions lane for lane
+        // (`maxps a, b` returns `b` unless `a > b`); no operand is NaN here anyway.
+        let max = |a: f32, b: f32| if a > b { a } else { b };
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        for (c, tn) in tnear.iter_mut().enumerate() {
+            let d = |row: usize, axis: usize| (p[row][c] - s.origin[axis]) * s.inv_dir[axis];
+            let near = max(
+                max(d(s.near[0], 0), d(s.near[1], 1)),
+                max(d(s.near[2], 2), s.tmin),
+            );
+            let far = min(
+                min(d(s.far[0], 0), d(s.far[1], 1)),
+                min(d(s.far[2], 2), tmax),
+            );
+            *tn = near;
             mask |= ((near <= far) as u32) << c;
         }
         (mask, tnear)
     }
 }
 
+/// The SSE2 node test: the two halves of the node, four children each.
+#[cfg(target_arch = "x86_64")]
+pub(super) struct Sse2;
+
+#[cfg(target_arch = "x86_64")]
+impl NodeTest for Sse2 {
+    #[inline(always)]
+    fn enter(s: &SlabRay, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
+        use std::arch::x86_64::*;
+        let p = &node.planes;
+        let mut tnear = [0.0f32; WIDTH];
+        let mut mask = 0;
+        for half in 0..2 {
+            let lane = 4 * half;
+            // SAFETY: SSE2 is part of the x86-64 baseline; `Node` is 64-byte aligned and each
+            // plane row is 32 bytes, so every half row (16 bytes at a multiple of 16) suits an
+            // aligned load; the store writes lanes `lane..lane + 4` of `tnear`, within its 8.
+            unsafe {
+                let dist = |row: usize, axis: usize| {
+                    _mm_mul_ps(
+                        _mm_sub_ps(
+                            _mm_load_ps(p[row][lane..].as_ptr()),
+                            _mm_set1_ps(s.origin[axis]),
+                        ),
+                        _mm_set1_ps(s.inv_dir[axis]),
+                    )
+                };
+                let near = _mm_max_ps(
+                    _mm_max_ps(dist(s.near[0], 0), dist(s.near[1], 1)),
+                    _mm_max_ps(dist(s.near[2], 2), _mm_set1_ps(s.tmin)),
+                );
+                let far = _mm_min_ps(
+                    _mm_min_ps(dist(s.far[0], 0), dist(s.far[1], 1)),
+                    _mm_min_ps(dist(s.far[2], 2), _mm_set1_ps(tmax)),
+                );
+                _mm_storeu_ps(tnear[lane..].as_mut_ptr(), near);
+                mask |= (_mm_movemask_ps(_mm_cmple_ps(near, far)) as u32) << lane;
+            }
+        }
+        (mask, tnear)
+    }
+}
+
+/// The AVX2 node test: all eight children at once. Only used inside `#[target_feature(enable =
+/// "avx2")]` functions, which [`WideBvh`] calls only where the CPU has AVX2.
+#[cfg(target_arch = "x86_64")]
+pub(super) struct Avx2;
+
+#[cfg(target_arch = "x86_64")]
+impl NodeTest for Avx2 {
+    #[inline(always)]
+    fn enter(s: &SlabRay, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
+        use std::arch::x86_64::*;
+        let p = &node.planes;
+        let mut tnear = [0.0f32; WIDTH];
+        // SAFETY: `Avx2` is only used by `closest_avx2` / `any_avx2`, which run only where
+        // `Kernel::best` detected AVX2, and into which this function is inlined (so are the
+        // intrinsics: a separate `#[target_feature]` function was not inlined and cost 15 %).
+        // `Node` is 64-byte aligned and each plane row is 32 bytes, so every row suits an
+        // aligned 32-byte load; `tnear` takes an unaligned store.
+        let mask = unsafe {
+            let dist = |row: usize, axis: usize| {
+                _mm256_mul_ps(
+                    _mm256_sub_ps(
+                        _mm256_load_ps(p[row].as_ptr()),
+                        _mm256_set1_ps(s.origin[axis]),
+                    ),
+                    _mm256_set1_ps(s.inv_dir[axis]),
+                )
+            };
+            let near = _mm256_max_ps(
+                _mm256_max_ps(dist(s.near[0], 0), dist(s.near[1], 1)),
+                _mm256_max_ps(dist(s.near[2], 2), _mm256_set1_ps(s.tmin)),
+            );
+            let far = _mm256_min_ps(
+                _mm256_min_ps(dist(s.far[0], 0), dist(s.far[1], 1)),
+                _mm256_min_ps(dist(s.far[2], 2), _mm256_set1_ps(tmax)),
+            );
+            _mm256_storeu_ps(tnear.as_mut_ptr(), near);
+            _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32
+        };
+        (mask, tnear)
+    }
+}
+
+/// Runs the AVX2 node test where the CPU has AVX2 (for tests).
+#[cfg(all(test, target_arch = "x86_64"))]
+#[target_feature(enable = "avx2")]
+fn enter_avx2(s: &SlabRay, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
+    Avx2::enter(s, node, tmax)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use obvhs::BvhBuildParams;
-    use obvhs::aabb::Aabb;
-    use obvhs::bvh2::builder::build_bvh2;
 
-    /// Every primitive sits in exactly one leaf, inside its leaf's box.
+    /// A node with eight random boxes, some slots empty.
+    fn node(seed: u32) -> Node {
+        let mut n = Node::EMPTY;
+        let mut x = seed.wrapping_mul(2_654_435_761);
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            (x >> 8) as f32 / (1 << 24) as f32 * 4.0 - 2.0
+        };
+        for slot in 0..WIDTH {
+            if (seed as usize + slot).is_multiple_of(5) {
+                continue;
+            }
+            let (a, b) = (
+                Vec3A::new(next(), next(), next()),
+                Vec3A::new(next(), next(), next()),
+            );
+            n.set_box(slot, a.min(b), a.max(b));
+        }
+        n
+    }
+
+    /// Every kernel the CPU runs returns the same mask and the same entry distances.
     #[test]
-    fn collapse_keeps_every_primitive_once() {
-        let boxes: Vec<Aabb> = (0..1000)
-            .map(|i| {
-                let c = Vec3A::new((i % 10) as f32, ((i / 10) % 10) as f32, (i / 100) as f32);
-                Aabb::new(c, c + Vec3A::splat(0.5))
-            })
-            .collect();
-        let b2 = build_bvh2(
-            &boxes,
-            BvhBuildParams::medium_build(),
-            &mut Default::default(),
-        );
-        let w = WideBvh::from_bvh2(&b2);
-        let mut seen = vec![0; boxes.len()];
-        for n in &w.nodes {
-            for c in 0..4 {
-                for i in n.index[c]..n.index[c] + n.count[c] {
-                    let b = &boxes[w.order[i as usize] as usize];
-                    seen[w.order[i as usize] as usize] += 1;
-                    for a in 0..3 {
-                        assert!(
-                            n.planes[2 * a][c] <= b.min[a] && b.max[a] <= n.planes[2 * a + 1][c]
-                        );
-                    }
+    fn kernels_agree_bit_for_bit() {
+        for k in 0..2000u32 {
+            let n = node(k);
+            let f = k as f32;
+            let ray = Ray::new(
+                Vec3A::new(
+                    (f * 0.3).sin() * 3.0,
+                    (f * 0.7).cos() * 3.0,
+                    (f * 1.1).sin(),
+                ),
+                Vec3A::new((f * 0.37).sin(), (f * 0.91).cos(), (f * 0.13).sin() + 0.01),
+            );
+            let s = SlabRay::new(&ray);
+            let tmax = if k.is_multiple_of(3) {
+                2.0
+            } else {
+                f32::INFINITY
+            };
+            let (m, t) = Scalar::enter(&s, &n, tmax);
+            let keep = |t: [f32; WIDTH]| (0..WIDTH).map(|c| (m >> c) & 1 == 1).zip(t);
+            let hits = |t: [f32; WIDTH]| {
+                keep(t)
+                    .filter(|x| x.0)
+                    .map(|x| x.1.to_bits())
+                    .collect::<Vec<_>>()
+            };
+            #[cfg(target_arch = "x86_64")]
+            {
+                let (m2, t2) = Sse2::enter(&s, &n, tmax);
+                assert_eq!((m, hits(t)), (m2, hits(t2)), "sse2, node {k}");
+                if Kernel::best() == Kernel::Avx2 {
+                    // SAFETY: AVX2 was detected just above.
+                    let (m3, t3) = unsafe { enter_avx2(&s, &n, tmax) };
+                    assert_eq!((m, hits(t)), (m3, hits(t3)), "avx2, node {k}");
                 }
             }
         }
-        assert!(seen.iter().all(|&s| s == 1));
-        assert!(w.stack_len <= STACK);
     }
 }

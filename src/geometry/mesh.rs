@@ -5,9 +5,10 @@
 //! placed ten times is stored once. Vertex attributes are indexed by one index
 //! per corner (loaders unify `v/vt/vn` triples into single vertices).
 
-use crate::accel::{Bounds, Bvh};
+use crate::accel::{Bounds, Bvh, Kernel};
 use crate::geometry::Ray;
-use crate::geometry::triangle::{self, RayShear, TriangleHit};
+use crate::geometry::tri4::Tri4;
+use crate::geometry::triangle::{RayShear, TriangleHit};
 use glam::{Vec2, Vec3, Vec3A};
 use std::path::PathBuf;
 
@@ -70,9 +71,9 @@ pub struct MeshGeom {
     pub materials: Vec<u32>,
     pub bvh: Bvh,
     pub bounds: Bounds,
-    /// The corners of each triangle, in BVH order: what traversal reads, one contiguous record
-    /// per triangle instead of an index and three scattered positions.
-    corners: Vec<[Vec3A; 3]>,
+    /// The corners of each BVH leaf's triangles, by leaf id ([`Bvh::leaves`]): what traversal
+    /// reads, one contiguous record tested at once instead of indices and scattered positions.
+    blocks: Vec<Tri4>,
     /// Area-weighted vertex normals, computed on first use (Perlin noise needs smooth normals).
     smooth: std::sync::OnceLock<Vec<Vec3A>>,
 }
@@ -107,9 +108,17 @@ impl MeshGeom {
                 .map(|&i| first_material + data.triangle_materials[i as usize])
                 .collect()
         };
-        let corners = triangles
+        let blocks = bvh
+            .leaves()
             .iter()
-            .map(|t| t.map(|i| positions[i as usize]))
+            .map(|l| {
+                let mut corners = [[Vec3A::ZERO; 3]; 4];
+                let range = l.first as usize..(l.first + l.count) as usize;
+                for (c, t) in corners.iter_mut().zip(&triangles[range]) {
+                    *c = t.map(|i| positions[i as usize]);
+                }
+                Tri4::new(&corners[..l.count as usize])
+            })
             .collect();
         let bounds = boxes.iter().fold(Bounds::EMPTY, |a, &b| a.union(b));
         MeshGeom {
@@ -120,7 +129,7 @@ impl MeshGeom {
             materials,
             bvh,
             bounds,
-            corners,
+            blocks,
             smooth: std::sync::OnceLock::new(),
         }
     }
@@ -143,42 +152,52 @@ impl MeshGeom {
 
     /// Returns the bytes of triangle data kept for tracing only, beyond the shared attributes.
     pub fn tracer_bytes(&self) -> usize {
-        std::mem::size_of_val(self.corners.as_slice())
+        std::mem::size_of_val(self.blocks.as_slice())
     }
 
     /// Returns the closest triangle hit by an object-space ray and its barycentrics.
     pub fn intersect(&self, ray: &Ray) -> Option<(u32, TriangleHit)> {
         let shear = RayShear::new(ray);
+        let scalar = self.bvh.kernel() == Kernel::Scalar;
         let mut best = None;
-        self.bvh.closest(
+        self.bvh.closest_leaf(
             ray,
             #[inline(always)]
-            |r, i| {
-                let [a, b, c] = self.corners[i];
-                match triangle::intersect(&shear, a, b, c, r.tmin, r.tmax) {
-                    Some(h) => {
-                        best = Some((i as u32, h));
+            |r, leaf| {
+                let block = &self.blocks[leaf as usize];
+                let hit = if scalar {
+                    block.closest_scalar(&shear, r.tmin, r.tmax)
+                } else {
+                    block.closest(&shear, r.tmin, r.tmax)
+                };
+                match hit {
+                    Some((lane, h)) => {
+                        best = Some((leaf, lane, h));
                         h.t
                     }
                     None => f32::INFINITY,
                 }
             },
         );
-        best
+        best.map(|(leaf, lane, h)| (self.bvh.leaves()[leaf as usize].first + lane, h))
     }
 
     /// Returns the `t` of some triangle on the ray within `(tmin, tmax)` (any hit, not the closest).
     pub fn any_hit(&self, ray: &Ray) -> Option<f32> {
         let shear = RayShear::new(ray);
+        let scalar = self.bvh.kernel() == Kernel::Scalar;
         let mut found = None;
-        self.bvh.any(
+        self.bvh.any_leaf(
             ray,
             #[inline(always)]
-            |r, i| {
-                let [a, b, c] = self.corners[i];
-                let t = triangle::intersect(&shear, a, b, c, r.tmin, r.tmax).map(|h| h.t);
-                found = found.or(t);
-                t.unwrap_or(f32::INFINITY)
+            |r, leaf| {
+                let block = &self.blocks[leaf as usize];
+                found = if scalar {
+                    block.any_scalar(&shear, r.tmin, r.tmax)
+                } else {
+                    block.any(&shear, r.tmin, r.tmax)
+                };
+                found.is_some()
             },
         );
         found

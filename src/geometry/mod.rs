@@ -11,6 +11,7 @@ pub mod cylinder;
 pub mod mesh;
 pub mod ray;
 pub mod sphere;
+pub mod tri4;
 pub mod triangle;
 pub mod uv;
 pub mod water;

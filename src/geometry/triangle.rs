@@ -18,10 +18,10 @@ use glam::Vec3A;
 #[derive(Clone, Copy, Debug)]
 pub struct RayShear {
     kz: u8,
-    sx: f32,
-    sy: f32,
-    sz: f32,
-    origin: Vec3A,
+    pub(super) sx: f32,
+    pub(super) sy: f32,
+    pub(super) sz: f32,
+    pub(super) origin: Vec3A,
 }
 
 impl RayShear {
@@ -36,6 +36,18 @@ impl RayShear {
             sy: d[ky] / d[kz],
             sz: 1.0 / d[kz],
             origin: ray.origin,
+        }
+    }
+}
+
+impl RayShear {
+    /// Returns the ray-aligned axes `[kx, ky, kz]`: `kz` is the direction's dominant axis.
+    #[inline(always)]
+    pub(super) fn axes(&self) -> [usize; 3] {
+        match self.kz {
+            0 => [1, 2, 0],
+            1 => [2, 0, 1],
+            _ => [0, 1, 2],
         }
     }
 }

@@ -1,8 +1,11 @@
 //! Traversal benchmark against the Embree reference harness (`../shared/bench/README.md`).
 //!
 //! ```text
-//! bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] MESH RAYS [RAYS...]
+//! bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--kernel K] MESH RAYS [RAYS...]
 //! ```
+//!
+//! `--kernel scalar|sse2|avx2` picks the BVH node test (default: the fastest the CPU runs); the
+//! report's `quality` names the build configuration and the kernel.
 //!
 //! Reads the harness's `.mesh` and `.rays` files, builds the mesh's BVH exactly as the renderer
 //! does ([`MeshGeom::new`] from a [`MeshData`]) and traces every ray set in file order: closest
@@ -18,7 +21,7 @@
 //! `(tmin, tmax)`, the files' rays have `tmin = 0`, so only a ray starting exactly on the surface
 //! could differ from Embree's closed interval.
 
-use caustic::accel::BUILD_CONFIG;
+use caustic::accel::{BUILD_CONFIG, Kernel};
 use caustic::geometry::Ray;
 use caustic::geometry::mesh::{MeshData, MeshGeom};
 use caustic_tools::benchfile::{RayRecord, RaySet, read_mesh, read_rays};
@@ -39,12 +42,13 @@ struct Options {
     build_reps: usize,
     verify: Option<usize>,
     mt: usize,
+    kernel: Kernel,
     mesh: PathBuf,
     rays: Vec<PathBuf>,
 }
 
-const USAGE: &str =
-    "usage: bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] MESH RAYS [RAYS...]";
+const USAGE: &str = "usage: bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] \
+                     [--kernel scalar|sse2|avx2] MESH RAYS [RAYS...]";
 
 fn parse_args() -> Result<Options, String> {
     let mut o = Options {
@@ -52,6 +56,7 @@ fn parse_args() -> Result<Options, String> {
         build_reps: 3,
         verify: None,
         mt: 2,
+        kernel: Kernel::best(),
         mesh: PathBuf::new(),
         rays: Vec::new(),
     };
@@ -68,6 +73,14 @@ fn parse_args() -> Result<Options, String> {
             "--build-reps" => o.build_reps = num("--build-reps")?.max(1),
             "--verify" => o.verify = Some(num("--verify")?),
             "--mt" => o.mt = num("--mt")?,
+            "--kernel" => {
+                o.kernel = match args.next().as_deref() {
+                    Some("scalar") => Kernel::Scalar,
+                    Some("sse2") => Kernel::Sse2,
+                    Some("avx2") => Kernel::Avx2,
+                    k => return Err(format!("--kernel wants scalar, sse2 or avx2, got {k:?}")),
+                }
+            }
             "-h" | "--help" => return Err(USAGE.into()),
             s if s.starts_with("--") => return Err(format!("unknown option {s}\n{USAGE}")),
             _ => pos.push(PathBuf::from(a)),
@@ -117,11 +130,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ftz as u8,
         rayon::current_num_threads()
     );
-    let geom = build(&data, &mesh, o.build_reps)?;
+    let mut geom = build(&data, &mesh, &quality(o.kernel), o.build_reps)?;
+    let kernel = geom.bvh.set_kernel(o.kernel);
+    let quality = quality(kernel);
     let ctx = Ctx {
         geom: &geom,
         order: geom.bvh.order(),
         mesh: &mesh,
+        quality: &quality,
         tris,
         reps: o.reps,
     };
@@ -148,9 +164,19 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
+/// Returns the report's `quality`: the build configuration and the node-test kernel.
+fn quality(kernel: Kernel) -> String {
+    format!("{BUILD_CONFIG}-{}", format!("{kernel:?}").to_lowercase())
+}
+
 /// Times [`MeshGeom::new`] on one thread (process CPU time) and on all threads (wall time),
 /// prints a `BUILD` line for each and returns the last BVH built.
-fn build(data: &MeshData, mesh: &str, reps: usize) -> Result<MeshGeom, Box<dyn std::error::Error>> {
+fn build(
+    data: &MeshData,
+    mesh: &str,
+    quality: &str,
+    reps: usize,
+) -> Result<MeshGeom, Box<dyn std::error::Error>> {
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let mut geom = None;
     for (threads, pool) in [(1, Some(&one)), (0, None)] {
@@ -172,7 +198,7 @@ fn build(data: &MeshData, mesh: &str, reps: usize) -> Result<MeshGeom, Box<dyn s
         let (accel, shared) = sizes(g);
         let tris = data.triangles.len().max(1) as f64;
         println!(
-            "BUILD engine=caustic mesh={mesh} tris={} quality={BUILD_CONFIG} threads={threads} reps={} \
+            "BUILD engine=caustic mesh={mesh} tris={} quality={quality} threads={threads} reps={} \
              build_ms_min={:.2} build_ms_med={:.2} build_cpu_ms_min={:.2} accel_MB={:.2} \
              accel_B_per_tri={:.1} mesh_MB={:.2} mesh_B_per_tri={:.1} other_load={load:.2}",
             data.triangles.len(),
@@ -202,6 +228,7 @@ struct Ctx<'a> {
     geom: &'a MeshGeom,
     order: &'a [u32],
     mesh: &'a str,
+    quality: &'a str,
     tris: usize,
     reps: usize,
 }
@@ -301,10 +328,11 @@ impl Ctx<'_> {
             };
             let (best, med) = (clock::min(&wall), clock::median(&wall));
             let mut line = format!(
-                "TRACE engine=caustic mesh={} tris={} quality={BUILD_CONFIG} rays={} kind={} mode={mode} \
+                "TRACE engine=caustic mesh={} tris={} quality={} rays={} kind={} mode={mode} \
                  nrays={} reps={} med_s={med:.6} best_s={best:.6} mrays_med={:.3} mrays_best={:.3} ",
                 self.mesh,
                 self.tris,
+                self.quality,
                 base_name(&set.path),
                 set.kind.name(),
                 set.rays.len(),
@@ -469,9 +497,10 @@ fn verify(ctx: &Ctx, data: &MeshData, set: &RaySet, k: usize) {
         }
     }
     println!(
-        "VERIFY engine=caustic mesh={} rays={} quality={BUILD_CONFIG} checked={k} hit_mismatch={mismatch} \
+        "VERIFY engine=caustic mesh={} rays={} quality={} checked={k} hit_mismatch={mismatch} \
          prim_diff={prim_diff} max_rel_t_err={max_rel:.3e} must_hit={n_must} leaks={leaks} bad_t={bad_t}",
         ctx.mesh,
         base_name(&set.path),
+        ctx.quality,
     );
 }

@@ -9,8 +9,11 @@
 //! across their plane, and the median split keeps the depth at `log2(n / LEAF_SIZE)` however many
 //! photons share a coordinate.
 //!
-//! Queries descend the near side first and visit the far side only if the box of the far cell
-//! (tracked per axis, Arya & Mount 1993) is within the current bound. The bound test is `d2 <=
+//! A k-nearest query first scans the whole subtree of 2k to 4k photons around the query point (a
+//! contiguous index range) and keeps its k nearest, which gives a tight bound for one linear scan
+//! and one selection. Queries then descend the near side first, skipping that subtree, and visit
+//! the far side only if the box of the far cell (tracked per axis, Arya & Mount 1993) is within
+//! the current bound. The bound test is `d2 <=
 //! bound`, where `bound` is the query radius, or for a full k-nearest heap the largest float below
 //! its current maximum, so ties at the query radius are found and ties with the k-th distance are
 //! skipped without changing the distances returned. Cell distances are computed from the same
@@ -19,7 +22,7 @@
 
 use super::store::{self, AXIS_NONE, PowerCodec};
 use super::{Photon, PhotonId, PhotonMap};
-use glam::Vec3A;
+use glam::{BVec3A, Vec3A};
 
 /// Largest index range stored as a leaf bucket (searched linearly, no split).
 pub const LEAF_SIZE: usize = 8;
@@ -41,16 +44,26 @@ fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
     dx * dx + dy * dy + dz * dz
 }
 
+/// Returns `v` with lane `a` (0, 1 or 2) replaced by `x`, without a round trip through memory.
+#[inline(always)]
+fn with_lane(v: Vec3A, a: usize, x: f32) -> Vec3A {
+    const LANES: [BVec3A; 3] = [
+        BVec3A::new(true, false, false),
+        BVec3A::new(false, true, false),
+        BVec3A::new(false, false, true),
+    ];
+    Vec3A::select(LANES[a], Vec3A::splat(x), v)
+}
+
 /// Returns the axis along which the positions spread furthest (the lowest axis on ties).
 fn widest_axis(points: impl Iterator<Item = [f32; 3]>) -> u32 {
-    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
     for p in points {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
+        let p = Vec3A::from_array(p);
+        lo = lo.min(p);
+        hi = hi.max(p);
     }
-    let ext = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+    let ext = (hi - lo).to_array();
     let mut best = 0;
     for a in 1..3 {
         if ext[a] > ext[best] {
@@ -135,28 +148,58 @@ impl PhotonMap {
         if k == 0 || self.is_empty() || max_d2.is_nan() || max_d2 < 0.0 {
             return 0.0;
         }
-        out.reserve(k.min(self.len()));
-        let mut heap = Heap {
-            items: out,
-            k,
-            bound: max_d2,
-        };
-        self.knn_in(0, self.len(), p.to_array(), [0.0; 3], &mut heap);
+        let q = p.to_array();
+        // Seed: every photon of a small subtree around q gives a tight first bound cheaply (one
+        // linear scan and one selection instead of a heap insertion per photon).
+        let seed = self.seed_range(q, k);
+        out.reserve(k.max(seed.1 - seed.0));
+        for (i, &x) in self.pos[seed.0..seed.1].iter().enumerate() {
+            let d2 = dist2(x, q);
+            if d2 <= max_d2 {
+                out.push((d2, PhotonId((seed.0 + i) as u32)));
+            }
+        }
+        if out.len() > k {
+            out.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+            out.truncate(k);
+        }
+        let mut heap = Heap::new(out, k, max_d2);
+        self.knn_in(0, self.len(), q, Vec3A::ZERO, seed, &mut heap);
         out.first().map_or(0.0, |e| e.0)
     }
 
-    /// Adds the photons of subtree `lo..hi` that beat the heap's bound; `off` is the per-axis
-    /// offset from `q` to the subtree's cell.
+    /// Returns the subtree holding `q`'s leaf that has between `2k` and `4k` photons (or the
+    /// leaf, or the whole map if smaller).
+    fn seed_range(&self, q: [f32; 3], k: usize) -> (usize, usize) {
+        let (mut lo, mut hi) = (0, self.len());
+        while hi - lo > LEAF_SIZE && (hi - lo) / 2 >= 2 * k {
+            let m = lo + (hi - lo) / 2;
+            let a = store::code_axis(self.code[m]) as usize;
+            (lo, hi) = if q[a] <= self.pos[m][a] {
+                (lo, m)
+            } else {
+                (m + 1, hi)
+            };
+        }
+        (lo, hi)
+    }
+
+    /// Adds the photons of subtree `lo..hi` that beat the heap's bound, except those of the
+    /// already searched subtree `skip`; `off` is the per-axis offset from `q` to the subtree's cell.
     fn knn_in(
         &self,
         mut lo: usize,
         mut hi: usize,
         q: [f32; 3],
-        mut off: [f32; 3],
+        mut off: Vec3A,
+        skip: (usize, usize),
         heap: &mut Heap,
     ) {
         let pos = &self.pos[..];
         loop {
+            if (lo, hi) == skip {
+                return;
+            }
             let n = hi - lo;
             if n <= LEAF_SIZE {
                 for (i, &x) in pos[lo..hi].iter().enumerate() {
@@ -176,13 +219,13 @@ impl PhotonMap {
             } else {
                 ((m + 1, hi), (lo, m))
             };
-            self.knn_in(near.0, near.1, q, off, heap);
+            self.knn_in(near.0, near.1, q, off, skip, heap);
             let d2 = dist2(split, q);
             if d2 <= heap.bound {
                 heap.push(d2, m as u32);
             }
-            off[a] = d;
-            if off[0] * off[0] + off[1] * off[1] + off[2] * off[2] > heap.bound {
+            off = with_lane(off, a, d);
+            if off.length_squared() > heap.bound {
                 return;
             }
             (lo, hi) = far;
@@ -197,7 +240,7 @@ impl PhotonMap {
         if self.is_empty() || r2.is_nan() || r2 < 0.0 {
             return;
         }
-        self.within_in(0, self.len(), p.to_array(), [0.0; 3], r2, out);
+        self.within_in(0, self.len(), p.to_array(), Vec3A::ZERO, r2, out);
     }
 
     /// Adds the photons of subtree `lo..hi` within `r2` of `q`; `off` as in [`Self::knn_in`].
@@ -206,7 +249,7 @@ impl PhotonMap {
         mut lo: usize,
         mut hi: usize,
         q: [f32; 3],
-        mut off: [f32; 3],
+        mut off: Vec3A,
         r2: f32,
         out: &mut Vec<(f32, PhotonId)>,
     ) {
@@ -236,8 +279,8 @@ impl PhotonMap {
             if d2 <= r2 {
                 out.push((d2, PhotonId(m as u32)));
             }
-            off[a] = d;
-            if off[0] * off[0] + off[1] * off[1] + off[2] * off[2] > r2 {
+            off = with_lane(off, a, d);
+            if off.length_squared() > r2 {
                 return;
             }
             (lo, hi) = far;
@@ -317,7 +360,21 @@ struct Heap<'a> {
     bound: f32,
 }
 
-impl Heap<'_> {
+impl<'a> Heap<'a> {
+    /// Returns a heap of the at most `k` photons already in `items`, accepting up to `max_d2`.
+    fn new(items: &'a mut Vec<(f32, PhotonId)>, k: usize, max_d2: f32) -> Heap<'a> {
+        debug_assert!(items.len() <= k && items.iter().all(|e| e.0 <= max_d2));
+        for i in (0..items.len() / 2).rev() {
+            let x = items[i];
+            sift_down(items, i, x);
+        }
+        let bound = match items.first() {
+            Some(top) if items.len() == k => top.0.next_down(),
+            _ => max_d2,
+        };
+        Heap { items, k, bound }
+    }
+
     /// Adds photon `id` at squared distance `d2 <= self.bound`, evicting the farthest if full.
     #[inline(always)]
     fn push(&mut self, d2: f32, id: u32) {
@@ -339,26 +396,31 @@ impl Heap<'_> {
                 return;
             }
         } else {
-            let n = h.len();
-            let mut i = 0;
-            loop {
-                let mut c = 2 * i + 1;
-                if c >= n {
-                    break;
-                }
-                if c + 1 < n && h[c + 1].0 > h[c].0 {
-                    c += 1;
-                }
-                if h[c].0 <= d2 {
-                    break;
-                }
-                h[i] = h[c];
-                i = c;
-            }
-            h[i] = x;
+            sift_down(h, 0, x);
         }
         self.bound = h[0].0.next_down();
     }
+}
+
+/// Puts `x` at `i` of max-heap `h` and moves it down until both its children are not larger.
+#[inline(always)]
+fn sift_down(h: &mut [(f32, PhotonId)], mut i: usize, x: (f32, PhotonId)) {
+    let n = h.len();
+    loop {
+        let mut c = 2 * i + 1;
+        if c >= n {
+            break;
+        }
+        if c + 1 < n && h[c + 1].0 > h[c].0 {
+            c += 1;
+        }
+        if h[c].0 <= x.0 {
+            break;
+        }
+        h[i] = h[c];
+        i = c;
+    }
+    h[i] = x;
 }
 
 #[cfg(test)]
@@ -388,11 +450,7 @@ mod tests {
     #[test]
     fn heap_keeps_the_k_smallest_and_its_bound() {
         let mut v = Vec::new();
-        let mut h = Heap {
-            items: &mut v,
-            k: 3,
-            bound: 10.0,
-        };
+        let mut h = Heap::new(&mut v, 3, 10.0);
         for (i, d) in [5.0, 1.0, 7.0, 3.0, 3.0, 0.5].into_iter().enumerate() {
             if d <= h.bound {
                 h.push(d, i as u32);

@@ -55,8 +55,8 @@ fn oct_project(v: Vec3A) -> (f32, f32) {
     }
 }
 
-/// Returns the unit vector of grid point `(i, j)` of the octahedral map.
-fn oct_decode(i: u32, j: u32) -> Vec3A {
+/// Returns a (not unit) vector along grid point `(i, j)` of the octahedral map.
+fn oct_point(i: u32, j: u32) -> Vec3A {
     let half = (OCT_N - 1) as i32;
     let u = (2 * i as i32 - half) as f32 / half as f32;
     let v = (2 * j as i32 - half) as f32 / half as f32;
@@ -69,7 +69,7 @@ fn oct_decode(i: u32, j: u32) -> Vec3A {
     } else {
         (u, v)
     };
-    Vec3A::new(x, y, z).normalize()
+    Vec3A::new(x, y, z)
 }
 
 /// Returns the grid index (`i * OCT_N + j`) of the direction closest to `v` by angle.
@@ -77,13 +77,15 @@ fn oct_encode(v: Vec3A) -> u32 {
     let v = v.try_normalize().unwrap_or(Vec3A::Z);
     let (u, w) = oct_project(v);
     let scale = (OCT_N - 1) as f32 * 0.5;
-    let (fu, fw) = ((u + 1.0) * scale, (w + 1.0) * scale);
     let top = OCT_N - 1;
-    let (i0, j0) = ((fu.floor() as u32).min(top), (fw.floor() as u32).min(top));
+    // The projection is in [-1, 1], so truncation is the floor.
+    let i0 = (((u + 1.0) * scale) as u32).min(top);
+    let j0 = (((w + 1.0) * scale) as u32).min(top);
     let mut best = (f32::NEG_INFINITY, 0);
     for i in [i0, (i0 + 1).min(top)] {
         for j in [j0, (j0 + 1).min(top)] {
-            let cos = oct_decode(i, j).dot(v);
+            let c = oct_point(i, j);
+            let cos = c.dot(v) / c.length();
             if cos > best.0 {
                 best = (cos, i * OCT_N + j);
             }
@@ -94,7 +96,7 @@ fn oct_encode(v: Vec3A) -> u32 {
 
 /// Returns the unit vector of a grid index made by [`oct_encode`].
 fn oct_decode_index(index: u32) -> Vec3A {
-    oct_decode(index / OCT_N, index % OCT_N)
+    oct_point(index / OCT_N, index % OCT_N).normalize()
 }
 
 /// Returns the code word of a photon's incident direction, surface normal and `direct` flag,
@@ -173,7 +175,7 @@ pub(super) fn power_exponent(p: Vec3A) -> i32 {
     }
     let e = exponent_above(m);
     // A largest channel that rounds up to 512 quanta needs the next exponent.
-    if (m / pow2(e - 9)).round() >= 512.0 {
+    if m / pow2(e - 9) + 0.5 >= 512.0 {
         e + 1
     } else {
         e
@@ -197,7 +199,8 @@ impl PowerCodec {
         let c = sanitise_power(p);
         let e = power_exponent(p).clamp(self.base, self.base + 31);
         let q = pow2(e - 9);
-        let m = c.map(|x| ((x / q).round() as u32).min(511));
+        // Rounds half up; channels are not negative.
+        let m = c.map(|x| ((x / q + 0.5) as u32).min(511));
         m[0] | (m[1] << 9) | (m[2] << 18) | (((e - self.base) as u32) << 27)
     }
 

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{a4_assets, caustic, out_dir};
+use common::{a4_assets, caustic, out_dir, run_ok};
 use std::path::Path;
 
 /// Every A4 scene, with the image size its `gr.render` call asks for.
@@ -34,22 +34,12 @@ fn check_image(path: &Path, w: u32, h: u32) {
     );
 }
 
-fn render_ok(cmd: &mut std::process::Command) {
-    let out = cmd.output().unwrap();
-    assert!(
-        out.status.success(),
-        "caustic failed: {}\n{}",
-        String::from_utf8_lossy(&out.stderr),
-        String::from_utf8_lossy(&out.stdout)
-    );
-}
-
 #[test]
 fn every_a4_scene_renders_from_its_own_folder() {
     let out = out_dir("a4-from-folder");
     for (name, w, h) in SCENES {
         let png = out.join(format!("{name}.png"));
-        render_ok(
+        run_ok(
             caustic()
                 .current_dir(a4_assets())
                 .args(["render", &format!("{name}.lua"), "-o"])
@@ -66,7 +56,7 @@ fn every_a4_scene_renders_by_path_from_the_repository_root() {
         let png = out.join(format!("{name}.png"));
         let script = Path::new("../shared/corpus/cs488/shraacha__cs488/A4/Assets")
             .join(format!("{name}.lua"));
-        render_ok(
+        run_ok(
             caustic()
                 .current_dir(env!("CARGO_MANIFEST_DIR"))
                 .arg("render")
@@ -86,7 +76,7 @@ fn without_o_the_image_lands_in_the_working_directory_and_meshes_beside_the_scri
     for f in ["nonhier.lua", "smstdodeca.obj"] {
         std::fs::copy(a4_assets().join(f), scenes.join(f)).unwrap();
     }
-    render_ok(
+    run_ok(
         caustic()
             .current_dir(&out)
             .args(["render", "scenes/nonhier.lua"]),
@@ -99,7 +89,7 @@ fn without_o_the_image_lands_in_the_working_directory_and_meshes_beside_the_scri
 fn scale_option_resizes_the_image() {
     let out = out_dir("a4-scale");
     let png = out.join("n.png");
-    render_ok(
+    run_ok(
         caustic()
             .current_dir(a4_assets())
             .args(["render", "nonhier.lua", "--scale", "0.25", "-o"])
@@ -129,15 +119,10 @@ fn incompatible_dialect_fails_with_a_located_error() {
 
 #[test]
 fn info_summarises_nodes_meshes_and_render_calls() {
-    let out = caustic()
-        .current_dir(a4_assets())
-        .args(["info", "macho-cows.lua"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = run_ok(
+        caustic()
+            .current_dir(a4_assets())
+            .args(["info", "macho-cows.lua"]),
     );
     let text = String::from_utf8_lossy(&out.stdout);
     // 3 cow instances of one 5,804-triangle mesh, plus the plane and the buckyball.

@@ -6,7 +6,7 @@ mod common;
 use caustic::render::gi::{Gi, GiSettings, Indirect};
 use caustic::render::plan::{GiMode, plan};
 use caustic::scene::build::build_scene;
-use common::{caustic, out_dir, run_lua};
+use common::{caustic, out_dir, run_lua, run_ok};
 use glam::Vec3A;
 use std::path::Path;
 
@@ -175,28 +175,23 @@ fn photon_renders_are_identical_for_one_and_two_threads() {
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
     let run = |threads: &str, name: &str| {
         let png = dir.join(name);
-        let out = caustic()
-            .arg("render")
-            .arg(&scene)
-            .args([
-                "--scale",
-                "0.1",
-                "--photons",
-                "20000",
-                "--gather-rays",
-                "8",
-                "-q",
-                "--threads",
-                threads,
-                "-o",
-            ])
-            .arg(&png)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        run_ok(
+            caustic()
+                .arg("render")
+                .arg(&scene)
+                .args([
+                    "--scale",
+                    "0.1",
+                    "--photons",
+                    "20000",
+                    "--gather-rays",
+                    "8",
+                    "-q",
+                    "--threads",
+                    threads,
+                    "-o",
+                ])
+                .arg(&png),
         );
         std::fs::read(png).unwrap()
     };
@@ -255,17 +250,12 @@ fn photon_viewer_draws_both_maps() {
     let dir = out_dir("photon-viewer");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
     let png = dir.join("p.png");
-    let out = caustic()
-        .arg("photons")
-        .arg(&scene)
-        .args(["--scale", "0.25", "--photons", "20000", "-o"])
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = run_ok(
+        caustic()
+            .arg("photons")
+            .arg(&scene)
+            .args(["--scale", "0.25", "--photons", "20000", "-o"])
+            .arg(&png),
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("global") && err.contains("caustic"), "{err}");

@@ -7,7 +7,7 @@ use caustic::camera::Camera;
 use caustic::render::{Film, RenderOptions, Sampling, Window, render_with};
 use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
-use common::{a4_assets, caustic, out_dir, run_lua};
+use common::{a4_assets, caustic, out_dir, run_lua, run_ok};
 
 /// A large flat floor and a ball against the sky: mostly flat areas, a few long edges.
 const FLAT_SCENE: &str = "
@@ -155,17 +155,12 @@ fn adaptive_sampling_beats_uniform_supersampling_at_equal_error() {
 
 fn render_cli(dir: &std::path::Path, name: &str, extra: &[&str]) -> Vec<u8> {
     let png = dir.join(name);
-    let out = caustic()
-        .current_dir(a4_assets())
-        .args(["render", "nonhier.lua", "--scale", "0.5", "-q", "-o"])
-        .arg(&png)
-        .args(extra)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    run_ok(
+        caustic()
+            .current_dir(a4_assets())
+            .args(["render", "nonhier.lua", "--scale", "0.5", "-q", "-o"])
+            .arg(&png)
+            .args(extra),
     );
     std::fs::read(png).unwrap()
 }
@@ -200,16 +195,14 @@ fn stitched_tiles_equal_the_full_render_byte_for_byte() {
     for (name, crop) in tiles {
         render_cli(&dir, name, &["--spp", "2", "--crop", crop]);
     }
-    let out = caustic()
-        .current_dir(&dir)
-        .args(["stitch", "c.png", "a.png", "b.png", "-o", "stitched.png"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_ok(caustic().current_dir(&dir).args([
+        "stitch",
+        "c.png",
+        "a.png",
+        "b.png",
+        "-o",
+        "stitched.png",
+    ]));
     assert!(
         std::fs::read(dir.join("stitched.png")).unwrap() == full,
         "stitched image differs from the full render"

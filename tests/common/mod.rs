@@ -224,3 +224,15 @@ pub fn assert_same_mesh(
         "triangle materials"
     );
 }
+
+/// Runs a command, asserting it succeeds (its stderr and stdout in the failure message).
+pub fn run_ok(cmd: &mut Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "command failed: {}\n{}",
+        String::from_utf8_lossy(&out.stderr),
+        String::from_utf8_lossy(&out.stdout)
+    );
+    out
+}

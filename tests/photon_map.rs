@@ -178,6 +178,50 @@ fn within_equals_brute_force_on_every_point_set() {
 }
 
 #[test]
+fn nearest_where_equals_brute_force_on_every_point_set() {
+    for set in SETS {
+        let points = point_set(set);
+        let map = build(photons_at(&points, 3));
+        // A predicate that rejects about two photons in three, so the search must look past them.
+        let keep = |id: PhotonId| map.normal(id).y > 0.3;
+        for q in queries(&points) {
+            for max_d2 in [f32::INFINITY, 0.002, 0.0] {
+                let mut asked = 0;
+                let got = map.nearest_where(q, max_d2, &mut |id| {
+                    asked += 1;
+                    keep(id)
+                });
+                let want = brute(&map, q, max_d2, usize::MAX)
+                    .into_iter()
+                    .find(|&(_, id)| keep(id));
+                assert_eq!(got, want, "{set}: q = {q}, max_d2 = {max_d2}");
+                assert!(asked < map.len() / 4, "{set}: asked {asked} photons");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_map_from_chunks_equals_the_map_of_their_concatenation() {
+    let points = point_set("uniform");
+    let photons = photons_at(&points, 4);
+    let whole = PhotonMap::build(photons.clone());
+    let mut chunks = Vec::new();
+    let mut rest = &photons[..];
+    for len in [0, 1, 999, 0, 4096, 7] {
+        let (a, b) = rest.split_at(len.min(rest.len()));
+        chunks.push(a.to_vec());
+        rest = b;
+    }
+    chunks.push(rest.to_vec());
+    let parts = PhotonMap::from_chunks(&chunks);
+    assert_eq!(parts.len(), whole.len());
+    for i in 0..whole.len() as u32 {
+        assert_eq!(parts.get(PhotonId(i)), whole.get(PhotonId(i)), "photon {i}");
+    }
+}
+
+#[test]
 fn a_photon_exactly_on_the_radius_is_found() {
     let points = [
         Vec3A::ZERO,

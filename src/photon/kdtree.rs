@@ -100,29 +100,55 @@ impl PhotonMap {
     ///
     /// Photons with a NaN or infinite position are skipped (a tracer bug: debug builds assert).
     pub fn build(photons: Vec<Photon>) -> PhotonMap {
+        PhotonMap::from_chunks(std::slice::from_ref(&photons))
+    }
+
+    /// Returns the map of the photons of every chunk (the tracer's per-task output), as
+    /// [`PhotonMap::build`] of their concatenation would, without concatenating them first.
+    pub fn from_chunks(chunks: &[Vec<Photon>]) -> PhotonMap {
         use rayon::prelude::*;
+        // starts[c] is the index of chunk c's first photon in the concatenation.
+        let starts: Vec<usize> = chunks
+            .iter()
+            .scan(0, |n, c| {
+                let s = *n;
+                *n += c.len();
+                Some(s)
+            })
+            .collect();
+        let total = chunks.iter().map(Vec::len).sum::<usize>();
+        let photon = |i: usize| {
+            let c = starts.partition_point(|&s| s <= i) - 1;
+            &chunks[c][i - starts[c]]
+        };
         let finite = |p: &&Photon| {
             let ok = p.position.is_finite();
             debug_assert!(ok, "photon at {}", p.position);
             ok
         };
-        let max_exponent = photons
+        let max_exponent = chunks
             .par_iter()
+            .flat_map_iter(|c| c.iter())
             .filter(finite)
             .map(|p| store::power_exponent(p.power))
             .max()
             .unwrap_or(i32::MIN);
         let codec = PowerCodec::new(max_exponent);
-        let mut recs: Vec<Record> = photons
-            .par_iter()
-            .filter(finite)
-            .map(|p| Record {
-                pos: p.position.to_array(),
-                code: store::encode_code(p.dir, p.normal, p.direct),
-                power: codec.encode(p.power),
+        // An indexed parallel map writes the records in place (no serial concatenation).
+        let mut recs: Vec<Record> = (0..total)
+            .into_par_iter()
+            .map(|i| {
+                let p = photon(i);
+                Record {
+                    pos: p.position.to_array(),
+                    code: store::encode_code(p.dir, p.normal, p.direct),
+                    power: codec.encode(p.power),
+                }
             })
             .collect();
-        drop(photons);
+        if chunks.par_iter().any(|c| c.iter().any(|p| !finite(&p))) {
+            recs.retain(|r| r.pos.iter().all(|x| x.is_finite()));
+        }
         recs.truncate(u32::MAX as usize);
         build_subtree(&mut recs);
         let mut map = PhotonMap {
@@ -226,6 +252,70 @@ impl PhotonMap {
             }
             off = with_lane(off, a, d);
             if off.length_squared() > heap.bound {
+                return;
+            }
+            (lo, hi) = far;
+        }
+    }
+
+    /// Returns the nearest photon to `p` with squared distance <= `max_d2` for which `accept`
+    /// holds, and its squared distance; `accept` is asked only of photons nearer than the best
+    /// accepted so far. Among photons at the same distance, the lowest id wins. A NaN query
+    /// point or `max_d2` finds nothing.
+    pub fn nearest_where(
+        &self,
+        p: Vec3A,
+        max_d2: f32,
+        accept: &mut impl FnMut(PhotonId) -> bool,
+    ) -> Option<(f32, PhotonId)> {
+        if self.is_empty() || max_d2.is_nan() || max_d2 < 0.0 {
+            return None;
+        }
+        let mut best = (max_d2, None);
+        self.nearest_in(0, self.len(), p.to_array(), Vec3A::ZERO, &mut best, accept);
+        best.1.map(|id| (best.0, id))
+    }
+
+    /// Improves `best` (squared distance, photon) with the photons of subtree `lo..hi`; `off` as
+    /// in [`Self::knn_in`].
+    fn nearest_in<F: FnMut(PhotonId) -> bool>(
+        &self,
+        mut lo: usize,
+        mut hi: usize,
+        q: [f32; 3],
+        mut off: Vec3A,
+        best: &mut (f32, Option<PhotonId>),
+        accept: &mut F,
+    ) {
+        let pos = &self.pos[..];
+        let consider = |i: usize, best: &mut (f32, Option<PhotonId>), accept: &mut F| {
+            let d2 = dist2(pos[i], q);
+            let id = PhotonId(i as u32);
+            let better = d2 < best.0 || (d2 == best.0 && best.1.is_none_or(|b| id < b));
+            if better && accept(id) {
+                *best = (d2, Some(id));
+            }
+        };
+        loop {
+            let n = hi - lo;
+            if n <= LEAF_SIZE {
+                for i in lo..hi {
+                    consider(i, best, accept);
+                }
+                return;
+            }
+            let m = lo + n / 2;
+            let a = store::code_axis(self.code[m]) as usize;
+            let d = q[a] - pos[m][a];
+            let (near, far) = if d <= 0.0 {
+                ((lo, m), (m + 1, hi))
+            } else {
+                ((m + 1, hi), (lo, m))
+            };
+            self.nearest_in(near.0, near.1, q, off, best, accept);
+            consider(m, best, accept);
+            off = with_lane(off, a, d);
+            if off.length_squared() > best.0 {
                 return;
             }
             (lo, hi) = far;

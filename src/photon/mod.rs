@@ -146,6 +146,22 @@ impl PhotonMap {
         }
     }
 
+    /// Returns the surface normal of photon `id` (as [`PhotonMap::get`] decodes it).
+    ///
+    /// # Panics
+    /// If `id` is not below [`PhotonMap::len`].
+    pub fn normal(&self, id: PhotonId) -> Vec3A {
+        store::decode_normal(self.code[id.0 as usize])
+    }
+
+    /// Returns the power of photon `id` (as [`PhotonMap::get`] decodes it).
+    ///
+    /// # Panics
+    /// If `id` is not below [`PhotonMap::len`].
+    pub fn power(&self, id: PhotonId) -> Vec3A {
+        self.codec.decode(self.power[id.0 as usize])
+    }
+
     /// Returns the position of photon `id`, reading the position array only.
     ///
     /// # Panics

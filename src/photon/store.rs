@@ -117,6 +117,11 @@ pub(super) fn decode_code(code: u32) -> (Vec3A, Vec3A, bool) {
     )
 }
 
+/// Returns the surface normal of a code word (the second half of [`decode_code`]).
+pub(super) fn decode_normal(code: u32) -> Vec3A {
+    oct_decode_index((code & DIRS_MASK) % OCT_CELLS)
+}
+
 /// Returns the split axis of a code word (0 = x, 1 = y, 2 = z, [`AXIS_NONE`] = no split).
 #[inline(always)]
 pub(super) fn code_axis(code: u32) -> u32 {

@@ -49,11 +49,26 @@ pub struct LightCounts {
     pub stored: u64,
 }
 
-/// The photons of one map with per-light counts.
+/// The photons of one map, as the tracing tasks stored them (see [`PhotonMap::from_chunks`]),
+/// with per-light counts.
+///
+/// [`PhotonMap::from_chunks`]: crate::photon::PhotonMap::from_chunks
 #[derive(Clone, Debug, Default)]
 pub struct TracedMap {
-    pub photons: Vec<Photon>,
+    pub chunks: Vec<Vec<Photon>>,
     pub per_light: Vec<LightCounts>,
+}
+
+impl TracedMap {
+    /// Returns the number of photons stored.
+    pub fn len(&self) -> usize {
+        self.chunks.iter().map(Vec::len).sum()
+    }
+
+    /// Returns whether no photon was stored.
+    pub fn is_empty(&self) -> bool {
+        self.chunks.iter().all(Vec::is_empty)
+    }
 }
 
 /// Returns each light's photon count: its own `num_photons`, or a share of `total` in proportion to
@@ -173,14 +188,11 @@ pub fn trace_map(scene: &Scene, budget: &[u64], kind: MapKind, seed: u64) -> Tra
                 photons
             })
             .collect();
-        let before = out.photons.len();
-        for c in chunks {
-            out.photons.extend(c);
-        }
         out.per_light.push(LightCounts {
             emitted: n,
-            stored: (out.photons.len() - before) as u64,
+            stored: chunks.iter().map(|c| c.len() as u64).sum(),
         });
+        out.chunks.extend(chunks);
     }
     out
 }

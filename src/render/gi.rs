@@ -119,10 +119,8 @@ impl Gi {
             .then(|| trace_map(scene, &budget, MapKind::Caustic, settings.seed));
         let trace_time = start.elapsed();
         let start = Instant::now();
-        let global_map = PhotonMap::build(global.photons);
-        let caustic_map = caustic
-            .as_ref()
-            .map(|c| PhotonMap::build(c.photons.clone()));
+        let global_map = PhotonMap::from_chunks(&global.chunks);
+        let caustic_map = caustic.as_ref().map(|c| PhotonMap::from_chunks(&c.chunks));
         let build_time = start.elapsed();
         let extent = scene.extent().max(f32::MIN_POSITIVE);
         let r = settings.max_radius * extent;

@@ -61,7 +61,7 @@ fn main() -> ExitCode {
                     let start = Instant::now();
                     let map = pool.install(|| trace_map(&scene, &budget, kind, 0));
                     best = best.min(start.elapsed().as_secs_f64());
-                    stored = map.photons.len();
+                    stored = map.len();
                 }
                 let emitted: u64 = budget.iter().sum();
                 let rate = emitted as f64 / best / 1e6;

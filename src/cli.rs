@@ -117,6 +117,11 @@ pub struct RenderArgs {
     /// Final-gather rays per shaded point.
     #[arg(long, value_name = "N", default_value_t = 64)]
     pub gather_rays: u32,
+    /// What a final-gather ray reads where it lands: precomputed (irradiance computed beforehand
+    /// at one global photon in four, Christensen's method, fast) or estimate (a density estimate
+    /// at the hit, slower and sharper).
+    #[arg(long, value_enum, default_value_t = GatherLookup::Precomputed)]
+    pub gather_lookup: GatherLookup,
     /// Nearest photons per density estimate.
     #[arg(long, value_name = "K", default_value_t = 50)]
     pub photon_k: usize,
@@ -149,6 +154,13 @@ pub enum GiArg {
 pub enum IndirectArg {
     Gather,
     Direct,
+}
+
+/// The `--gather-lookup` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GatherLookup {
+    Precomputed,
+    Estimate,
 }
 
 /// The `--tonemap` choices.
@@ -326,6 +338,7 @@ impl RenderSettings {
                     },
                     IndirectArg::Direct => Indirect::Direct,
                 },
+                precompute: a.gather_lookup == GatherLookup::Precomputed,
                 ..GiSettings::default()
             },
             progress: !a.quiet && std::io::stderr().is_terminal(),
@@ -410,7 +423,7 @@ fn render_one(
         print_stats(&scene, &film, &rstats, r, out);
         println!("  effects: {}", plan.reasons.join("; "));
         if let Some(gi) = &gi {
-            print_photon_stats(gi);
+            print_photon_stats(gi, &rstats);
         }
     }
     Ok(())
@@ -530,7 +543,7 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
     Ok(())
 }
 
-fn print_photon_stats(gi: &Gi) {
+fn print_photon_stats(gi: &Gi, rstats: &RenderStats) {
     let s = &gi.stats;
     for (name, counts, map) in [
         ("global", &s.global, Some(&gi.global)),
@@ -549,13 +562,16 @@ fn print_photon_stats(gi: &Gi) {
             bytes as f64 / stored.max(1) as f64
         );
     }
-    let lookups = s.lookups.load(std::sync::atomic::Ordering::Relaxed);
-    let used = s.photons_used.load(std::sync::atomic::Ordering::Relaxed);
+    let (lookups, used) = (rstats.lookups, rstats.photons_used);
     println!(
-        "  photon phases: trace {:.3} s, kd-tree build {:.3} s; {} estimates, {:.1} photons per lookup",
+        "  photon phases: trace {:.3} s, kd-tree build {:.3} s, irradiance precomputed at {} points in {:.3} s",
         s.trace_time.as_secs_f64(),
         s.build_time.as_secs_f64(),
-        lookups,
+        s.precomputed_points,
+        s.precompute_time.as_secs_f64(),
+    );
+    println!(
+        "  photon lookups while rendering: {lookups}, {:.1} photons per lookup",
         used as f64 / lookups.max(1) as f64
     );
 }

@@ -82,25 +82,36 @@ fn closed_sphere_has_radiance_one_with_final_gathering() {
     let r = &d.renders[0];
     let scene = build_scene(&d, r).unwrap();
     assert!(plan(&scene, GiMode::Auto).photon_maps);
-    let gi = Gi::build(
-        &scene,
-        &GiSettings {
-            indirect: Indirect::Gather { rays: 256 },
-            ..GiSettings::default()
-        },
-    );
     let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
-    let (film, _) = caustic::render::render_with(
-        &scene,
-        &camera,
-        Some(&gi),
-        &caustic::render::RenderOptions::new(r.width, r.height),
-        &|| {},
-    );
-    let mean = film.pixels.iter().map(|p| p.x).sum::<f32>() / film.pixels.len() as f32;
-    assert!((mean - 1.0).abs() < 0.025, "mean radiance {mean}");
-    for p in &film.pixels {
-        assert!((p.x - 1.0).abs() < 0.06, "pixel {p}");
+    // Both ways a gather ray reads the global map: precomputed irradiance and a fresh estimate.
+    for precompute in [true, false] {
+        let gi = Gi::build(
+            &scene,
+            &GiSettings {
+                indirect: Indirect::Gather { rays: 256 },
+                precompute,
+                ..GiSettings::default()
+            },
+        );
+        assert_eq!(gi.precomputed.is_some(), precompute);
+        let (film, _) = caustic::render::render_with(
+            &scene,
+            &camera,
+            Some(&gi),
+            &caustic::render::RenderOptions::new(r.width, r.height),
+            &|| {},
+        );
+        let mean = film.pixels.iter().map(|p| p.x).sum::<f32>() / film.pixels.len() as f32;
+        assert!(
+            (mean - 1.0).abs() < 0.025,
+            "precompute {precompute}: mean radiance {mean}"
+        );
+        for p in &film.pixels {
+            assert!(
+                (p.x - 1.0).abs() < 0.06,
+                "precompute {precompute}: pixel {p}"
+            );
+        }
     }
 }
 

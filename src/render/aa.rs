@@ -59,9 +59,7 @@ impl<'a> PixelSampler<'a> {
                 .collect();
             for (row, c) in rows {
                 sampler.corners.extend(row);
-                sampler.corner_counts.primary += c.primary;
-                sampler.corner_counts.shadow += c.shadow;
-                sampler.corner_counts.secondary += c.secondary;
+                sampler.corner_counts.add(&c);
             }
         }
         sampler

@@ -26,7 +26,7 @@ use crate::camera::Camera;
 use crate::scene::Scene;
 use glam::Vec3A;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// A linear-RGB image, row 0 at the top: the whole image or a window (crop) of it.
@@ -132,6 +132,9 @@ pub struct RenderStats {
     pub time: Duration,
     /// Thread time spent in texture, bump-map and Perlin-noise evaluation (with `timing`).
     pub material_time: Duration,
+    /// Photon-map estimates made while rendering, and the photons they found.
+    pub lookups: u64,
+    pub photons_used: u64,
 }
 
 /// Per-thread ray counts, summed into [`RenderStats`] once per row.
@@ -145,6 +148,21 @@ pub struct RayCounts {
     pub timing: bool,
     /// Nanoseconds spent evaluating materials, when `timing`.
     pub material_nanos: u64,
+    /// Photon-map lookups and the photons they found.
+    pub lookups: u64,
+    pub photons_used: u64,
+}
+
+impl RayCounts {
+    /// Adds `o`'s counts to these.
+    pub fn add(&mut self, o: &RayCounts) {
+        self.primary += o.primary;
+        self.shadow += o.shadow;
+        self.secondary += o.secondary;
+        self.material_nanos += o.material_nanos;
+        self.lookups += o.lookups;
+        self.photons_used += o.photons_used;
+    }
 }
 
 /// Renders `scene` through `camera` into a `width × height` film with one centre ray per pixel.
@@ -169,12 +187,8 @@ pub fn render_with(
     let start = Instant::now();
     let win = opts.window;
     let (w, h) = win.size();
-    let totals = [
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-    ];
+    // Rows add their counts once each (a lock per row costs nothing next to a row of pixels).
+    let totals = Mutex::new(RayCounts::default());
     let mut pixels = vec![Vec3A::ZERO; w as usize * h as usize];
     let mut samples = vec![0u32; w as usize * h as usize];
     let tracer = shade::Tracer {
@@ -200,22 +214,21 @@ pub fn render_with(
                 *n = (counts.primary - before) as u32
                     + sampler.corner_rays_charged(i as u32, row as u32);
             }
-            totals[0].fetch_add(counts.primary, Ordering::Relaxed);
-            totals[1].fetch_add(counts.shadow, Ordering::Relaxed);
-            totals[2].fetch_add(counts.secondary, Ordering::Relaxed);
-            totals[3].fetch_add(counts.material_nanos, Ordering::Relaxed);
+            totals
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .add(&counts);
             row_done();
         });
-    let corner_counts = sampler.corner_counts();
-    totals[0].fetch_add(corner_counts.primary, Ordering::Relaxed);
-    totals[1].fetch_add(corner_counts.shadow, Ordering::Relaxed);
-    totals[2].fetch_add(corner_counts.secondary, Ordering::Relaxed);
-    totals[3].fetch_add(corner_counts.material_nanos, Ordering::Relaxed);
+    let mut t = totals.into_inner().unwrap_or_else(|e| e.into_inner());
+    t.add(&sampler.corner_counts());
     let stats = RenderStats {
-        primary_rays: totals[0].load(Ordering::Relaxed),
-        shadow_rays: totals[1].load(Ordering::Relaxed),
-        secondary_rays: totals[2].load(Ordering::Relaxed),
-        material_time: Duration::from_nanos(totals[3].load(Ordering::Relaxed)),
+        primary_rays: t.primary,
+        shadow_rays: t.shadow,
+        secondary_rays: t.secondary,
+        material_time: Duration::from_nanos(t.material_nanos),
+        lookups: t.lookups,
+        photons_used: t.photons_used,
         time: start.elapsed(),
     };
     let film = Film {

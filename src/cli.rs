@@ -3,6 +3,7 @@
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
+use crate::photon::trace::Progress;
 use crate::render::gi::{Gi, GiSettings, Indirect};
 use crate::render::plan::{GiMode, plan};
 use crate::render::{Film, RenderOptions, RenderStats, Sampling, Window, render_with};
@@ -52,6 +53,9 @@ pub struct PhotonsArgs {
     /// Draw at this multiple of the script's image size.
     #[arg(long, value_name = "F", default_value_t = 1.0)]
     pub scale: f64,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]
@@ -346,6 +350,39 @@ impl RenderSettings {
     }
 }
 
+/// The progress bar of one image on stderr (hidden unless `show`): one phase after another, each
+/// with its own count, elapsed time and estimate of time left.
+struct Bar(indicatif::ProgressBar, String);
+
+impl Bar {
+    fn new(show: bool, out: &std::path::Path) -> Bar {
+        let bar = if show {
+            let bar = indicatif::ProgressBar::new(0);
+            if let Ok(style) = indicatif::ProgressStyle::with_template(
+                "{msg} [{bar:40}] {human_pos}/{human_len}, {elapsed} elapsed, {eta} left",
+            ) {
+                bar.set_style(style.progress_chars("=> "));
+            }
+            bar
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        Bar(bar, out.display().to_string())
+    }
+}
+
+impl Progress for Bar {
+    fn start(&self, what: &str, total: u64) {
+        self.0.reset();
+        self.0.set_length(total);
+        self.0.set_message(format!("{}: {what}", self.1));
+    }
+
+    fn advance(&self, n: u64) {
+        self.0.inc(n);
+    }
+}
+
 /// Builds, renders and writes the image of one `gr.render` call.
 fn render_one(
     desc: &SceneDesc,
@@ -384,29 +421,18 @@ fn render_one(
         timing: settings.stats,
         light_samples: settings.light_samples,
     };
-    let bar = if settings.progress {
-        let bar = indicatif::ProgressBar::new(window.size().1 as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "{msg} [{bar:40}] {pos}/{len} rows, {elapsed} elapsed, {eta} left",
-        ) {
-            bar.set_style(style.progress_chars("=> "));
-        }
-        bar.set_message(format!("rendering {}", out.display()));
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let bar = Bar::new(settings.progress, out);
     let plan = plan(&scene, settings.gi_mode);
     let gi = plan.photon_maps.then(|| {
         let gi_settings = GiSettings {
             caustics: plan.caustics,
             ..settings.gi.clone()
         };
-        bar.set_message(format!("tracing photons for {}", out.display()));
-        let gi = Gi::build(&scene, &gi_settings);
-        bar.set_message(format!("rendering {}", out.display()));
-        gi
+        Gi::build_with(&scene, &gi_settings, &bar)
     });
+    let rows = window.size().1 as u64;
+    bar.start("rendering rows", rows);
+    let bar = bar.0;
     let (film, rstats) = render_with(&scene, &camera, gi.as_ref(), &opts, &|| bar.inc(1));
     bar.finish_and_clear();
     write_image(&film, out, settings.tonemap)?;
@@ -499,6 +525,7 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
     let counter = Rc::clone(&count);
     let output = args.output.clone();
     let (photons, seed, scale) = (args.photons, args.seed, args.scale);
+    let progress = !args.quiet && std::io::stderr().is_terminal();
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
         counter.set(counter.get() + 1);
         let out = match &output {
@@ -526,9 +553,12 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
             seed,
             photons,
             caustics: plan.caustics,
+            precompute: false,
             ..GiSettings::default()
         };
-        let gi = Gi::build(&scene, &settings);
+        let bar = Bar::new(progress, &out);
+        let gi = Gi::build_with(&scene, &settings, &bar);
+        bar.0.finish_and_clear();
         let film = crate::render::photon_view::photon_image(&scene, &camera, &gi, w, h);
         write_image(&film, &out, Tonemap::Clamp)?;
         eprintln!(

@@ -270,6 +270,11 @@ fn photon_viewer_draws_both_maps() {
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("global") && err.contains("caustic"), "{err}");
+    // stderr is a pipe here, so no progress bar.
+    assert!(
+        !err.contains("elapsed") && !err.contains("tracing"),
+        "{err}"
+    );
     let img = image::open(&png).unwrap().to_rgb8();
     assert_eq!((img.width(), img.height()), (100, 100));
     let bright = img
@@ -277,4 +282,46 @@ fn photon_viewer_draws_both_maps() {
         .filter(|p| p.0.iter().any(|&c| c > 100))
         .count();
     assert!(bright > 200, "only {bright} photon pixels");
+}
+
+/// Records the phases and advances a build reports.
+#[derive(Default)]
+struct Recorder(std::sync::Mutex<Vec<(String, u64, u64)>>);
+
+impl caustic::photon::trace::Progress for Recorder {
+    fn start(&self, what: &str, total: u64) {
+        self.0.lock().unwrap().push((what.to_string(), total, 0));
+    }
+    fn advance(&self, n: u64) {
+        self.0.lock().unwrap().last_mut().unwrap().2 += n;
+    }
+}
+
+#[test]
+fn photon_phases_report_progress_that_adds_up() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
+    let d = run_lua(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let scene = build_scene(&d, &d.renders[0]).unwrap();
+    let settings = GiSettings {
+        photons: 50_000,
+        ..GiSettings::default()
+    };
+    let rec = Recorder::default();
+    let gi = Gi::build_with(&scene, &settings, &rec);
+    let phases = rec.0.into_inner().unwrap();
+    let names: Vec<&str> = phases.iter().map(|p| p.0.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "tracing global photons",
+            "tracing caustic photons",
+            "precomputing irradiance"
+        ]
+    );
+    let emitted: u64 = gi.stats.global.iter().map(|c| c.emitted).sum();
+    assert_eq!((phases[0].1, phases[0].2), (emitted, emitted));
+    assert_eq!((phases[1].1, phases[1].2), (emitted, emitted));
+    let points = gi.precomputed.as_ref().unwrap().len() as u64;
+    assert_eq!(points, gi.global.len().div_ceil(4) as u64);
+    assert_eq!((phases[2].1, phases[2].2), (points, points));
 }

@@ -161,8 +161,35 @@ pub fn specular_targets(scene: &Scene) -> Vec<(Vec3A, f32)> {
         .collect()
 }
 
+/// How a long phase tells a progress display what it has done; calls may come from any thread.
+pub trait Progress: Sync {
+    /// A phase called `what` starts, with `total` units of work.
+    fn start(&self, what: &str, total: u64);
+    /// `n` more units of the current phase are done.
+    fn advance(&self, n: u64);
+}
+
+/// A [`Progress`] that shows nothing.
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn start(&self, _: &str, _: u64) {}
+    fn advance(&self, _: u64) {}
+}
+
 /// Traces the photons of `kind` for every light: `budget[l]` emitted by light `l`.
 pub fn trace_map(scene: &Scene, budget: &[u64], kind: MapKind, seed: u64) -> TracedMap {
+    trace_map_with(scene, budget, kind, seed, &NoProgress)
+}
+
+/// [`trace_map`], reporting photons emitted to `progress` (one phase per map).
+pub fn trace_map_with(
+    scene: &Scene,
+    budget: &[u64],
+    kind: MapKind,
+    seed: u64,
+    progress: &dyn Progress,
+) -> TracedMap {
     let targets = if kind == MapKind::Caustic {
         specular_targets(scene)
     } else {
@@ -174,6 +201,11 @@ pub fn trace_map(scene: &Scene, budget: &[u64], kind: MapKind, seed: u64) -> Tra
         return out;
     }
     const CHUNK: u64 = 4096;
+    let what = match kind {
+        MapKind::Global => "tracing global photons",
+        MapKind::Caustic => "tracing caustic photons",
+    };
+    progress.start(what, budget.iter().take(scene.lights.len()).sum());
     for (l, light) in scene.lights.iter().enumerate() {
         let n = budget.get(l).copied().unwrap_or(0);
         let chunks: Vec<Vec<Photon>> = (0..n.div_ceil(CHUNK))
@@ -185,6 +217,7 @@ pub fn trace_map(scene: &Scene, budget: &[u64], kind: MapKind, seed: u64) -> Tra
                     let mut rng = Rng::new(seed, Pass::Photon, key);
                     trace_one(scene, light, n, kind, &targets, &mut rng, &mut photons);
                 }
+                progress.advance(CHUNK.min(n - c * CHUNK));
                 photons
             })
             .collect();

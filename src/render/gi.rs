@@ -34,7 +34,9 @@ use super::shade::Tracer;
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::light::cosine_around;
 use crate::photon::estimate::Filter;
-use crate::photon::trace::{LightCounts, MapKind, photon_budget, trace_map};
+use crate::photon::trace::{
+    LightCounts, MapKind, NoProgress, Progress, photon_budget, trace_map_with,
+};
 use crate::photon::{Photon, PhotonId, PhotonMap};
 use crate::sampling::{Rng, stratified_2d};
 use crate::scene::Scene;
@@ -134,15 +136,21 @@ thread_local! {
 impl Gi {
     /// Traces and stores the photons of `scene` (both cores) and builds their kd-trees.
     pub fn build(scene: &Scene, settings: &GiSettings) -> Gi {
+        Gi::build_with(scene, settings, &NoProgress)
+    }
+
+    /// [`Gi::build`], reporting each phase (tracing each map, precomputing irradiance) to
+    /// `progress`.
+    pub fn build_with(scene: &Scene, settings: &GiSettings, progress: &dyn Progress) -> Gi {
         let budget: Vec<u64> = photon_budget(&scene.lights, settings.photons)
             .into_iter()
             .map(|n| (n as f64 * settings.photon_scale).round() as u64)
             .collect();
         let start = Instant::now();
-        let global = trace_map(scene, &budget, MapKind::Global, settings.seed);
+        let global = trace_map_with(scene, &budget, MapKind::Global, settings.seed, progress);
         let caustic = settings
             .caustics
-            .then(|| trace_map(scene, &budget, MapKind::Caustic, settings.seed));
+            .then(|| trace_map_with(scene, &budget, MapKind::Caustic, settings.seed, progress));
         let trace_time = start.elapsed();
         let start = Instant::now();
         let global_map = PhotonMap::from_chunks(&global.chunks);
@@ -168,7 +176,7 @@ impl Gi {
         let gathers = matches!(settings.indirect, Indirect::Gather { .. });
         if settings.precompute && gathers && !gi.global.is_empty() {
             let start = Instant::now();
-            let map = gi.precompute_irradiance();
+            let map = gi.precompute_irradiance(progress);
             gi.stats.precompute_time = start.elapsed();
             gi.stats.precomputed_points = map.len();
             gi.precomputed = Some(map);
@@ -178,12 +186,18 @@ impl Gi {
 
     /// Returns a map of every [`PRECOMPUTE_STRIDE`]th global photon (in kd-tree order, so spread as
     /// the photons are) carrying the global map's irradiance estimate at it as its power.
-    fn precompute_irradiance(&self) -> PhotonMap {
+    fn precompute_irradiance(&self, progress: &dyn Progress) -> PhotonMap {
         use rayon::prelude::*;
-        let points: Vec<Photon> = (0..self.global.len())
+        let n = self.global.len().div_ceil(PRECOMPUTE_STRIDE);
+        progress.start("precomputing irradiance", n as u64);
+        let points: Vec<Photon> = (0..n)
             .into_par_iter()
-            .step_by(PRECOMPUTE_STRIDE)
-            .map(|i| {
+            .with_min_len(1024)
+            .map(|j| {
+                let i = j * PRECOMPUTE_STRIDE;
+                if j % 1024 == 1023 || j == n - 1 {
+                    progress.advance(j as u64 % 1024 + 1);
+                }
                 let ph = self.global.get(PhotonId(i as u32));
                 let mut counts = RayCounts::default();
                 let e = self.irradiance(

@@ -35,6 +35,7 @@ pub mod geometry;
 pub mod io;
 pub mod light;
 pub mod material;
+pub mod mem;
 pub mod photon;
 pub mod render;
 pub mod sampling;

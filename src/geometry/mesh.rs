@@ -108,7 +108,7 @@ impl MeshGeom {
                 .map(|&i| first_material + data.triangle_materials[i as usize])
                 .collect()
         };
-        let blocks = bvh
+        let blocks: Vec<Tri4> = bvh
             .leaves()
             .iter()
             .map(|l| {
@@ -121,6 +121,9 @@ impl MeshGeom {
             })
             .collect();
         let bounds = boxes.iter().fold(Bounds::EMPTY, |a, &b| a.union(b));
+        crate::mem::prefer_huge_pages(&blocks);
+        crate::mem::prefer_huge_pages(&positions);
+        crate::mem::prefer_huge_pages(&triangles);
         MeshGeom {
             positions,
             normals: data.normals.iter().map(|&n| n.into()).collect(),

@@ -161,6 +161,9 @@ impl PhotonMap {
         map.pos.shrink_to_fit();
         map.code.shrink_to_fit();
         map.power.shrink_to_fit();
+        crate::mem::prefer_huge_pages(&map.pos);
+        crate::mem::prefer_huge_pages(&map.code);
+        crate::mem::prefer_huge_pages(&map.power);
         map
     }
 

@@ -303,6 +303,17 @@ impl RenderSettings {
         if !a.exposure.is_finite() {
             return Err(Error::Usage("--exposure must be finite".into()));
         }
+        for (name, value, max) in [
+            ("--light-samples", a.light_samples as u64, 4096),
+            ("--photon-k", a.photon_k as u64, 10_000),
+            ("--gather-rays", a.gather_rays as u64, 65_536),
+        ] {
+            if !(1..=max).contains(&value) {
+                return Err(Error::Usage(format!(
+                    "{name} must be in [1, {max}], got {value}"
+                )));
+            }
+        }
         let sampling = if a.adaptive {
             Sampling::Adaptive {
                 threshold: a.aa_threshold,
@@ -325,7 +336,7 @@ impl RenderSettings {
             tonemap,
             aa_map: a.aa_map.clone(),
             stats: a.stats,
-            light_samples: a.light_samples.clamp(1, 4096),
+            light_samples: a.light_samples,
             gi_mode: match a.gi {
                 GiArg::Auto => GiMode::Auto,
                 GiArg::On => GiMode::On,
@@ -335,10 +346,10 @@ impl RenderSettings {
                 seed: a.seed,
                 photons: a.photons,
                 photon_scale: a.photon_scale,
-                k: a.photon_k.clamp(1, 10_000),
+                k: a.photon_k,
                 indirect: match a.indirect {
                     IndirectArg::Gather => Indirect::Gather {
-                        rays: a.gather_rays.clamp(1, 65_536),
+                        rays: a.gather_rays,
                     },
                     IndirectArg::Direct => Indirect::Direct,
                 },

@@ -325,3 +325,36 @@ fn photon_phases_report_progress_that_adds_up() {
     assert_eq!(points, gi.global.len().div_ceil(4) as u64);
     assert_eq!((phases[2].1, phases[2].2), (points, points));
 }
+
+#[test]
+fn out_of_range_photon_options_are_usage_errors() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
+    for (flag, value, want) in [
+        ("--photon-k", "0", "--photon-k must be in [1, 10000], got 0"),
+        (
+            "--gather-rays",
+            "0",
+            "--gather-rays must be in [1, 65536], got 0",
+        ),
+        (
+            "--gather-rays",
+            "70000",
+            "--gather-rays must be in [1, 65536], got 70000",
+        ),
+        (
+            "--light-samples",
+            "0",
+            "--light-samples must be in [1, 4096], got 0",
+        ),
+    ] {
+        let out = caustic()
+            .arg("render")
+            .arg(&scene)
+            .args([flag, value, "-o", "/nonexistent/never.png"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flag} {value} was accepted");
+        assert!(err.contains(want), "{flag} {value}: {err}");
+    }
+}

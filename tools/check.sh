@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
 # The one gate: formatting, lints and the whole test suite, in release mode.
-# People run it before committing; .ci/run runs exactly this.
+# People run it before committing; .ci/run runs exactly this. On a fresh machine it first adds
+# what the gate needs and the toolchain may lack (rustfmt and clippy, through rustup).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-if cargo fmt --version >/dev/null 2>&1; then
-  cargo fmt --all -- --check
-else
-  echo "check: rustfmt is not installed; skipping the format check" >&2
-fi
-if cargo clippy --version >/dev/null 2>&1; then
-  cargo clippy --release --workspace --all-targets --locked -- -D warnings
-else
-  echo "check: clippy is not installed; skipping lints" >&2
-fi
+for tool in fmt clippy; do
+  if ! cargo "$tool" --version >/dev/null 2>&1; then
+    component=$([ "$tool" = fmt ] && echo rustfmt || echo clippy)
+    echo "check: installing $component" >&2
+    rustup component add "$component"
+  fi
+done
+cargo fmt --all -- --check
+cargo clippy --release --workspace --all-targets --locked -- -D warnings
 cargo test --release --locked

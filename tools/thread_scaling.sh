@@ -14,19 +14,20 @@ scene="$1"
 shift
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
-declare -A times
+# One line per run: threads and wall seconds.
 for ((r = 1; r <= reps; r++)); do
     for t in 1 2; do
-        start=$(date +%s.%N)
+        start=$(date +%s%N)
         "$caustic" render "$scene" --threads "$t" -q -o "$out/t$t.png" "$@" >/dev/null 2>&1
-        end=$(date +%s.%N)
-        times[$t]+="$(echo "$end - $start" | bc) "
+        echo "$t $(( $(date +%s%N) - start ))" >>"$out/times"
     done
     cmp -s "$out/t1.png" "$out/t2.png" || { echo "images differ between 1 and 2 threads" >&2; exit 1; }
 done
-stats() { tr ' ' '\n' <<<"$1" | grep . | sort -g | awk '{a[NR]=$1} END {printf "best %.2f s, median %.2f s", a[1], a[int((NR+1)/2)]}'; }
-best() { tr ' ' '\n' <<<"$1" | grep . | sort -g | head -1; }
 echo "scene $scene $*: $reps runs each, images identical"
-echo "1 thread:  $(stats "${times[1]}")"
-echo "2 threads: $(stats "${times[2]}")"
-echo "speed-up (best over best): $(echo "scale=2; $(best "${times[1]}") / $(best "${times[2]}")" | bc)x"
+sort -k1,1n -k2,2n "$out/times" | awk '
+    { s[$1, ++n[$1]] = $2 / 1e9 }
+    END {
+        for (t = 1; t <= 2; t++)
+            printf "%d thread(s): best %.2f s, median %.2f s\n", t, s[t, 1], s[t, int((n[t] + 1) / 2)]
+        printf "speed-up (best over best): %.2fx\n", s[1, 1] / s[2, 1]
+    }'

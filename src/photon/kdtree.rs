@@ -193,7 +193,7 @@ impl PhotonMap {
             out.truncate(k);
         }
         let mut heap = Heap::new(out, k, max_d2);
-        self.knn_in(0, self.len(), q, Vec3A::ZERO, seed, &mut heap);
+        self.search(0, self.len(), q, Vec3A::ZERO, seed, &mut heap);
         out.first().map_or(0.0, |e| e.0)
     }
 
@@ -213,16 +213,17 @@ impl PhotonMap {
         (lo, hi)
     }
 
-    /// Adds the photons of subtree `lo..hi` that beat the heap's bound, except those of the
-    /// already searched subtree `skip`; `off` is the per-axis offset from `q` to the subtree's cell.
-    fn knn_in(
+    /// Offers `sink` every photon of subtree `lo..hi` within its bound, except those of the
+    /// already searched subtree `skip`, nearer subtrees first; `off` is the per-axis offset from
+    /// `q` to the subtree's cell. Every query is this walk with its own [`Sink`].
+    fn search<S: Sink>(
         &self,
         mut lo: usize,
         mut hi: usize,
         q: [f32; 3],
         mut off: Vec3A,
         skip: (usize, usize),
-        heap: &mut Heap,
+        sink: &mut S,
     ) {
         let pos = &self.pos[..];
         loop {
@@ -233,8 +234,8 @@ impl PhotonMap {
             if n <= LEAF_SIZE {
                 for (i, &x) in pos[lo..hi].iter().enumerate() {
                     let d2 = dist2(x, q);
-                    if d2 <= heap.bound {
-                        heap.push(d2, (lo + i) as u32);
+                    if d2 <= sink.bound() {
+                        sink.offer(d2, lo + i);
                     }
                 }
                 return;
@@ -248,13 +249,13 @@ impl PhotonMap {
             } else {
                 ((m + 1, hi), (lo, m))
             };
-            self.knn_in(near.0, near.1, q, off, skip, heap);
+            self.search(near.0, near.1, q, off, skip, sink);
             let d2 = dist2(split, q);
-            if d2 <= heap.bound {
-                heap.push(d2, m as u32);
+            if d2 <= sink.bound() {
+                sink.offer(d2, m);
             }
             off = with_lane(off, a, d);
-            if off.length_squared() > heap.bound {
+            if off.length_squared() > sink.bound() {
                 return;
             }
             (lo, hi) = far;
@@ -274,55 +275,12 @@ impl PhotonMap {
         if self.is_empty() || max_d2.is_nan() || max_d2 < 0.0 {
             return None;
         }
-        let mut best = (max_d2, None);
-        self.nearest_in(0, self.len(), p.to_array(), Vec3A::ZERO, &mut best, accept);
-        best.1.map(|id| (best.0, id))
-    }
-
-    /// Improves `best` (squared distance, photon) with the photons of subtree `lo..hi`; `off` as
-    /// in [`Self::knn_in`].
-    fn nearest_in<F: FnMut(PhotonId) -> bool>(
-        &self,
-        mut lo: usize,
-        mut hi: usize,
-        q: [f32; 3],
-        mut off: Vec3A,
-        best: &mut (f32, Option<PhotonId>),
-        accept: &mut F,
-    ) {
-        let pos = &self.pos[..];
-        let consider = |i: usize, best: &mut (f32, Option<PhotonId>), accept: &mut F| {
-            let d2 = dist2(pos[i], q);
-            let id = PhotonId(i as u32);
-            let better = d2 < best.0 || (d2 == best.0 && best.1.is_none_or(|b| id < b));
-            if better && accept(id) {
-                *best = (d2, Some(id));
-            }
+        let mut sink = Nearest {
+            best: (max_d2, None),
+            accept,
         };
-        loop {
-            let n = hi - lo;
-            if n <= LEAF_SIZE {
-                for i in lo..hi {
-                    consider(i, best, accept);
-                }
-                return;
-            }
-            let m = lo + n / 2;
-            let a = store::code_axis(self.code[m]) as usize;
-            let d = q[a] - pos[m][a];
-            let (near, far) = if d <= 0.0 {
-                ((lo, m), (m + 1, hi))
-            } else {
-                ((m + 1, hi), (lo, m))
-            };
-            self.nearest_in(near.0, near.1, q, off, best, accept);
-            consider(m, best, accept);
-            off = with_lane(off, a, d);
-            if off.length_squared() > best.0 {
-                return;
-            }
-            (lo, hi) = far;
-        }
+        self.search(0, self.len(), p.to_array(), Vec3A::ZERO, NO_SKIP, &mut sink);
+        sink.best.1.map(|id| (sink.best.0, id))
     }
 
     /// Writes every photon with squared distance <= r2 from p to `out` (cleared first).
@@ -333,51 +291,8 @@ impl PhotonMap {
         if self.is_empty() || r2.is_nan() || r2 < 0.0 {
             return;
         }
-        self.within_in(0, self.len(), p.to_array(), Vec3A::ZERO, r2, out);
-    }
-
-    /// Adds the photons of subtree `lo..hi` within `r2` of `q`; `off` as in [`Self::knn_in`].
-    fn within_in(
-        &self,
-        mut lo: usize,
-        mut hi: usize,
-        q: [f32; 3],
-        mut off: Vec3A,
-        r2: f32,
-        out: &mut Vec<(f32, PhotonId)>,
-    ) {
-        let pos = &self.pos[..];
-        loop {
-            let n = hi - lo;
-            if n <= LEAF_SIZE {
-                for (i, &x) in pos[lo..hi].iter().enumerate() {
-                    let d2 = dist2(x, q);
-                    if d2 <= r2 {
-                        out.push((d2, PhotonId((lo + i) as u32)));
-                    }
-                }
-                return;
-            }
-            let m = lo + n / 2;
-            let a = store::code_axis(self.code[m]) as usize;
-            let split = pos[m];
-            let d = q[a] - split[a];
-            let (near, far) = if d <= 0.0 {
-                ((lo, m), (m + 1, hi))
-            } else {
-                ((m + 1, hi), (lo, m))
-            };
-            self.within_in(near.0, near.1, q, off, r2, out);
-            let d2 = dist2(split, q);
-            if d2 <= r2 {
-                out.push((d2, PhotonId(m as u32)));
-            }
-            off = with_lane(off, a, d);
-            if off.length_squared() > r2 {
-                return;
-            }
-            (lo, hi) = far;
-        }
+        let mut sink = Within { r2, out };
+        self.search(0, self.len(), p.to_array(), Vec3A::ZERO, NO_SKIP, &mut sink);
     }
 
     /// Checks the kd-tree invariants (see the module doc); returns the first violation found.
@@ -441,6 +356,66 @@ impl PhotonMap {
             ));
         }
         Ok(())
+    }
+}
+
+/// What a query does with the photons [`PhotonMap::search`] finds.
+trait Sink {
+    /// Largest squared distance still of interest (it may shrink as photons are offered).
+    fn bound(&self) -> f32;
+    /// Takes photon `i` at squared distance `d2 <= self.bound()`.
+    fn offer(&mut self, d2: f32, i: usize);
+}
+
+/// A `skip` range no subtree has.
+const NO_SKIP: (usize, usize) = (usize::MAX, usize::MAX);
+
+/// Every photon within `r2` ([`PhotonMap::within`]).
+struct Within<'a> {
+    r2: f32,
+    out: &'a mut Vec<(f32, PhotonId)>,
+}
+
+impl Sink for Within<'_> {
+    #[inline(always)]
+    fn bound(&self) -> f32 {
+        self.r2
+    }
+    #[inline(always)]
+    fn offer(&mut self, d2: f32, i: usize) {
+        self.out.push((d2, PhotonId(i as u32)));
+    }
+}
+
+/// The nearest photon `accept` takes, lowest id among equals ([`PhotonMap::nearest_where`]).
+struct Nearest<'a, F> {
+    best: (f32, Option<PhotonId>),
+    accept: &'a mut F,
+}
+
+impl<F: FnMut(PhotonId) -> bool> Sink for Nearest<'_, F> {
+    #[inline(always)]
+    fn bound(&self) -> f32 {
+        self.best.0
+    }
+    #[inline(always)]
+    fn offer(&mut self, d2: f32, i: usize) {
+        let id = PhotonId(i as u32);
+        let better = d2 < self.best.0 || self.best.1.is_none_or(|b| id < b);
+        if better && (self.accept)(id) {
+            self.best = (d2, Some(id));
+        }
+    }
+}
+
+impl Sink for Heap<'_> {
+    #[inline(always)]
+    fn bound(&self) -> f32 {
+        self.bound
+    }
+    #[inline(always)]
+    fn offer(&mut self, d2: f32, i: usize) {
+        self.push(d2, i as u32);
     }
 }
 

@@ -309,13 +309,8 @@ fn mangled_glb_files_never_panic() {
     let rest = textured_quad(&mut f);
     let valid = f.glb(&rest);
     let path = Path::new("mangled.glb");
-    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
-    let mut next = |bound: usize| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state % bound as u64) as usize
-    };
+    let mut rng = caustic::sampling::Rng::new(7, caustic::sampling::Pass::Pixel, 0);
+    let mut next = |bound: usize| rng.next_u32() as usize % bound;
     let mut rejected = 0;
     for round in 0..3000 {
         let mut bytes = valid.clone();

@@ -568,13 +568,8 @@ v 0 0 0|v 1 0 0|v 1e30 0 0 1e-30|f 1 2 3 => 3: vertex coordinate is not finite
              f 1/1/1 2/2/1 3/1/1 4/2/1\ng b\nf -1//-1 -2//1 -3//1\nf 4 3 2\n"
         );
         let alphabet = b"0123456789-+/. \n\te#vfnlto";
-        let mut state: u64 = 0x2545_f491_4f6c_dd1d;
-        let mut next = |bound: usize| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % bound as u64) as usize
-        };
+        let mut rng = crate::sampling::Rng::new(7, crate::sampling::Pass::Pixel, 0);
+        let mut next = |bound: usize| rng.next_u32() as usize % bound;
         let mut failed = 0;
         for round in 0..3000 {
             let mut bytes = valid.clone().into_bytes();

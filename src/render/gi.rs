@@ -199,18 +199,9 @@ impl Gi {
                     progress.advance(j as u64 % 1024 + 1);
                 }
                 let ph = self.global.get(PhotonId(i as u32));
-                let mut counts = RayCounts::default();
-                let e = self.irradiance(
-                    &self.global,
-                    self.global_r2,
-                    ph.position,
-                    ph.normal,
-                    false,
-                    &mut counts,
-                );
                 Photon {
                     position: ph.position,
-                    power: e,
+                    power: self.global_irradiance(ph.position, ph.normal),
                     dir: ph.normal,
                     normal: ph.normal,
                     direct: false,

@@ -363,7 +363,11 @@ impl RenderSettings {
 
 /// The progress bar of one image on stderr (hidden unless `show`): one phase after another, each
 /// with its own count, elapsed time and estimate of time left.
-struct Bar(indicatif::ProgressBar, String);
+struct Bar {
+    bar: indicatif::ProgressBar,
+    /// The image's path, shown before each phase's name.
+    image: String,
+}
 
 impl Bar {
     fn new(show: bool, out: &std::path::Path) -> Bar {
@@ -378,19 +382,27 @@ impl Bar {
         } else {
             indicatif::ProgressBar::hidden()
         };
-        Bar(bar, out.display().to_string())
+        Bar {
+            bar,
+            image: out.display().to_string(),
+        }
+    }
+
+    /// Removes the bar from the terminal.
+    fn finish(&self) {
+        self.bar.finish_and_clear();
     }
 }
 
 impl Progress for Bar {
     fn start(&self, what: &str, total: u64) {
-        self.0.reset();
-        self.0.set_length(total);
-        self.0.set_message(format!("{}: {what}", self.1));
+        self.bar.reset();
+        self.bar.set_length(total);
+        self.bar.set_message(format!("{}: {what}", self.image));
     }
 
     fn advance(&self, n: u64) {
-        self.0.inc(n);
+        self.bar.inc(n);
     }
 }
 
@@ -443,9 +455,8 @@ fn render_one(
     });
     let rows = window.size().1 as u64;
     bar.start("rendering rows", rows);
-    let bar = bar.0;
-    let (film, rstats) = render_with(&scene, &camera, gi.as_ref(), &opts, &|| bar.inc(1));
-    bar.finish_and_clear();
+    let (film, rstats) = render_with(&scene, &camera, gi.as_ref(), &opts, &|| bar.advance(1));
+    bar.finish();
     write_image(&film, out, settings.tonemap)?;
     if let Some(map) = &settings.aa_map {
         write_sample_map(&film, map)?;
@@ -569,7 +580,7 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         };
         let bar = Bar::new(progress, &out);
         let gi = Gi::build_with(&scene, &settings, &bar);
-        bar.0.finish_and_clear();
+        bar.finish();
         let film = crate::render::photon_view::photon_image(&scene, &camera, &gi, w, h);
         write_image(&film, &out, Tonemap::Clamp)?;
         eprintln!(

@@ -7,7 +7,8 @@
 //! For each point set and size it builds both trees on a 1-thread and a 2-thread rayon pool,
 //! reports build time (wall clock), bytes per photon, and k-nearest query time per query for
 //! queries in render order and in random order: on 1 thread by the thread's CPU time, on 2 threads
-//! by wall clock divided by the number of queries, each the best of `--reps` runs. The last column
+//! by wall clock divided by the number of queries, each the best of `--reps` runs, interleaved
+//! between the implementations so that a slow spell of a shared machine hits them alike. The last column
 //! is the load other processes put on the machine meanwhile (cores), which inflates wall clocks.
 //! kiddo's bytes are the heap bytes live after its build minus those before (a counting global
 //! allocator), so they include everything it owns. Then it checks, on the first `--verify`
@@ -195,33 +196,28 @@ fn timed<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> (f64, R) {
     })
 }
 
-/// Returns the nanoseconds per query of running `one` over `queries`, the best of `reps` runs:
-/// on the calling thread by its CPU time (`threads == 1`, robust to other load), or on a pool of
-/// `threads` threads by wall clock.
-fn per_query(
-    threads: usize,
-    reps: usize,
-    queries: &[[f32; 3]],
-    one: impl Fn(&[f32; 3]) -> f32 + Sync,
-) -> f64 {
-    let run = || {
-        if threads == 1 {
-            let t = clock::thread_cpu_s();
-            std::hint::black_box(queries.iter().map(&one).sum::<f32>());
-            clock::thread_cpu_s() - t
-        } else {
-            let (s, sum) = timed(threads, || {
-                queries
-                    .par_chunks(256)
-                    .map(|c| c.iter().map(&one).sum::<f32>())
-                    .sum::<f32>()
-            });
-            std::hint::black_box(sum);
-            s
-        }
+/// A k-nearest query of one implementation; returns a value that depends on its result.
+type Query<'a> = &'a (dyn Fn(&[f32; 3]) -> f32 + Sync);
+
+/// Returns the nanoseconds per query of one run of `one` over `queries`: on the calling thread
+/// by its CPU time (`threads == 1`, robust to other load), or on a pool of `threads` threads by
+/// wall clock.
+fn per_query(threads: usize, queries: &[[f32; 3]], one: Query) -> f64 {
+    let s = if threads == 1 {
+        let t = clock::thread_cpu_s();
+        std::hint::black_box(queries.iter().map(one).sum::<f32>());
+        clock::thread_cpu_s() - t
+    } else {
+        let (s, sum) = timed(threads, || {
+            queries
+                .par_chunks(256)
+                .map(|c| c.iter().map(one).sum::<f32>())
+                .sum::<f32>()
+        });
+        std::hint::black_box(sum);
+        s
     };
-    let best = clock::min(&(0..reps.max(1)).map(|_| run()).collect::<Vec<_>>());
-    best * 1e9 / queries.len() as f64
+    s * 1e9 / queries.len() as f64
 }
 
 /// One implementation's figures for one point set and size.
@@ -234,20 +230,28 @@ struct Row {
     note: String,
 }
 
-/// Measures the queries of one implementation: render order and random, 1 and 2 threads.
+/// Measures the queries of every implementation: render order and random, 1 and 2 threads,
+/// each the best of `reps` runs. The runs are interleaved (every implementation and case once,
+/// then again), so that a slow spell of a shared machine hits all implementations alike.
 fn query_figures(
     reps: usize,
     render: &[[f32; 3]],
     random: &[[f32; 3]],
-    one: impl Fn(&[f32; 3]) -> f32 + Sync,
-) -> [f64; 4] {
-    per_query(1, 1, &render[..render.len().min(2000)], &one); // warm-up
-    [
-        per_query(1, reps, render, &one),
-        per_query(2, reps, render, &one),
-        per_query(1, reps, random, &one),
-        per_query(2, reps, random, &one),
-    ]
+    impls: &[Query],
+) -> Vec<[f64; 4]> {
+    let cases = [(1, render), (2, render), (1, random), (2, random)];
+    for one in impls {
+        per_query(1, &render[..render.len().min(2000)], *one); // warm-up
+    }
+    let mut best = vec![[f64::INFINITY; 4]; impls.len()];
+    for _ in 0..reps.max(1) {
+        for (one, best) in impls.iter().zip(&mut best) {
+            for (b, &(threads, queries)) in best.iter_mut().zip(&cases) {
+                *b = b.min(per_query(threads, queries, *one));
+            }
+        }
+    }
+    best
 }
 
 /// Returns the sorted squared distances of our k nearest photons to `q`.
@@ -277,11 +281,11 @@ fn bench(set: &str, n: usize, o: &Options) -> (Row, Vec<(String, Row)>, String) 
     }
     let points: Vec<[f32; 3]> = input.iter().map(|p| p.position.to_array()).collect();
     drop(input);
-    ours.query_ns = query_figures(o.reps, &render, &random, |q| {
+    let ours_query = |q: &[f32; 3]| {
         thread_local!(static OUT: std::cell::RefCell<Vec<(f32, caustic::photon::PhotonId)>> =
             const { std::cell::RefCell::new(Vec::new()) });
         OUT.with_borrow_mut(|out| map.knn(Vec3A::from_array(*q), k, f32::INFINITY, out))
-    });
+    };
 
     // kiddo: build under catch_unwind, silencing the panic message.
     let hook = std::panic::take_hook();
@@ -302,10 +306,12 @@ fn bench(set: &str, n: usize, o: &Options) -> (Row, Vec<(String, Row)>, String) 
         Ok(Ok(t)) => t,
         Ok(Err(e)) => {
             kid.note = format!("build error: {e:?}");
+            ours.query_ns = query_figures(o.reps, &render, &random, &[&ours_query])[0];
             return (ours, vec![("kiddo".into(), kid)], String::new());
         }
         Err(_) => {
             kid.note = "panics".into();
+            ours.query_ns = query_figures(o.reps, &render, &random, &[&ours_query])[0];
             return (ours, vec![("kiddo".into(), kid)], String::new());
         }
     };
@@ -317,14 +323,14 @@ fn bench(set: &str, n: usize, o: &Options) -> (Row, Vec<(String, Row)>, String) 
         bytes_per_photon: kid.bytes_per_photon,
         ..Row::default()
     };
-    kid.query_ns = query_figures(o.reps, &render, &random, |q| {
+    let kid_query = |q: &[f32; 3]| {
         let r = tree
             .query(q)
             .nearest_n::<SquaredEuclidean<f32>>(nz)
             .execute();
         r.last().map_or(0.0, |e| e.distance)
-    });
-    kid_unsorted.query_ns = query_figures(o.reps, &render, &random, |q| {
+    };
+    let kid_unsorted_query = |q: &[f32; 3]| {
         let r = tree
             .query(q)
             .nearest_n::<SquaredEuclidean<f32>>(nz)
@@ -332,7 +338,14 @@ fn bench(set: &str, n: usize, o: &Options) -> (Row, Vec<(String, Row)>, String) 
             .unsorted()
             .execute();
         r.iter().map(|e| e.distance).fold(0.0, f32::max)
-    });
+    };
+    let figures = query_figures(
+        o.reps,
+        &render,
+        &random,
+        &[&ours_query, &kid_query, &kid_unsorted_query],
+    );
+    [ours.query_ns, kid.query_ns, kid_unsorted.query_ns] = [figures[0], figures[1], figures[2]];
 
     // Verification: the same multiset of distances, exactly.
     let checked = render.len().min(o.verify);

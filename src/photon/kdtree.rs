@@ -40,6 +40,8 @@ struct Record {
 /// Returns the squared distance between `a` and `b`, as `(a - b).length_squared()` computes it.
 #[inline(always)]
 fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
+    #[cfg(test)]
+    tests::DIST2_CALLS.with(|c| c.set(c.get() + 1));
     let (dx, dy, dz) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
     dx * dx + dy * dy + dz * dz
 }
@@ -544,18 +546,55 @@ mod tests {
         assert!(map.validate().is_err());
     }
 
+    /// Returns the photon distances `f` computes (queries compute one per photon they look at).
+    fn distances_computed(f: impl FnOnce()) -> usize {
+        let before = DIST2_CALLS.get();
+        f();
+        DIST2_CALLS.get() - before
+    }
+
     #[test]
-    fn all_duplicates_build_a_balanced_tree_and_query_fast() {
-        let map = PhotonMap::build(vec![photon(Vec3A::ONE); 100_000]);
+    fn all_duplicates_build_a_balanced_tree_and_query_near_one_path() {
+        let n = 100_000;
+        let map = PhotonMap::build(vec![photon(Vec3A::ONE); n]);
         assert_eq!(map.validate(), Ok(()));
         let mut out = Vec::new();
-        assert_eq!(map.knn(Vec3A::ONE, 50, f32::INFINITY, &mut out), 0.0);
+        // Ties with the k-th distance are pruned, so the query reads the seed subtree (at most
+        // 4k photons) and the medians on one root-to-leaf path, not the whole map.
+        let looked = distances_computed(|| {
+            assert_eq!(map.knn(Vec3A::ONE, 50, f32::INFINITY, &mut out), 0.0);
+        });
         assert_eq!(out.len(), 50);
-        // Ties with the k-th distance are pruned, so the query stays near one root-to-leaf path.
-        let start = std::time::Instant::now();
-        for _ in 0..1000 {
-            map.knn(Vec3A::ONE, 50, f32::INFINITY, &mut out);
-        }
-        assert!(start.elapsed().as_secs_f64() < 0.5, "{:?}", start.elapsed());
+        assert!(looked <= 4 * 50 + 64, "{looked} of {n} photons");
+    }
+
+    #[test]
+    fn a_large_coplanar_map_builds_balanced_and_queries_locally() {
+        // 400 000 photons on y = 0 on a 200 × 200 grid (10 duplicates each): kiddo's failure case.
+        let points = (0..400_000).map(|i| {
+            let (x, z) = ((i % 200) as f32, ((i / 200) % 200) as f32);
+            photon(Vec3A::new(x * 0.005, 0.0, z * 0.005))
+        });
+        let map = PhotonMap::build(points.collect());
+        assert_eq!(map.validate(), Ok(()));
+        let mut out = Vec::new();
+        let queries = 20_000;
+        let looked = distances_computed(|| {
+            for i in 0..queries {
+                let q = Vec3A::new((i % 141) as f32 * 0.007, 0.0, (i / 141) as f32 * 0.007);
+                map.knn(q, 50, f32::INFINITY, &mut out);
+                assert_eq!(out.len(), 50);
+            }
+        });
+        // 50 photons are 5 grid points; a query that stays local reads a few leaves around them
+        // (253 per query when written), where a degenerate tree would read a large
+        // part of the 400 000.
+        let per_query = looked as f64 / queries as f64;
+        assert!(per_query < 600.0, "{per_query} photons per query");
+    }
+
+    thread_local! {
+        /// Calls of [`dist2`] on this thread.
+        pub(super) static DIST2_CALLS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
     }
 }

@@ -22,19 +22,59 @@ const HUGE_PAGE: usize = 2 << 20;
 /// Asks the kernel to back the whole huge pages that `data` covers with huge pages (see the
 /// module doc). Arrays smaller than two huge pages are left alone.
 pub fn prefer_huge_pages<T>(data: &[T]) {
-    static ENABLED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    if let Some((start, len)) = whole_huge_pages(data) {
+        collapse(start, len);
+    }
+}
+
+/// Returns the start and length of the whole huge pages inside `data`, or None when it spans
+/// fewer than two huge pages (or huge pages are turned off).
+fn whole_huge_pages<T>(data: &[T]) -> Option<(usize, usize)> {
     let len = std::mem::size_of_val(data);
-    if len < 2 * HUGE_PAGE
-        || !*ENABLED.get_or_init(|| std::env::var_os("CAUSTIC_HUGE_PAGES").is_none_or(|v| v != "0"))
-    {
-        return;
+    if len < 2 * HUGE_PAGE || !enabled() {
+        return None;
     }
     let start = (data.as_ptr() as usize).next_multiple_of(HUGE_PAGE);
     let end = (data.as_ptr() as usize + len) / HUGE_PAGE * HUGE_PAGE;
-    if end > start {
-        collapse(start, end - start);
+    (end > start).then_some((start, end - start))
+}
+
+/// Returns an empty vector with room for `capacity` elements whose whole huge pages the kernel is
+/// asked to back with huge pages when they are first written (`MADV_HUGEPAGE`). Unlike
+/// [`prefer_huge_pages`], which copies finished arrays into huge pages, this costs nothing: the
+/// pages are faulted in as huge ones in the first place. Use it for arrays built in one go.
+pub fn huge_vec<T>(capacity: usize) -> Vec<T> {
+    let mut v = Vec::with_capacity(capacity);
+    reserve_huge(&mut v, capacity);
+    v
+}
+
+/// Reserves room for `additional` more elements in `v` and advises huge pages for the whole
+/// huge pages of the spare room (see [`huge_vec`]); pages already written stay as they are.
+pub fn reserve_huge<T>(v: &mut Vec<T>, additional: usize) {
+    v.reserve(additional);
+    if let Some((start, len)) = whole_huge_pages(v.spare_capacity_mut()) {
+        advise(start, len);
     }
 }
+
+fn enabled() -> bool {
+    static ENABLED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ENABLED.get_or_init(|| std::env::var_os("CAUSTIC_HUGE_PAGES").is_none_or(|v| v != "0"))
+}
+
+#[cfg(target_os = "linux")]
+fn advise(start: usize, len: usize) {
+    // SAFETY: `start..start + len` lies inside one live allocation (the vector's spare
+    // capacity); MADV_HUGEPAGE only changes how pages not yet written will be mapped, never any
+    // contents, and an error leaves the mapping as it was, so the result is ignored.
+    unsafe {
+        libc::madvise(start as *mut libc::c_void, len, libc::MADV_HUGEPAGE);
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn advise(_start: usize, _len: usize) {}
 
 #[cfg(target_os = "linux")]
 fn collapse(start: usize, len: usize) {

@@ -76,5 +76,7 @@ pub(super) fn collapse(bvh2: &Bvh2) -> WideBvh {
         }
     }
     nodes.shrink_to_fit();
+    crate::mem::prefer_huge_pages(&nodes);
+    crate::mem::prefer_huge_pages(&leaves);
     WideBvh::new(nodes, leaves, bvh2.primitive_indices.clone(), max_level)
 }

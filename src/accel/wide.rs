@@ -102,8 +102,6 @@ pub(super) struct WideBvh {
 impl WideBvh {
     /// Wraps built nodes (root at 0), choosing the fastest kernel; `depth` counts node levels.
     pub(super) fn new(nodes: Vec<Node>, leaves: Vec<Leaf>, order: Vec<u32>, depth: usize) -> Self {
-        crate::mem::prefer_huge_pages(&nodes);
-        crate::mem::prefer_huge_pages(&leaves);
         WideBvh {
             nodes,
             leaves,

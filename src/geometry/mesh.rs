@@ -5,11 +5,12 @@
 //! placed ten times is stored once. Vertex attributes are indexed by one index
 //! per corner (loaders unify `v/vt/vn` triples into single vertices).
 
-use crate::accel::{Bounds, Bvh, Kernel};
+use crate::accel::{Bounds, Builder, Bvh, Kernel};
 use crate::geometry::Ray;
 use crate::geometry::tri4::Tri4;
 use crate::geometry::triangle::{RayShear, TriangleHit};
 use glam::{Vec2, Vec3, Vec3A};
+use rayon::prelude::*;
 use std::path::PathBuf;
 
 /// A triangle mesh as loaded from a file, in the object space of its node.
@@ -85,21 +86,30 @@ impl MeshGeom {
     /// Positions must be finite, and `triangle_materials` empty or parallel to `triangles` with
     /// every entry below `materials.len()` (the scene builder checks both).
     pub fn new(data: &MeshData, first_material: u32) -> MeshGeom {
-        let positions: Vec<Vec3A> = data.positions.iter().map(|&p| p.into()).collect();
+        MeshGeom::with_builder(data, first_material, Builder::BinnedSah)
+    }
+
+    /// [`MeshGeom::new`] with the BVH built by `builder` (for benchmarks and tests).
+    pub fn with_builder(data: &MeshData, first_material: u32, builder: Builder) -> MeshGeom {
+        let mut positions = crate::mem::huge_vec(data.positions.len());
+        data.positions
+            .par_iter()
+            .map(|&p| p.into())
+            .collect_into_vec(&mut positions);
         let boxes: Vec<Bounds> = data
             .triangles
-            .iter()
+            .par_iter()
             .map(|t| {
                 t.iter()
                     .fold(Bounds::EMPTY, |b, &i| b.grow(positions[i as usize]))
             })
             .collect();
-        let bvh = Bvh::build(&boxes);
-        let triangles: Vec<[u32; 3]> = bvh
-            .order()
-            .iter()
+        let bvh = Bvh::build_with(&boxes, builder);
+        let mut triangles = crate::mem::huge_vec(bvh.len());
+        bvh.order()
+            .par_iter()
             .map(|&i| data.triangles[i as usize])
-            .collect();
+            .collect_into_vec(&mut triangles);
         let materials = if data.triangle_materials.is_empty() {
             Vec::new()
         } else {
@@ -108,9 +118,9 @@ impl MeshGeom {
                 .map(|&i| first_material + data.triangle_materials[i as usize])
                 .collect()
         };
-        let blocks: Vec<Tri4> = bvh
-            .leaves()
-            .iter()
+        let mut blocks = crate::mem::huge_vec(bvh.leaves().len());
+        bvh.leaves()
+            .par_iter()
             .map(|l| {
                 let mut corners = [[Vec3A::ZERO; 3]; 4];
                 let range = l.first as usize..(l.first + l.count) as usize;
@@ -119,11 +129,11 @@ impl MeshGeom {
                 }
                 Tri4::new(&corners[..l.count as usize])
             })
-            .collect();
-        let bounds = boxes.iter().fold(Bounds::EMPTY, |a, &b| a.union(b));
-        crate::mem::prefer_huge_pages(&blocks);
-        crate::mem::prefer_huge_pages(&positions);
-        crate::mem::prefer_huge_pages(&triangles);
+            .collect_into_vec(&mut blocks);
+        let bounds = boxes
+            .par_iter()
+            .copied()
+            .reduce(|| Bounds::EMPTY, Bounds::union);
         MeshGeom {
             positions,
             normals: data.normals.iter().map(|&n| n.into()).collect(),

@@ -1,14 +1,16 @@
 //! Traversal benchmark against the Embree reference harness (`../shared/bench/README.md`).
 //!
 //! ```text
-//! bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--kernel K] MESH RAYS [RAYS...]
+//! bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--kernel K] [--builder B]
+//!                 MESH RAYS [RAYS...]
 //! ```
 //!
-//! `--kernel scalar|sse2|avx2` picks the BVH node test (default: the fastest the CPU runs); the
-//! report's `quality` names the build configuration and the kernel.
+//! `--kernel scalar|sse2|avx2` picks the BVH node test (default: the fastest the CPU runs);
+//! `--builder sah|ploc` the BVH builder (default: `sah`, the one meshes use); the report's
+//! `quality` names the build configuration and the kernel.
 //!
 //! Reads the harness's `.mesh` and `.rays` files, builds the mesh's BVH exactly as the renderer
-//! does ([`MeshGeom::new`] from a [`MeshData`]) and traces every ray set in file order: closest
+//! does ([`MeshGeom::with_builder`] from a [`MeshData`]) and traces every ray set in file order: closest
 //! hit (`mode=intersect1`) and any hit (`mode=occluded1`) on the calling thread, then the same on
 //! `--mt` threads (`mode=intersect1_<N>t`, `occluded1_<N>t`; 0 skips them). Each mode runs one
 //! untimed warm-up pass and `--reps` timed passes, timed by wall clock and by the tracing thread's
@@ -21,7 +23,7 @@
 //! `(tmin, tmax)`, the files' rays have `tmin = 0`, so only a ray starting exactly on the surface
 //! could differ from Embree's closed interval.
 
-use caustic::accel::{BUILD_CONFIG, Kernel};
+use caustic::accel::{Builder, Kernel};
 use caustic::geometry::Ray;
 use caustic::geometry::mesh::{MeshData, MeshGeom};
 use caustic_tools::benchfile::{RayRecord, RaySet, read_mesh, read_rays};
@@ -43,12 +45,13 @@ struct Options {
     verify: Option<usize>,
     mt: usize,
     kernel: Kernel,
+    builder: Builder,
     mesh: PathBuf,
     rays: Vec<PathBuf>,
 }
 
 const USAGE: &str = "usage: bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] \
-                     [--kernel scalar|sse2|avx2] MESH RAYS [RAYS...]";
+                     [--kernel scalar|sse2|avx2] [--builder sah|ploc] MESH RAYS [RAYS...]";
 
 fn parse_args() -> Result<Options, String> {
     let mut o = Options {
@@ -57,6 +60,7 @@ fn parse_args() -> Result<Options, String> {
         verify: None,
         mt: 2,
         kernel: Kernel::best(),
+        builder: Builder::BinnedSah,
         mesh: PathBuf::new(),
         rays: Vec::new(),
     };
@@ -79,6 +83,13 @@ fn parse_args() -> Result<Options, String> {
                     Some("sse2") => Kernel::Sse2,
                     Some("avx2") => Kernel::Avx2,
                     k => return Err(format!("--kernel wants scalar, sse2 or avx2, got {k:?}")),
+                }
+            }
+            "--builder" => {
+                o.builder = match args.next().as_deref() {
+                    Some("sah") => Builder::BinnedSah,
+                    Some("ploc") => Builder::Ploc,
+                    b => return Err(format!("--builder wants sah or ploc, got {b:?}")),
                 }
             }
             "-h" | "--help" => return Err(USAGE.into()),
@@ -130,9 +141,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ftz as u8,
         rayon::current_num_threads()
     );
-    let mut geom = build(&data, &mesh, &quality(o.kernel), o.build_reps)?;
+    let mut geom = build(
+        &data,
+        &mesh,
+        o.builder,
+        &quality(o.builder, o.kernel),
+        o.build_reps,
+    )?;
     let kernel = geom.bvh.set_kernel(o.kernel);
-    let quality = quality(kernel);
+    let quality = quality(o.builder, kernel);
     let ctx = Ctx {
         geom: &geom,
         order: geom.bvh.order(),
@@ -165,15 +182,20 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 /// Returns the report's `quality`: the build configuration and the node-test kernel.
-fn quality(kernel: Kernel) -> String {
-    format!("{BUILD_CONFIG}-{}", format!("{kernel:?}").to_lowercase())
+fn quality(builder: Builder, kernel: Kernel) -> String {
+    format!(
+        "{}-{}",
+        builder.name(),
+        format!("{kernel:?}").to_lowercase()
+    )
 }
 
-/// Times [`MeshGeom::new`] on one thread (process CPU time) and on all threads (wall time),
+/// Times [`MeshGeom::with_builder`] on one thread (process CPU time) and on all threads (wall time),
 /// prints a `BUILD` line for each and returns the last BVH built.
 fn build(
     data: &MeshData,
     mesh: &str,
+    builder: Builder,
     quality: &str,
     reps: usize,
 ) -> Result<MeshGeom, Box<dyn std::error::Error>> {
@@ -186,8 +208,8 @@ fn build(
             drop(geom.take());
             let (c0, w0) = (clock::process_cpu_s(), Instant::now());
             let g = match pool {
-                Some(p) => p.install(|| MeshGeom::new(data, 0)),
-                None => MeshGeom::new(data, 0),
+                Some(p) => p.install(|| MeshGeom::with_builder(data, 0, builder)),
+                None => MeshGeom::with_builder(data, 0, builder),
             };
             wall.push(w0.elapsed().as_secs_f64());
             cpu.push(clock::process_cpu_s() - c0);

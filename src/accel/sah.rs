@@ -1,0 +1,453 @@
+//! Our own builder: top-down binned SAH straight into 8-wide nodes, in parallel.
+//!
+//! Why not obvhs's PLOC for meshes: on the 2M-triangle wave mesh PLOC plus its reinsertion and
+//! leaf collapse, then our collapse to 8 wide, took 1.9 s on two threads and left 2.9 triangles
+//! per leaf (a quarter of every 4-wide triangle test wasted), while Embree's binned SAH builder
+//! takes 0.5 s. obvhs has no top-down builder (`../shared/docs/obvhs.md` §1), so this is
+//! the one in Wald's "On fast Construction of SAH-based Bounding Volume Hierarchies" (2007), shaped
+//! like Embree's BVH8 builder:
+//!
+//! - primitives are 32-byte references (box and index) that are partitioned in place, so each
+//!   level streams through memory instead of gathering boxes by index;
+//! - a node starts with its whole range as one child and splits the child with the largest
+//!   surface until it has eight ([`WIDTH`]) or none can be split; each split is the cheapest of
+//!   [`BINS`] planes per axis over the centroids' extent, costed as area × 4-triangle blocks,
+//!   because leaves are tested four at a time;
+//! - ranges of at most [`MAX_LEAF`] primitives become leaves, so leaves are full;
+//! - ranges of [`PAR_BIN`] or more are binned by all threads, and subtrees of [`PAR_TREE`] or
+//!   more are built in parallel into their own arrays, then appended; binning sums, minima and
+//!   maxima do not depend on the order of the reduction, so the tree is the same for any number
+//!   of threads.
+//!
+//! Measured on the wave mesh (2-core VM, `bench_traversal`): 0.99–1.02 s on one thread,
+//! 0.55–0.60 s on two; 3.95 triangles per leaf; primary rays 5.3 Mrays/s against 3.5–3.7 from
+//! the PLOC tree. Left for later: nodes average 3.2 children, because ranges of 5 to 32
+//! triangles become nodes of a few full leaves; leaves of several 4-triangle blocks chosen by
+//! SAH (as Embree does) would fill them.
+
+use super::Bounds;
+use super::MAX_LEAF;
+use super::wide::{LEAF, Leaf, Node, WIDTH, WideBvh};
+use glam::Vec4;
+use rayon::prelude::*;
+
+/// Split planes tried per axis.
+const BINS: usize = 16;
+/// Ranges at least this long are binned in parallel.
+const PAR_BIN: usize = 1 << 16;
+/// Subtrees at least this long are built in parallel.
+const PAR_TREE: usize = 1 << 12;
+
+/// A box; lane `w` carries no meaning (in a [`PrimRef`]'s `lo` it holds the index's bits).
+#[derive(Clone, Copy, Debug)]
+struct Box4 {
+    lo: Vec4,
+    hi: Vec4,
+}
+
+impl Box4 {
+    const EMPTY: Box4 = Box4 {
+        lo: Vec4::splat(f32::INFINITY),
+        hi: Vec4::splat(f32::NEG_INFINITY),
+    };
+
+    #[inline(always)]
+    fn grow(&mut self, o: &Box4) {
+        self.lo = self.lo.min(o.lo);
+        self.hi = self.hi.max(o.hi);
+    }
+
+    #[inline(always)]
+    fn grow_point(&mut self, p: Vec4) {
+        self.lo = self.lo.min(p);
+        self.hi = self.hi.max(p);
+    }
+
+    /// Half the surface area (0 for an empty box).
+    #[inline(always)]
+    fn half_area(&self) -> f32 {
+        let d = (self.hi - self.lo).max(Vec4::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+}
+
+/// A primitive reference: its box, with its index in `lo.w`.
+type PrimRef = Box4;
+
+#[inline(always)]
+fn prim_index(p: &PrimRef) -> u32 {
+    p.lo.w.to_bits()
+}
+
+/// Twice the centroid (the factor cancels in every use).
+#[inline(always)]
+fn centroid2(p: &PrimRef) -> Vec4 {
+    p.lo + p.hi
+}
+
+/// A run of references with its bounds and its centroids' bounds.
+#[derive(Clone, Copy, Debug)]
+struct Range {
+    start: usize,
+    end: usize,
+    bounds: Box4,
+    cent: Box4,
+}
+
+impl Range {
+    fn len(&self) -> usize {
+        self.end - self.start
+    }
+}
+
+/// Maps centroids to bins along each axis.
+#[derive(Clone, Copy)]
+struct Binner {
+    origin: Vec4,
+    scale: Vec4,
+}
+
+impl Binner {
+    fn new(cent: &Box4) -> Binner {
+        let extent = cent.hi - cent.lo;
+        let s = |e: f32| {
+            if e > 0.0 {
+                BINS as f32 * 0.999_99 / e
+            } else {
+                0.0
+            }
+        };
+        Binner {
+            origin: cent.lo,
+            scale: Vec4::new(s(extent.x), s(extent.y), s(extent.z), 0.0),
+        }
+    }
+
+    /// The bin of `p` along each axis (lane 3 unused).
+    #[inline(always)]
+    fn bins(&self, p: &PrimRef) -> [usize; 4] {
+        let k = ((centroid2(p) - self.origin) * self.scale)
+            .clamp(Vec4::ZERO, Vec4::splat((BINS - 1) as f32));
+        [k.x as usize, k.y as usize, k.z as usize, 0]
+    }
+}
+
+/// Per axis and bin: the union of the boxes and the count of the references binned there.
+#[derive(Clone, Copy)]
+struct Bins {
+    boxes: [[Box4; BINS]; 3],
+    counts: [[u32; BINS]; 3],
+}
+
+impl Bins {
+    fn empty() -> Bins {
+        Bins {
+            boxes: [[Box4::EMPTY; BINS]; 3],
+            counts: [[0; BINS]; 3],
+        }
+    }
+
+    fn add(mut self, prims: &[PrimRef], b: &Binner) -> Bins {
+        for p in prims {
+            let k = b.bins(p);
+            for (axis, &bin) in k[..3].iter().enumerate() {
+                self.boxes[axis][bin].grow(p);
+                self.counts[axis][bin] += 1;
+            }
+        }
+        self
+    }
+
+    fn merge(mut self, o: Bins) -> Bins {
+        for axis in 0..3 {
+            for i in 0..BINS {
+                self.boxes[axis][i].grow(&o.boxes[axis][i]);
+                self.counts[axis][i] += o.counts[axis][i];
+            }
+        }
+        self
+    }
+
+    fn of(prims: &[PrimRef], b: &Binner) -> Bins {
+        if prims.len() >= PAR_BIN {
+            prims
+                .par_chunks(PAR_BIN / 4)
+                .map(|c| Bins::empty().add(c, b))
+                .reduce(Bins::empty, Bins::merge)
+        } else {
+            Bins::empty().add(prims, b)
+        }
+    }
+
+    /// The cheapest split: (axis, first bin of the right side), or None when every axis has all
+    /// references in one bin.
+    fn best(&self) -> Option<(usize, usize)> {
+        // Leaves are tested four triangles at a time: cost counts blocks of four.
+        let blocks = |n: u32| n.div_ceil(MAX_LEAF as u32) as f32;
+        let mut best = (f32::INFINITY, None);
+        for axis in 0..3 {
+            let (boxes, counts) = (&self.boxes[axis], &self.counts[axis]);
+            let mut right_cost = [0.0f32; BINS];
+            let mut right_n = [0u32; BINS];
+            let (mut acc, mut n) = (Box4::EMPTY, 0);
+            for i in (1..BINS).rev() {
+                acc.grow(&boxes[i]);
+                n += counts[i];
+                right_cost[i] = acc.half_area() * blocks(n);
+                right_n[i] = n;
+            }
+            let (mut acc, mut n) = (Box4::EMPTY, 0);
+            for i in 1..BINS {
+                acc.grow(&boxes[i - 1]);
+                n += counts[i - 1];
+                if n == 0 || right_n[i] == 0 {
+                    continue;
+                }
+                let cost = acc.half_area() * blocks(n) + right_cost[i];
+                if cost < best.0 {
+                    best = (cost, Some((axis, i)));
+                }
+            }
+        }
+        best.1
+    }
+}
+
+/// Splits `r` in two non-empty ranges, reordering `prims[r.start..r.end]` (at least two).
+fn split(prims: &mut [PrimRef], r: &Range) -> (Range, Range) {
+    let part = &mut prims[r.start..r.end];
+    let binner = Binner::new(&r.cent);
+    let (mid, left, right) = match Bins::of(part, &binner).best() {
+        Some((axis, plane)) => partition(part, |p| binner.bins(p)[axis] < plane),
+        None => {
+            // All centroids in one bin on every axis (equal, or too close for f32 to separate):
+            // any split costs the same, so halve the range by position along the widest axis.
+            let axis = (r.cent.hi - r.cent.lo).truncate().max_position();
+            let half = part.len() / 2;
+            part.select_nth_unstable_by(half, |a, b| {
+                centroid2(a)[axis].total_cmp(&centroid2(b)[axis])
+            });
+            let (l, rr) = part.split_at(half);
+            (half, Side::of(l), Side::of(rr))
+        }
+    };
+    let range = |s: Side, start: usize, end: usize| Range {
+        start,
+        end,
+        bounds: s.bounds,
+        cent: s.cent,
+    };
+    (
+        range(left, r.start, r.start + mid),
+        range(right, r.start + mid, r.end),
+    )
+}
+
+/// The bounds and centroid bounds of some references.
+#[derive(Clone, Copy)]
+struct Side {
+    bounds: Box4,
+    cent: Box4,
+}
+
+impl Side {
+    const EMPTY: Side = Side {
+        bounds: Box4::EMPTY,
+        cent: Box4::EMPTY,
+    };
+
+    #[inline(always)]
+    fn add(&mut self, p: &PrimRef) {
+        self.bounds.grow(p);
+        self.cent.grow_point(centroid2(p));
+    }
+
+    fn of(s: &[PrimRef]) -> Side {
+        let mut side = Side::EMPTY;
+        s.iter().for_each(|p| side.add(p));
+        side
+    }
+}
+
+/// Moves the references satisfying `left` to the front, measuring both sides on the way;
+/// returns how many satisfy it and the two sides' bounds.
+fn partition(s: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> (usize, Side, Side) {
+    let (mut l, mut r) = (Side::EMPTY, Side::EMPTY);
+    let (mut i, mut j) = (0, s.len());
+    loop {
+        while i < j && left(&s[i]) {
+            l.add(&s[i]);
+            i += 1;
+        }
+        while i < j && !left(&s[j - 1]) {
+            r.add(&s[j - 1]);
+            j -= 1;
+        }
+        if i >= j {
+            return (i, l, r);
+        }
+        // s[i] goes right and s[j - 1] left: swap them, and count each on its side.
+        s.swap(i, j - 1);
+        l.add(&s[i]);
+        r.add(&s[j - 1]);
+        i += 1;
+        j -= 1;
+    }
+}
+
+/// A built subtree: its nodes (root first, child references relative to this array) and its
+/// leaves (ids relative to this array).
+#[derive(Default)]
+struct Sub {
+    nodes: Vec<Node>,
+    leaves: Vec<Leaf>,
+    depth: usize,
+}
+
+impl Sub {
+    /// Appends `o` whose root is `root`, returning the reference to that root from `self`.
+    fn append(&mut self, root: u32, o: Sub) -> u32 {
+        let (nb, lb) = (self.nodes.len() as u32, self.leaves.len() as u32);
+        self.depth = self.depth.max(o.depth);
+        self.leaves.extend_from_slice(&o.leaves);
+        self.nodes.extend(o.nodes.into_iter().map(|mut n| {
+            for c in &mut n.child {
+                *c = if *c & LEAF != 0 { *c + lb } else { *c + nb };
+            }
+            n
+        }));
+        if root & LEAF != 0 {
+            root + lb
+        } else {
+            root + nb
+        }
+    }
+}
+
+/// Builds the subtree of `r` (a range of `prims`, whose index 0 is BVH-order index `base`) into
+/// `out`, returning the reference to its root: a leaf or a node.
+fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: usize) -> u32 {
+    out.depth = out.depth.max(level);
+    if r.len() <= MAX_LEAF {
+        out.leaves.push(Leaf {
+            first: (base + r.start) as u32,
+            count: r.len() as u32,
+        });
+        return LEAF | (out.leaves.len() as u32 - 1);
+    }
+    // Open the child with the largest surface until there are eight.
+    let mut kids = vec![r];
+    while kids.len() < WIDTH {
+        let widest = kids
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| k.len() > MAX_LEAF)
+            .max_by(|a, b| a.1.bounds.half_area().total_cmp(&b.1.bounds.half_area()));
+        let Some((at, _)) = widest else { break };
+        let (a, b) = split(prims, &kids[at]);
+        kids[at] = a;
+        kids.push(b);
+    }
+    kids.sort_unstable_by_key(|k| k.start);
+    let me = out.nodes.len();
+    out.nodes.push(Node::EMPTY);
+    for (slot, k) in kids.iter().enumerate() {
+        out.nodes[me].set_box(
+            slot,
+            k.bounds.lo.truncate().into(),
+            k.bounds.hi.truncate().into(),
+        );
+    }
+    if r.len() >= PAR_TREE {
+        // Hand each child its own slice of `prims` and build them at once.
+        let mut rest = &mut prims[r.start..r.end];
+        let mut jobs = Vec::with_capacity(kids.len());
+        for k in &kids {
+            let (mine, tail) = rest.split_at_mut(k.len());
+            rest = tail;
+            let local = Range {
+                start: 0,
+                end: k.len(),
+                ..*k
+            };
+            jobs.push((mine, base + k.start, local));
+        }
+        let subs: Vec<(u32, Sub)> = jobs
+            .into_par_iter()
+            .map(|(mine, at, local)| {
+                let mut s = Sub::default();
+                let root = subtree(mine, at, local, &mut s, level + 1);
+                (root, s)
+            })
+            .collect();
+        // The biggest arrays are assembled here: fault them in as huge pages (`crate::mem`).
+        let more = |f: fn(&Sub) -> usize| subs.iter().map(|s| f(&s.1)).sum::<usize>();
+        crate::mem::reserve_huge(&mut out.nodes, more(|s| s.nodes.len()));
+        crate::mem::reserve_huge(&mut out.leaves, more(|s| s.leaves.len()));
+        for (slot, (root, s)) in subs.into_iter().enumerate() {
+            out.nodes[me].child[slot] = out.append(root, s);
+        }
+    } else {
+        for (slot, k) in kids.into_iter().enumerate() {
+            let c = subtree(prims, base, k, out, level + 1);
+            out.nodes[me].child[slot] = c;
+        }
+    }
+    me as u32
+}
+
+/// Builds an 8-wide BVH over `boxes` (at least two, all finite).
+pub(super) fn build(boxes: &[Bounds]) -> WideBvh {
+    let mut prims = crate::mem::huge_vec(boxes.len());
+    boxes
+        .par_iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let mut lo = Vec4::from((b.min, 0.0));
+            lo.w = f32::from_bits(i as u32);
+            PrimRef {
+                lo,
+                hi: Vec4::from((b.max, 0.0)),
+            }
+        })
+        .collect_into_vec(&mut prims);
+    let (bounds, cent) = prims
+        .par_chunks(PAR_BIN / 4)
+        .map(|c| {
+            let (mut b, mut m) = (Box4::EMPTY, Box4::EMPTY);
+            for p in c {
+                b.grow(p);
+                m.grow_point(centroid2(p));
+            }
+            (b, m)
+        })
+        .reduce(
+            || (Box4::EMPTY, Box4::EMPTY),
+            |mut a, b| {
+                a.0.grow(&b.0);
+                a.1.grow(&b.1);
+                a
+            },
+        );
+    let whole = Range {
+        start: 0,
+        end: prims.len(),
+        bounds,
+        cent,
+    };
+    let mut sub = Sub::default();
+    let root = subtree(&mut prims, 0, whole, &mut sub, 1);
+    if root & LEAF != 0 {
+        // Too few primitives for a node: one node with the leaf as its only child.
+        let mut n = Node::EMPTY;
+        n.set_box(0, bounds.lo.truncate().into(), bounds.hi.truncate().into());
+        n.child[0] = root;
+        sub.nodes.push(n);
+    }
+    let mut order = crate::mem::huge_vec(prims.len());
+    prims
+        .par_iter()
+        .map(prim_index)
+        .collect_into_vec(&mut order);
+    WideBvh::new(sub.nodes, sub.leaves, order, sub.depth)
+}

@@ -58,8 +58,12 @@ impl Builder {
     }
 }
 
-/// The most primitives a leaf holds (one 4-wide SIMD test of triangles).
-pub const MAX_LEAF: usize = 4;
+/// Primitives per SIMD block: a leaf is tested [`LEAF_BLOCK`] triangles at a time.
+pub const LEAF_BLOCK: usize = 4;
+
+/// The most primitives a leaf holds: two blocks for the SAH builder, which makes a range of
+/// five to eight triangles one leaf rather than a node of two leaves; one block for PLOC.
+pub const MAX_LEAF: usize = 2 * LEAF_BLOCK;
 
 /// An axis-aligned box; `min <= max` on every axis for a non-empty box.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -409,7 +413,7 @@ mod tests {
     }
 
     /// The binned SAH builder makes the same tree, byte for byte, on one thread and on two (it
-    /// bins and builds subtrees in parallel above a size), and fills its leaves and nodes.
+    /// bins and builds subtrees in parallel above a size), and fills its blocks and nodes.
     #[test]
     fn binned_sah_is_deterministic_and_full() {
         // A bumpy height field of 200k thin boxes, like a triangle mesh's.
@@ -443,7 +447,20 @@ mod tests {
                 y.planes.map(|r| r.map(f32::to_bits))
             );
         }
-        let per_leaf = boxes.len() as f64 / a.leaves.len() as f64;
-        assert!(per_leaf > 3.5, "{per_leaf:.2} boxes per leaf");
+        // Blocks of four are (nearly) full, and nodes are not sparse.
+        let blocks: usize = a
+            .leaves
+            .iter()
+            .map(|l| (l.count as usize).div_ceil(LEAF_BLOCK))
+            .sum();
+        let per_block = boxes.len() as f64 / blocks as f64;
+        assert!(per_block > 3.8, "{per_block:.2} boxes per block");
+        let used = |n: &wide::Node| {
+            (0..wide::WIDTH)
+                .filter(|&k| n.planes[0][k] <= n.planes[1][k])
+                .count()
+        };
+        let per_node = a.nodes.iter().map(used).sum::<usize>() as f64 / a.nodes.len() as f64;
+        assert!(per_node > 5.0, "{per_node:.2} children per node");
     }
 }

@@ -13,21 +13,23 @@
 //!   surface until it has eight ([`WIDTH`]) or none can be split; each split is the cheapest of
 //!   [`BINS`] planes per axis over the centroids' extent, costed as area × 4-triangle blocks,
 //!   because leaves are tested four at a time;
-//! - ranges of at most [`MAX_LEAF`] primitives become leaves, so leaves are full;
+//! - a node splits every child of more than [`LEAF_BLOCK`] primitives while it has room; a
+//!   child left with at most [`MAX_LEAF`] (two blocks) becomes a leaf rather than a node of two
+//!   leaves, so blocks are full and nodes are not sparse;
 //! - ranges of [`PAR_BIN`] or more are binned by all threads, and subtrees of [`PAR_TREE`] or
 //!   more are built in parallel into their own arrays, then appended; binning sums, minima and
 //!   maxima do not depend on the order of the reduction, so the tree is the same for any number
 //!   of threads.
 //!
-//! Measured on the wave mesh (2-core VM, `bench_traversal`): 0.99–1.02 s on one thread,
-//! 0.55–0.60 s on two; 3.95 triangles per leaf; primary rays 5.3 Mrays/s against 3.5–3.7 from
-//! the PLOC tree. Left for later: nodes average 3.2 children, because ranges of 5 to 32
-//! triangles become nodes of a few full leaves; leaves of several 4-triangle blocks chosen by
-//! SAH (as Embree does) would fill them.
+//! Measured on the wave mesh (2-core VM, `bench_traversal`): about 1.0–1.2 s on one thread and
+//! 0.6–0.7 s on two; 3.95 triangles per block, 5.4 children per node, 53 B per triangle; primary
+//! rays 4.5–5.3 Mrays/s against 3.5–3.7 from the PLOC tree. With one-block leaves nodes
+//! averaged 3.2 children (ranges of five to eight triangles became nodes of two leaves) and the
+//! BVH took 72 B per triangle, for the same traversal speed.
 
 use super::Bounds;
-use super::MAX_LEAF;
 use super::wide::{LEAF, Leaf, Node, WIDTH, WideBvh};
+use super::{LEAF_BLOCK, MAX_LEAF};
 use glam::Vec4;
 use rayon::prelude::*;
 
@@ -183,7 +185,7 @@ impl Bins {
     /// references in one bin.
     fn best(&self) -> Option<(usize, usize)> {
         // Leaves are tested four triangles at a time: cost counts blocks of four.
-        let blocks = |n: u32| n.div_ceil(MAX_LEAF as u32) as f32;
+        let blocks = |n: u32| n.div_ceil(LEAF_BLOCK as u32) as f32;
         let mut best = (f32::INFINITY, None);
         for axis in 0..3 {
             let (boxes, counts) = (&self.boxes[axis], &self.counts[axis]);
@@ -341,7 +343,7 @@ fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: u
         let widest = kids
             .iter()
             .enumerate()
-            .filter(|(_, k)| k.len() > MAX_LEAF)
+            .filter(|(_, k)| k.len() > LEAF_BLOCK)
             .max_by(|a, b| a.1.bounds.half_area().total_cmp(&b.1.bounds.half_area()));
         let Some((at, _)) = widest else { break };
         let (a, b) = split(prims, &kids[at]);

@@ -58,12 +58,9 @@ impl Builder {
     }
 }
 
-/// Primitives per SIMD block: a leaf is tested [`LEAF_BLOCK`] triangles at a time.
-pub const LEAF_BLOCK: usize = 4;
-
-/// The most primitives a leaf holds: two blocks for the SAH builder, which makes a range of
-/// five to eight triangles one leaf rather than a node of two leaves; one block for PLOC.
-pub const MAX_LEAF: usize = 2 * LEAF_BLOCK;
+/// The most primitives a leaf holds (one 4-wide SIMD test of triangles). A node's child can be
+/// a pair of leaves (see [`sah`]).
+pub const MAX_LEAF: usize = 4;
 
 /// An axis-aligned box; `min <= max` on every axis for a non-empty box.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -377,12 +374,14 @@ mod tests {
                 if c & wide::LEAF == 0 || n.planes[0][slot] > n.planes[1][slot] {
                     continue;
                 }
-                let l = inner.leaves[(c & !wide::LEAF) as usize];
-                for i in l.first..l.first + l.count {
-                    let b = boxes[inner.order[i as usize] as usize];
-                    for a in 0..3 {
-                        assert!(n.planes[2 * a][slot] <= b.min[a]);
-                        assert!(b.max[a] <= n.planes[2 * a + 1][slot]);
+                for id in wide::leaf_ids(c) {
+                    let l = inner.leaves[id as usize];
+                    for i in l.first..l.first + l.count {
+                        let b = boxes[inner.order[i as usize] as usize];
+                        for a in 0..3 {
+                            assert!(n.planes[2 * a][slot] <= b.min[a]);
+                            assert!(b.max[a] <= n.planes[2 * a + 1][slot]);
+                        }
                     }
                 }
             }
@@ -413,7 +412,7 @@ mod tests {
     }
 
     /// The binned SAH builder makes the same tree, byte for byte, on one thread and on two (it
-    /// bins and builds subtrees in parallel above a size), and fills its blocks and nodes.
+    /// bins and builds subtrees in parallel above a size), and fills its leaves and nodes.
     #[test]
     fn binned_sah_is_deterministic_and_full() {
         // A bumpy height field of 200k thin boxes, like a triangle mesh's.
@@ -447,14 +446,9 @@ mod tests {
                 y.planes.map(|r| r.map(f32::to_bits))
             );
         }
-        // Blocks of four are (nearly) full, and nodes are not sparse.
-        let blocks: usize = a
-            .leaves
-            .iter()
-            .map(|l| (l.count as usize).div_ceil(LEAF_BLOCK))
-            .sum();
-        let per_block = boxes.len() as f64 / blocks as f64;
-        assert!(per_block > 3.8, "{per_block:.2} boxes per block");
+        // Leaves are (nearly) full, and nodes are not sparse.
+        let per_leaf = boxes.len() as f64 / a.leaves.len() as f64;
+        assert!(per_leaf > 3.8, "{per_leaf:.2} boxes per leaf");
         let used = |n: &wide::Node| {
             (0..wide::WIDTH)
                 .filter(|&k| n.planes[0][k] <= n.planes[1][k])

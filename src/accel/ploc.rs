@@ -1,6 +1,6 @@
 //! Building with obvhs: its PLOC binary BVH, collapsed into our 8-wide nodes.
 
-use super::LEAF_BLOCK;
+use super::MAX_LEAF;
 use super::wide::{LEAF, Leaf, Node, WIDTH, WideBvh};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
@@ -11,7 +11,7 @@ use std::time::Duration;
 /// Builds obvhs's medium-preset PLOC BVH over `boxes` (at least two) and collapses it.
 pub(super) fn build(boxes: &[Aabb]) -> WideBvh {
     let params = BvhBuildParams {
-        max_prims_per_leaf: LEAF_BLOCK as u32,
+        max_prims_per_leaf: MAX_LEAF as u32,
         ..BvhBuildParams::medium_build()
     };
     collapse(&build_bvh2(boxes, params, &mut Duration::default()))

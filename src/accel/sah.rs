@@ -13,23 +13,23 @@
 //!   surface until it has eight ([`WIDTH`]) or none can be split; each split is the cheapest of
 //!   [`BINS`] planes per axis over the centroids' extent, costed as area × 4-triangle blocks,
 //!   because leaves are tested four at a time;
-//! - a node splits every child of more than [`LEAF_BLOCK`] primitives while it has room; a
-//!   child left with at most [`MAX_LEAF`] (two blocks) becomes a leaf rather than a node of two
-//!   leaves, so blocks are full and nodes are not sparse;
+//! - a node splits every child of more than [`MAX_LEAF`] primitives while it has room; a child
+//!   left with five to eight becomes a [`PAIR`] of leaves, tested one after the other, rather
+//!   than a node of two leaves, so leaves are full and nodes are not sparse;
 //! - ranges of [`PAR_BIN`] or more are binned by all threads, and subtrees of [`PAR_TREE`] or
 //!   more are built in parallel into their own arrays, then appended; binning sums, minima and
 //!   maxima do not depend on the order of the reduction, so the tree is the same for any number
 //!   of threads.
 //!
 //! Measured on the wave mesh (2-core VM, `bench_traversal`): about 1.0–1.2 s on one thread and
-//! 0.6–0.7 s on two; 3.95 triangles per block, 5.4 children per node, 53 B per triangle; primary
-//! rays 4.5–5.3 Mrays/s against 3.5–3.7 from the PLOC tree. With one-block leaves nodes
-//! averaged 3.2 children (ranges of five to eight triangles became nodes of two leaves) and the
-//! BVH took 72 B per triangle, for the same traversal speed.
+//! 0.6–0.7 s on two; 3.95 triangles per leaf, 5.4 children per node, 53 B per triangle; primary
+//! rays 4.5–5.3 Mrays/s against 3.5–3.7 from the PLOC tree. Without pairs nodes averaged 3.2
+//! children (ranges of five to eight triangles became nodes of two leaves) and the BVH took
+//! 72 B per triangle.
 
 use super::Bounds;
-use super::wide::{LEAF, Leaf, Node, WIDTH, WideBvh};
-use super::{LEAF_BLOCK, MAX_LEAF};
+use super::MAX_LEAF;
+use super::wide::{LEAF, Leaf, Node, PAIR, WIDTH, WideBvh};
 use glam::Vec4;
 use rayon::prelude::*;
 
@@ -185,7 +185,7 @@ impl Bins {
     /// references in one bin.
     fn best(&self) -> Option<(usize, usize)> {
         // Leaves are tested four triangles at a time: cost counts blocks of four.
-        let blocks = |n: u32| n.div_ceil(LEAF_BLOCK as u32) as f32;
+        let blocks = |n: u32| n.div_ceil(MAX_LEAF as u32) as f32;
         let mut best = (f32::INFINITY, None);
         for axis in 0..3 {
             let (boxes, counts) = (&self.boxes[axis], &self.counts[axis]);
@@ -330,12 +330,21 @@ impl Sub {
 /// `out`, returning the reference to its root: a leaf or a node.
 fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: usize) -> u32 {
     out.depth = out.depth.max(level);
-    if r.len() <= MAX_LEAF {
+    if r.len() <= 2 * MAX_LEAF {
+        // One leaf, or a pair: the first `MAX_LEAF` references and the rest.
+        let first = (base + r.start) as u32;
+        let n = r.len() as u32;
+        let head = n.min(MAX_LEAF as u32);
+        out.leaves.push(Leaf { first, count: head });
+        let id = out.leaves.len() as u32 - 1;
+        if n == head {
+            return LEAF | id;
+        }
         out.leaves.push(Leaf {
-            first: (base + r.start) as u32,
-            count: r.len() as u32,
+            first: first + head,
+            count: n - head,
         });
-        return LEAF | (out.leaves.len() as u32 - 1);
+        return LEAF | PAIR | id;
     }
     // Open the child with the largest surface until there are eight.
     let mut kids = vec![r];
@@ -343,7 +352,7 @@ fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: u
         let widest = kids
             .iter()
             .enumerate()
-            .filter(|(_, k)| k.len() > LEAF_BLOCK)
+            .filter(|(_, k)| k.len() > MAX_LEAF)
             .max_by(|a, b| a.1.bounds.half_area().total_cmp(&b.1.bounds.half_area()));
         let Some((at, _)) = widest else { break };
         let (a, b) = split(prims, &kids[at]);

@@ -14,8 +14,18 @@ use glam::Vec3A;
 /// Children per node.
 pub(super) const WIDTH: usize = 8;
 
-/// Marks a child that is a leaf; the other bits are its leaf id.
+/// Marks a child that is a leaf; the bits below [`PAIR`] are its leaf id.
 pub(super) const LEAF: u32 = 1 << 31;
+/// Marks a leaf child made of two leaves, `id` and `id + 1` (a run of five to eight primitives
+/// tested as two blocks, without a node of its own; see `sah`).
+pub(super) const PAIR: u32 = 1 << 30;
+
+/// Returns the leaf ids of a leaf child: one, or two with [`PAIR`].
+#[inline(always)]
+pub(super) fn leaf_ids(child: u32) -> std::ops::Range<u32> {
+    let id = child & !(LEAF | PAIR);
+    id..id + 1 + (child & PAIR != 0) as u32
+}
 
 /// A node: up to eight children, each an inner node or a leaf.
 #[derive(Clone, Copy, Debug)]
@@ -24,7 +34,7 @@ pub(super) struct Node {
     /// Child boxes by plane: min x, max x, min y, max y, min z, max z; one lane per child. An
     /// empty slot holds the inverted box (min +∞, max −∞), which no ray enters.
     pub(super) planes: [[f32; WIDTH]; 6],
-    /// Per child: the inner node's index, or [`LEAF`] | the leaf's id.
+    /// Per child: the inner node's index, or [`LEAF`] | the leaf's id (with [`PAIR`]: two).
     pub(super) child: [u32; WIDTH],
 }
 
@@ -209,9 +219,11 @@ fn closest_with<T: NodeTest>(bvh: &WideBvh, ray: &Ray, mut leaf_fn: impl FnMut(&
                         continue;
                     }
                 } else {
-                    let t = leaf_fn(&r, cur.child & !LEAF);
-                    if t < r.tmax {
-                        r.tmax = t;
+                    for id in leaf_ids(cur.child) {
+                        let t = leaf_fn(&r, id);
+                        if t < r.tmax {
+                            r.tmax = t;
+                        }
                     }
                 }
                 loop {
@@ -258,7 +270,7 @@ fn any_with<T: NodeTest>(
                         }
                         continue;
                     }
-                } else if leaf_fn(ray, cur & !LEAF) {
+                } else if leaf_ids(cur).any(|id| leaf_fn(ray, id)) {
                     return true;
                 }
                 match stack.pop() {

@@ -7,7 +7,7 @@
 
 use crate::accel::{Bounds, Builder, Bvh, Kernel};
 use crate::geometry::Ray;
-use crate::geometry::tri4::{LANES, Tri4};
+use crate::geometry::tri4::Tri4;
 use crate::geometry::triangle::{RayShear, TriangleHit};
 use glam::{Vec2, Vec3, Vec3A};
 use rayon::prelude::*;
@@ -72,12 +72,9 @@ pub struct MeshGeom {
     pub materials: Vec<u32>,
     pub bvh: Bvh,
     pub bounds: Bounds,
-    /// The corners of the BVH leaves' triangles, four to a block, leaf after leaf: what traversal
-    /// reads, contiguous records tested four triangles at once instead of indices and scattered
-    /// positions.
+    /// The corners of each BVH leaf's triangles, by leaf id ([`Bvh::leaves`]): what traversal
+    /// reads, one contiguous record tested at once instead of indices and scattered positions.
     blocks: Vec<Tri4>,
-    /// Leaf `i`'s blocks are `blocks[block_first[i]..block_first[i + 1]]`.
-    block_first: Vec<u32>,
     /// Area-weighted vertex normals, computed on first use (Perlin noise needs smooth normals).
     smooth: std::sync::OnceLock<Vec<Vec3A>>,
 }
@@ -121,25 +118,16 @@ impl MeshGeom {
                 .map(|&i| first_material + data.triangle_materials[i as usize])
                 .collect()
         };
-        // Each leaf's triangles, four to a block: (first BVH-order triangle, count) per block.
-        let mut block_first = Vec::with_capacity(bvh.leaves().len() + 1);
-        let mut runs = Vec::with_capacity(bvh.leaves().len());
-        for l in bvh.leaves() {
-            block_first.push(runs.len() as u32);
-            for k in (0..l.count).step_by(LANES) {
-                runs.push((l.first + k, (l.count - k).min(LANES as u32)));
-            }
-        }
-        block_first.push(runs.len() as u32);
-        let mut blocks = crate::mem::huge_vec(runs.len());
-        runs.par_iter()
-            .map(|&(first, count)| {
-                let mut corners = [[Vec3A::ZERO; 3]; LANES];
-                let range = first as usize..(first + count) as usize;
+        let mut blocks = crate::mem::huge_vec(bvh.leaves().len());
+        bvh.leaves()
+            .par_iter()
+            .map(|l| {
+                let mut corners = [[Vec3A::ZERO; 3]; 4];
+                let range = l.first as usize..(l.first + l.count) as usize;
                 for (c, t) in corners.iter_mut().zip(&triangles[range]) {
                     *c = t.map(|i| positions[i as usize]);
                 }
-                Tri4::new(&corners[..count as usize])
+                Tri4::new(&corners[..l.count as usize])
             })
             .collect_into_vec(&mut blocks);
         let bounds = boxes
@@ -155,7 +143,6 @@ impl MeshGeom {
             bvh,
             bounds,
             blocks,
-            block_first,
             smooth: std::sync::OnceLock::new(),
         }
     }
@@ -179,14 +166,6 @@ impl MeshGeom {
     /// Returns the bytes of triangle data kept for tracing only, beyond the shared attributes.
     pub fn tracer_bytes(&self) -> usize {
         std::mem::size_of_val(self.blocks.as_slice())
-            + std::mem::size_of_val(self.block_first.as_slice())
-    }
-
-    /// Returns leaf `leaf`'s blocks and the BVH-order index of its first triangle.
-    #[inline(always)]
-    fn leaf_blocks(&self, leaf: u32) -> &[Tri4] {
-        let i = leaf as usize;
-        &self.blocks[self.block_first[i] as usize..self.block_first[i + 1] as usize]
     }
 
     /// Returns the closest triangle hit by an object-space ray and its barycentrics.
@@ -198,22 +177,22 @@ impl MeshGeom {
             ray,
             #[inline(always)]
             |r, leaf| {
-                let mut tmax = r.tmax;
-                for (k, block) in self.leaf_blocks(leaf).iter().enumerate() {
-                    let hit = if scalar {
-                        block.closest_scalar(&shear, r.tmin, tmax)
-                    } else {
-                        block.closest(&shear, r.tmin, tmax)
-                    };
-                    if let Some((lane, h)) = hit {
-                        best = Some((leaf, (k * LANES) as u32 + lane, h));
-                        tmax = h.t;
+                let block = &self.blocks[leaf as usize];
+                let hit = if scalar {
+                    block.closest_scalar(&shear, r.tmin, r.tmax)
+                } else {
+                    block.closest(&shear, r.tmin, r.tmax)
+                };
+                match hit {
+                    Some((lane, h)) => {
+                        best = Some((leaf, lane, h));
+                        h.t
                     }
+                    None => f32::INFINITY,
                 }
-                if tmax < r.tmax { tmax } else { f32::INFINITY }
             },
         );
-        best.map(|(leaf, at, h)| (self.bvh.leaves()[leaf as usize].first + at, h))
+        best.map(|(leaf, lane, h)| (self.bvh.leaves()[leaf as usize].first + lane, h))
     }
 
     /// Returns the `t` of some triangle on the ray within `(tmin, tmax)` (any hit, not the closest).
@@ -225,13 +204,12 @@ impl MeshGeom {
             ray,
             #[inline(always)]
             |r, leaf| {
-                found = self.leaf_blocks(leaf).iter().find_map(|block| {
-                    if scalar {
-                        block.any_scalar(&shear, r.tmin, r.tmax)
-                    } else {
-                        block.any(&shear, r.tmin, r.tmax)
-                    }
-                });
+                let block = &self.blocks[leaf as usize];
+                found = if scalar {
+                    block.any_scalar(&shear, r.tmin, r.tmax)
+                } else {
+                    block.any(&shear, r.tmin, r.tmax)
+                };
                 found.is_some()
             },
         );

@@ -7,9 +7,10 @@
 //!
 //! - Triangle meshes use our binned SAH builder ([`sah`], [`Builder::BinnedSah`]). obvhs has no
 //!   top-down SAH builder, and its PLOC path fell short of the geometry issue's bar on the
-//!   2M-triangle wave mesh: 1.9 s to build on two threads (target under 1 s), and half-empty
-//!   leaves that traced at 0.6× Embree. The SAH builder takes 0.55–0.6 s there and traces about
-//!   1.4× faster (figures in `sah`'s docs and the issue 3 closing note).
+//!   2M-triangle wave mesh: 1.9 s to build on two threads (target under 1 s), and leaves a quarter
+//!   empty (2.9 of 4 triangles) that traced at 0.6× Embree. The SAH builder takes 0.55–0.65 s
+//!   there and traces about 1.35× faster (figures in `sah`'s docs and the issue 3 closing
+//!   note).
 //! - Scene-level BVHs over mixed primitives (analytic shapes, CSG trees, mesh instances) use
 //!   obvhs's PLOC ([`Bvh::build`], [`Builder::Ploc`]): they hold a few to a few thousand
 //!   boxes, where build time and tree quality hardly matter, and obvhs is the project's BVH

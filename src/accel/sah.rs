@@ -128,8 +128,22 @@ impl Binner {
     /// The bin of `p` along each axis (lane 3 unused).
     #[inline(always)]
     fn bins(&self, p: &PrimRef) -> [usize; 4] {
+        // `max` first: it maps a NaN lane to 0 (SSE `maxps` returns its second operand then).
         let k = ((centroid2(p) - self.origin) * self.scale)
-            .clamp(Vec4::ZERO, Vec4::splat((BINS - 1) as f32));
+            .max(Vec4::ZERO)
+            .min(Vec4::splat((BINS - 1) as f32));
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{__m128, __m128i, _mm_cvttps_epi32};
+            // One truncating conversion for all lanes; `as usize` on each float costs a
+            // saturation check per lane, a tenth of the build's time in this loop.
+            // SAFETY: SSE2 is part of the x86-64 baseline; `Vec4` is an `__m128` there.
+            let i: [i32; 4] = unsafe {
+                std::mem::transmute::<__m128i, [i32; 4]>(_mm_cvttps_epi32(__m128::from(k)))
+            };
+            [i[0] as usize, i[1] as usize, i[2] as usize, 0]
+        }
+        #[cfg(not(target_arch = "x86_64"))]
         [k.x as usize, k.y as usize, k.z as usize, 0]
     }
 }

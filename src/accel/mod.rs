@@ -8,7 +8,7 @@
 //! - Triangle meshes use our binned SAH builder ([`sah`], [`Builder::BinnedSah`]). obvhs has no
 //!   top-down SAH builder, and its PLOC path fell short of the geometry issue's bar on the
 //!   2M-triangle wave mesh: 1.9 s to build on two threads (target under 1 s), and leaves a quarter
-//!   empty (2.9 of 4 triangles) that traced at 0.6× Embree. The SAH builder takes 0.55–0.65 s
+//!   empty (2.9 of 4 triangles) that traced at 0.6× Embree. The SAH builder takes 0.46–0.57 s
 //!   there and traces about 1.35× faster (figures in `sah`'s docs and the issue 3 closing
 //!   note).
 //! - Scene-level BVHs over mixed primitives (analytic shapes, CSG trees, mesh instances) use

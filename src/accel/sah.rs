@@ -21,8 +21,8 @@
 //!   maxima do not depend on the order of the reduction, so the tree is the same for any number
 //!   of threads.
 //!
-//! Measured on the wave mesh (2-core VM, `bench_traversal`): about 1.0–1.2 s on one thread and
-//! 0.6–0.7 s on two; 3.95 triangles per leaf, 5.4 children per node, 53 B per triangle; primary
+//! Measured on the wave mesh (2-core VM, `bench_traversal`): 0.80–0.92 s on one thread and
+//! 0.46–0.57 s on two; 3.95 triangles per leaf, 5.4 children per node, 53 B per triangle; primary
 //! rays 4.5–5.3 Mrays/s against 3.5–3.7 from the PLOC tree. Without pairs nodes averaged 3.2
 //! children (ranges of five to eight triangles became nodes of two leaves) and the BVH took
 //! 72 B per triangle.

@@ -35,7 +35,6 @@ pub use wide::{Kernel, Leaf};
 use crate::geometry::Ray;
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
-use rayon::prelude::*;
 use wide::WideBvh;
 
 /// How a [`Bvh`] is built.
@@ -147,10 +146,7 @@ impl Bvh {
                     .collect();
                 ploc::build(&aabbs)
             }
-            Builder::BinnedSah => {
-                let padded: Vec<Bounds> = boxes.par_iter().map(|b| b.padded()).collect();
-                sah::build(&padded)
-            }
+            Builder::BinnedSah => sah::build(boxes),
         };
         Bvh {
             inner: Some(inner),

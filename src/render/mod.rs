@@ -17,6 +17,7 @@
 //! a cropped window equals the same window of the full render.
 
 pub mod aa;
+pub mod film_log;
 pub mod gi;
 pub mod photon_view;
 pub mod plan;
@@ -238,5 +239,6 @@ pub fn render_with(
         samples,
         window: win,
     };
+    film_log::record(&film);
     (film, stats)
 }

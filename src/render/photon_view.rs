@@ -70,11 +70,13 @@ pub fn photon_image(scene: &Scene, camera: &Camera, gi: &Gi, width: u32, height:
     if let Some(c) = &gi.caustic {
         draw(c, 1.0, true);
     }
-    Film {
+    let film = Film {
         width,
         height,
         samples: vec![1; pixels.len()],
         pixels,
         window: Window::full(width, height),
-    }
+    };
+    super::film_log::record(&film);
+    film
 }

@@ -8,6 +8,7 @@ pub mod cone;
 pub mod csg;
 pub mod cube;
 pub mod cylinder;
+pub mod hit;
 pub mod mesh;
 pub mod ray;
 pub mod sphere;

@@ -13,6 +13,7 @@
 use crate::accel::{Bounds, Bvh};
 use crate::error::{Error, Loc, Result};
 use crate::geometry::csg::{CsgNode, CsgTree, LeafShape};
+pub use crate::geometry::hit::{Hit, SurfaceHit};
 use crate::geometry::mesh::MeshGeom;
 use crate::geometry::triangle;
 use crate::geometry::uv::{analytic_dpdu, analytic_uv};
@@ -74,39 +75,6 @@ pub struct Instance {
     pub node: NodeId,
     /// World-space bounding box.
     pub bounds: Bounds,
-}
-
-/// A ray's closest intersection, enough to compute the surface on demand.
-#[derive(Clone, Copy, Debug)]
-pub struct Hit {
-    pub t: f32,
-    /// Index into [`Scene::instances`].
-    pub instance: u32,
-    /// Triangle index (BVH order) for meshes; 0 otherwise.
-    pub prim: u32,
-    pub b1: f32,
-    pub b2: f32,
-    /// Object-space outward normal for analytic shapes and CSG; unused for meshes.
-    pub normal: Vec3A,
-    pub material: u32,
-    pub face: u8,
-}
-
-/// The surface at a hit, in world space.
-#[derive(Clone, Copy, Debug)]
-pub struct SurfaceHit {
-    pub p: Vec3A,
-    /// Unit geometric normal as the shape orients it (outward for solids).
-    pub ng: Vec3A,
-    /// Unit shading normal (interpolated vertex normals on meshes), on the same side as `ng`.
-    pub ns: Vec3A,
-    /// Texture coordinates ([`crate::geometry::uv`] for analytic shapes, interpolated on meshes,
-    /// or the barycentrics `(b1, b2)` for meshes without them).
-    pub uv: Vec2,
-    /// World-space `∂p/∂u`, the tangent that orients normal maps (not normalised; may be zero).
-    pub dpdu: Vec3A,
-    /// Index into [`Scene::materials`].
-    pub material: u32,
 }
 
 /// Counters describing a built scene, for `--stats` and `caustic info`.

@@ -12,6 +12,7 @@
 //! - `s`: Perlin-noise bending of the shading normal ([`perlin`]);
 //! - `bump`: an RGB tangent-space normal map or a grey height map ([`texture::BumpMap`]).
 
+pub mod bsdf;
 pub mod fresnel;
 pub mod medium;
 pub mod perlin;

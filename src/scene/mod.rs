@@ -5,6 +5,7 @@ pub mod args;
 pub mod build;
 pub mod desc;
 pub mod images;
+pub mod interaction;
 pub mod lua;
 
 pub use build::{Instance, Scene, Shape, build_scene};

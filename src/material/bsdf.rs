@@ -1,0 +1,327 @@
+//! The one scattering model: a [`Bsdf`] built once per hit, used by eye rays, final-gather rays
+//! and photons alike, so the light and eye paths cannot disagree about a material.
+//!
+//! # What a surface does
+//! A material `(kd, ks, p, t, ior)` mixes two surfaces ([`Lobes`]):
+//! - with weight `1 − t`, an opaque one: a Lambertian lobe of reflectance `kd` (the texture's
+//!   colour where there is one), a mirror lobe of weight `ks`, and, for light arriving straight
+//!   from a light, the course's Phong highlight `ks·(r·v)^p` ([`Bsdf::phong`]);
+//! - with weight `t`, a smooth dielectric interface between the media on either side
+//!   ([`Bsdf::crossing`]): Fresnel reflectance `F` reflects, `1 − F` refracts
+//!   ([`Bsdf::dielectric`]).
+//!
+//! # Conventions
+//! - Directions point away from the surface: `wo` towards where the ray came from, `wi` towards
+//!   the light.
+//! - [`Bsdf::n`] and [`Bsdf::ng`] are the shading and geometric normals turned to `wo`'s side, so
+//!   both sides of a surface shade alike; [`Bsdf::front`] says whether `wo` is on the side the
+//!   shape's normal points to (outside a solid).
+//! - Building the BSDF applies what bends the surface: the texture replaces `kd`, and the bump map
+//!   and Perlin noise bend the shading normal ([`Material::shading_normal`]).
+//! - Mirror and dielectric lobes are deltas: they report directions, not densities.
+//!
+//! # Sampling
+//! Eye rays split deterministically (they weight every lobe, as the course's ray tracer does);
+//! photons choose one lobe by Russian roulette on the lobe weights ([`Bsdf::sample`]), with their
+//! power divided by the choice's probability, so each estimate stays unbiased.
+
+use super::medium::{Crossing, MediumStack};
+use super::{Lobes, Material, fresnel};
+use crate::geometry::hit::SurfaceHit;
+use crate::light::cosine_around;
+use crate::sampling::Rng;
+use glam::Vec3A;
+
+/// The scattering at one surface point, for one outgoing direction.
+#[derive(Clone, Copy, Debug)]
+pub struct Bsdf<'a> {
+    pub material: &'a Material,
+    /// The material's index in the scene (what [`MediumStack`] records).
+    pub material_id: u32,
+    /// Diffuse reflectance at the hit (the texture's colour, or `kd`), before the `1 − t` weight.
+    pub kd: Vec3A,
+    /// Unit direction towards where the ray came from.
+    pub wo: Vec3A,
+    /// Whether `wo` lies on the side the shape's geometric normal points to.
+    pub front: bool,
+    /// Unit shading normal (bent by bump map and noise), on `wo`'s side.
+    pub n: Vec3A,
+    /// Unit geometric normal, on `wo`'s side.
+    pub ng: Vec3A,
+}
+
+/// Where one sampled photon goes next ([`Bsdf::sample`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Unit direction of travel.
+    pub dir: Vec3A,
+    /// What the path's power is multiplied by (the lobe's weight over its probability).
+    pub weight: Vec3A,
+    /// The lobe chosen.
+    pub lobe: Lobe,
+    /// The media beyond the surface when the path refracted into them.
+    pub media: Option<MediumStack>,
+}
+
+/// The lobes a path can scatter by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lobe {
+    Diffuse,
+    Mirror,
+    /// Fresnel reflection or refraction at a dielectric interface.
+    Dielectric,
+}
+
+/// The two directions a smooth dielectric interface splits a ray into ([`Bsdf::dielectric`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Split {
+    /// Fresnel reflectance: the reflected share (1 under total internal reflection).
+    pub f: f32,
+    /// The mirror direction.
+    pub reflected: Vec3A,
+    /// The refracted direction, `None` under total internal reflection or when a bent shading
+    /// normal would send it back out.
+    pub refracted: Option<Vec3A>,
+}
+
+impl<'a> Bsdf<'a> {
+    /// Returns the BSDF of `material` at `surf` seen from `wo` (unit, pointing away), with the
+    /// texture applied and, when `bend` is set, the shading normal bent by the bump map and noise
+    /// (lookups that read only `kd` and the geometric normal skip it).
+    pub fn new(material: &'a Material, surf: &SurfaceHit, wo: Vec3A, bend: bool) -> Bsdf<'a> {
+        let kd = material.diffuse(surf.uv);
+        let ns = if bend && material.perturbs_normals() {
+            material.shading_normal(surf.ns, surf.ng, surf.p, surf.uv, surf.dpdu)
+        } else {
+            surf.ns
+        };
+        let front = surf.ng.dot(wo) > 0.0;
+        let (n, ng) = if front {
+            (ns, surf.ng)
+        } else {
+            (-ns, -surf.ng)
+        };
+        Bsdf {
+            material,
+            material_id: surf.material,
+            kd,
+            wo,
+            front,
+            n,
+            ng,
+        }
+    }
+
+    /// Returns the weights of the material's lobes at this hit.
+    pub fn lobes(&self) -> Lobes {
+        self.material.lobes(self.kd)
+    }
+
+    /// Returns the crossing of this surface for a path in `media`, or `None` for an opaque
+    /// material (`t = 0`). A crossing that [`Crossing::is_false`] is no surface at all: the
+    /// boundary of a solid inside a denser one, passed straight through.
+    pub fn crossing(&self, media: &MediumStack) -> Option<Crossing> {
+        (self.material.transparency > 0.0)
+            .then(|| media.cross(self.material_id, self.material.ior, self.front))
+    }
+
+    /// Returns the course's direct-light term per unit of light intensity arriving along `wi`
+    /// (unit, towards the light): `kd·cos θ + ks·(r·wo)^p`, the Lambertian lobe and the Phong
+    /// highlight, before the light's intensity and attenuation.
+    pub fn phong(&self, wi: Vec3A) -> Vec3A {
+        let m = self.material;
+        let cos = self.n.dot(wi);
+        let rv = fresnel::reflect(wi, self.n).dot(self.wo);
+        let spec = if rv > 0.0 && m.shininess > 0.0 {
+            m.ks * rv.powf(m.shininess)
+        } else {
+            Vec3A::ZERO
+        };
+        self.kd * cos + spec
+    }
+
+    /// Returns the mirror direction of `wo`.
+    pub fn reflected(&self) -> Vec3A {
+        reflect_above(self.wo, self.n, self.ng)
+    }
+
+    /// Returns how the dielectric interface of `crossing` splits `wo` (Fresnel weight and the two
+    /// directions).
+    pub fn dielectric(&self, crossing: &Crossing) -> Split {
+        let eta = crossing.n_from / crossing.n_to;
+        let f = fresnel::dielectric(self.n.dot(self.wo).max(0.0), eta);
+        Split {
+            f,
+            reflected: self.reflected(),
+            refracted: fresnel::refract(self.wo, self.n, eta).filter(|wt| wt.dot(self.ng) < 0.0),
+        }
+    }
+
+    /// Returns a cosine-distributed direction around the shading normal for `u` in `[0, 1)²`, or
+    /// `None` when it falls below the geometric surface.
+    pub fn sample_diffuse(&self, u: (f32, f32)) -> Option<Vec3A> {
+        let d = cosine_around(self.n, u);
+        (d.dot(self.ng) > 0.0).then_some(d)
+    }
+
+    /// Chooses one lobe by Russian roulette on the lobe weights and samples it, as photons do;
+    /// `crossing` is [`Bsdf::crossing`]'s answer for the path's media. Returns `None` when the
+    /// path is absorbed or its sampled direction falls below the surface.
+    pub fn sample(&self, crossing: Option<&Crossing>, rng: &mut Rng) -> Option<Sample> {
+        let lobes = self.lobes();
+        let (pd, pm, pt) = (
+            lobes.diffuse.max_element(),
+            lobes.mirror.max_element(),
+            lobes.dielectric,
+        );
+        let scale = (pd + pm + pt).max(1.0);
+        let (pd, pm, pt) = (pd / scale, pm / scale, pt / scale);
+        let xi = rng.next_f32();
+        if xi < pd {
+            let weight = lobes.diffuse / pd;
+            let dir = self.sample_diffuse((rng.next_f32(), rng.next_f32()))?;
+            Some(Sample {
+                dir,
+                weight,
+                lobe: Lobe::Diffuse,
+                media: None,
+            })
+        } else if xi < pd + pm {
+            Some(Sample {
+                dir: self.reflected(),
+                weight: lobes.mirror / pm,
+                lobe: Lobe::Mirror,
+                media: None,
+            })
+        } else if xi < pd + pm + pt {
+            let c = crossing?;
+            let eta = c.n_from / c.n_to;
+            let f = fresnel::dielectric(self.n.dot(self.wo).max(0.0), eta);
+            let (dir, media) = match fresnel::refract(self.wo, self.n, eta) {
+                Some(wt) if rng.next_f32() >= f && wt.dot(self.ng) < 0.0 => (wt, Some(c.after)),
+                _ => (self.reflected(), None),
+            };
+            Some(Sample {
+                dir,
+                weight: Vec3A::ONE,
+                lobe: Lobe::Dielectric,
+                media,
+            })
+        } else {
+            None
+        }
+    }
+}
+
+/// Returns `wo` mirrored about the shading normal `n`, or about the geometric normal `ng` when a
+/// bent shading normal would send it below the surface.
+pub fn reflect_above(wo: Vec3A, n: Vec3A, ng: Vec3A) -> Vec3A {
+    let wr = fresnel::reflect(wo, n);
+    if wr.dot(ng) > 0.0 {
+        wr
+    } else {
+        fresnel::reflect(wo, ng)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Pass;
+    use glam::Vec2;
+
+    fn flat(material: u32) -> SurfaceHit {
+        SurfaceHit {
+            p: Vec3A::ZERO,
+            ng: Vec3A::Z,
+            ns: Vec3A::Z,
+            uv: Vec2::ZERO,
+            dpdu: Vec3A::X,
+            material,
+        }
+    }
+
+    #[test]
+    fn normals_face_wo_on_both_sides() {
+        let m = Material::fallback();
+        let wo = Vec3A::new(0.3, 0.0, -1.0).normalize();
+        let b = Bsdf::new(&m, &flat(0), wo, true);
+        assert!(!b.front);
+        assert_eq!((b.n, b.ng), (-Vec3A::Z, -Vec3A::Z));
+        let b = Bsdf::new(&m, &flat(0), -wo, true);
+        assert!(b.front && b.n == Vec3A::Z);
+    }
+
+    #[test]
+    fn phong_is_the_courses_lambert_plus_highlight() {
+        let mut m = Material::fallback();
+        m.kd = Vec3A::splat(0.5);
+        m.ks = Vec3A::splat(0.25);
+        m.shininess = 10.0;
+        let wo = Vec3A::Z;
+        let b = Bsdf::new(&m, &flat(0), wo, true);
+        let a = 0.3f32;
+        let wi = Vec3A::new(a.sin(), 0.0, a.cos());
+        // r = reflect(wi) has r·wo = cos a.
+        let want = 0.5 * a.cos() + 0.25 * a.cos().powf(10.0);
+        assert!((b.phong(wi).x - want).abs() < 1e-6);
+    }
+
+    #[test]
+    fn roulette_weights_are_unbiased_for_every_lobe() {
+        // E[weight · 1{lobe}] must equal the lobe's weight for each lobe.
+        let mut m = Material::fallback();
+        m.kd = Vec3A::new(0.6, 0.3, 0.1);
+        m.ks = Vec3A::new(0.2, 0.2, 0.4);
+        m.transparency = 0.3;
+        m.ior = 1.5;
+        let wo = Vec3A::new(0.2, 0.1, 1.0).normalize();
+        let b = Bsdf::new(&m, &flat(7), wo, true);
+        let crossing = b.crossing(&MediumStack::air()).expect("transparent");
+        assert!(!crossing.is_false() && crossing.n_to == 1.5);
+        let mut rng = Rng::new(1, Pass::Photon, 0);
+        let n = 400_000;
+        let (mut d, mut mirror, mut t) = (Vec3A::ZERO, Vec3A::ZERO, 0.0f64);
+        for _ in 0..n {
+            if let Some(s) = b.sample(Some(&crossing), &mut rng) {
+                match s.lobe {
+                    Lobe::Diffuse => d += s.weight,
+                    Lobe::Mirror => mirror += s.weight,
+                    Lobe::Dielectric => t += s.weight.x as f64,
+                }
+            }
+        }
+        let lobes = b.lobes();
+        // The diffuse lobe loses the directions below the surface (none for a flat normal).
+        let close = |a: Vec3A, b: Vec3A| ((a / n as f32) - b).abs().max_element() < 0.01;
+        assert!(close(d, lobes.diffuse), "{}", d / n as f32);
+        assert!(close(mirror, lobes.mirror), "{}", mirror / n as f32);
+        assert!((t / n as f64 - 0.3).abs() < 0.01);
+    }
+
+    #[test]
+    fn dielectric_split_follows_fresnel_and_snell() {
+        let mut m = Material::fallback();
+        m.transparency = 1.0;
+        m.ior = 1.5;
+        let a = 0.5f32;
+        let wo = Vec3A::new(a.sin(), 0.0, a.cos());
+        let b = Bsdf::new(&m, &flat(1), wo, true);
+        let c = b.crossing(&MediumStack::air()).unwrap();
+        let s = b.dielectric(&c);
+        assert!((s.f - fresnel::dielectric(a.cos(), 1.0 / 1.5)).abs() < 1e-7);
+        let wt = s.refracted.expect("no TIR entering glass");
+        assert!((wt.x.abs() - a.sin() / 1.5).abs() < 1e-5 && wt.z < 0.0);
+        assert_eq!(s.reflected, Vec3A::new(-a.sin(), 0.0, a.cos()));
+        // Leaving glass past the critical angle: everything reflects.
+        let inside = c.after;
+        let b = Bsdf::new(
+            &m,
+            &flat(1),
+            -Vec3A::new(0.9f32.sin(), 0.0, 0.9f32.cos()),
+            true,
+        );
+        let out = b.dielectric(&b.crossing(&inside).unwrap());
+        assert_eq!((out.f, out.refracted), (1.0, None));
+    }
+}

@@ -3,7 +3,7 @@
 
 mod common;
 
-use caustic::render::shade::background;
+use caustic::integrator::eye::background;
 use common::render_films;
 use glam::Vec3A;
 use std::path::Path;

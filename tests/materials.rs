@@ -4,9 +4,9 @@
 
 mod common;
 
+use caustic::film::Film;
 use caustic::geometry::Ray;
 use caustic::material::texture::Texture;
-use caustic::render::Film;
 use common::{out_dir, render_films};
 use glam::Vec3A;
 use std::path::Path;
@@ -33,7 +33,7 @@ fn ambient_render(
     let r = &d.renders[0];
     let scene = caustic::scene::build::build_scene(&d, r).unwrap();
     let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
-    let (film, _) = caustic::render::render(&scene, &camera, r.width, r.height);
+    let film = common::render_scene(&scene, &camera, r.width, r.height, &common::whitted());
     let surfaces = (0..r.width * r.height)
         .map(|i| {
             let ray: Ray = camera.ray((i % r.width) as f32 + 0.5, (i / r.width) as f32 + 0.5);

@@ -3,8 +3,8 @@
 
 mod common;
 
-use caustic::render::gi::{Gi, GiSettings, Indirect};
-use caustic::render::plan::{GiMode, plan};
+use caustic::integrator::photon_map::{Gi, GiSettings, Indirect};
+use caustic::integrator::{GiMode, Integrator, Settings, plan};
 use caustic::scene::build::build_scene;
 use common::{caustic, out_dir, run_lua, run_ok};
 use glam::Vec3A;
@@ -81,26 +81,27 @@ fn closed_sphere_has_radiance_one_with_final_gathering() {
     let d = run_lua(src).unwrap();
     let r = &d.renders[0];
     let scene = build_scene(&d, r).unwrap();
-    assert!(plan(&scene, GiMode::Auto).photon_maps);
+    assert_eq!(plan(&scene, GiMode::Auto).integrator, Integrator::PhotonMap);
     let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
     // Both ways a gather ray reads the global map: precomputed irradiance and a fresh estimate.
     for precompute in [true, false] {
-        let gi = Gi::build(
-            &scene,
-            &GiSettings {
+        let settings = Settings {
+            photons: GiSettings {
                 indirect: Indirect::Gather { rays: 256 },
                 precompute,
                 ..GiSettings::default()
             },
-        );
-        assert_eq!(gi.precomputed.is_some(), precompute);
-        let (film, _) = caustic::render::render_with(
+            ..Settings::default()
+        };
+        let (film, stats) = caustic::frame::render(
             &scene,
             &camera,
-            Some(&gi),
-            &caustic::render::RenderOptions::new(r.width, r.height),
-            &|| {},
+            caustic::film::Window::full(r.width, r.height),
+            &settings,
+            &caustic::progress::NoProgress,
         );
+        let photons = stats.photons.expect("the plan chose photon mapping");
+        assert_eq!(photons.precomputed_points > 0, precompute);
         let mean = film.pixels.iter().map(|p| p.x).sum::<f32>() / film.pixels.len() as f32;
         assert!(
             (mean - 1.0).abs() < 0.025,
@@ -288,7 +289,7 @@ fn photon_viewer_draws_both_maps() {
 #[derive(Default)]
 struct Recorder(std::sync::Mutex<Vec<(String, u64, u64)>>);
 
-impl caustic::photon::trace::Progress for Recorder {
+impl caustic::progress::Progress for Recorder {
     fn start(&self, what: &str, total: u64) {
         self.0.lock().unwrap().push((what.to_string(), total, 0));
     }

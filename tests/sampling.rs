@@ -4,7 +4,10 @@
 mod common;
 
 use caustic::camera::Camera;
-use caustic::render::{Film, RenderOptions, Sampling, Window, render_with};
+use caustic::film::{Film, Window};
+use caustic::integrator::Settings;
+use caustic::progress::NoProgress;
+use caustic::render::Sampling;
 use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
 use common::{a4_assets, caustic, out_dir, run_lua, run_ok};
@@ -41,14 +44,13 @@ fn render(
     sampling: Sampling,
     window: Option<Window>,
 ) -> Film {
-    let opts = RenderOptions {
+    let settings = Settings {
         seed: 5,
         sampling,
-        window: window.unwrap_or(Window::full(w, h)),
-        timing: false,
-        light_samples: 16,
+        ..common::whitted()
     };
-    render_with(scene, camera, None, &opts, &|| {}).0
+    let window = window.unwrap_or(Window::full(w, h));
+    caustic::frame::render(scene, camera, window, &settings, &NoProgress).0
 }
 
 fn rmse(a: &Film, b: &Film, pixels: impl Iterator<Item = usize>) -> f64 {

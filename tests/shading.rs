@@ -3,7 +3,7 @@
 
 mod common;
 
-use caustic::render::shade::background;
+use caustic::integrator::eye::background;
 use common::{a4_assets, render_corpus_script, render_films};
 use glam::Vec3A;
 use std::path::Path;
@@ -174,9 +174,11 @@ fn area_light_irradiance_matches_quadrature_and_casts_soft_shadows() {
     let r = &d.renders[0];
     let scene = caustic::scene::build::build_scene(&d, r).unwrap();
     let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
-    let mut opts = caustic::render::RenderOptions::new(r.width, r.height);
-    opts.light_samples = 1024;
-    let (film, _) = caustic::render::render_with(&scene, &camera, None, &opts, &|| {});
+    let settings = caustic::integrator::Settings {
+        light_samples: 1024,
+        ..common::whitted()
+    };
+    let film = common::render_scene(&scene, &camera, r.width, r.height, &settings);
     // Irradiance at floor point p from the light (radiance I/A = 1), by a 200×200 midpoint rule.
     let quadrature = |p: Vec3A| {
         let n = 200;

@@ -11,8 +11,8 @@
 # skipped with one line.
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-bin=$root/target/release/caustic
-water=$root/target/release/water
+bin=${BIN:-$root/target/release/caustic}
+water=${WATER:-$root/target/release/water}
 corpus=$root/../shared/corpus/cs488
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

@@ -15,7 +15,7 @@
 //! image, which is byte-identical to the PNG of a full render.
 
 use crate::error::{Error, Result};
-use crate::render::{Film, Window};
+use crate::film::{Film, Window};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 

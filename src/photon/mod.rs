@@ -62,6 +62,7 @@ pub mod estimate;
 pub mod kdtree;
 pub mod store;
 pub mod trace;
+pub mod view;
 
 use glam::Vec3A;
 pub use store::{MAX_ANGLE_ERROR_DEG, MAX_POWER_REL_ERROR};

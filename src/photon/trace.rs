@@ -20,11 +20,12 @@
 use super::Photon;
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::light::Light;
-use crate::material::fresnel;
+use crate::material::bsdf::Lobe;
 use crate::material::medium::MediumStack;
-use crate::render::shade::reflect_above;
+use crate::progress::{NoProgress, Progress};
 use crate::sampling::{Pass, Rng};
 use crate::scene::Scene;
+use crate::scene::interaction::Needs;
 use glam::Vec3A;
 use rayon::prelude::*;
 use std::f32::consts::TAU;
@@ -161,22 +162,6 @@ pub fn specular_targets(scene: &Scene) -> Vec<(Vec3A, f32)> {
         .collect()
 }
 
-/// How a long phase tells a progress display what it has done; calls may come from any thread.
-pub trait Progress: Sync {
-    /// A phase called `what` starts, with `total` units of work.
-    fn start(&self, what: &str, total: u64);
-    /// `n` more units of the current phase are done.
-    fn advance(&self, n: u64);
-}
-
-/// A [`Progress`] that shows nothing.
-pub struct NoProgress;
-
-impl Progress for NoProgress {
-    fn start(&self, _: &str, _: u64) {}
-    fn advance(&self, _: u64) {}
-}
-
 /// Traces the photons of `kind` for every light: `budget[l]` emitted by light `l`.
 pub fn trace_map(scene: &Scene, budget: &[u64], kind: MapKind, seed: u64) -> TracedMap {
     trace_map_with(scene, budget, kind, seed, &NoProgress)
@@ -298,24 +283,13 @@ fn trace_one(
         let Some(hit) = scene.intersect(&ray) else {
             return;
         };
-        let mut surf = scene.surface(&ray, &hit);
         if first {
             power *= light.falloff_ratio(hit.t * ray.dir.length());
             first = false;
         }
-        let mat = &scene.materials[surf.material as usize];
-        let kd = mat.diffuse(surf.uv);
-        if mat.perturbs_normals() {
-            surf.ns = mat.shading_normal(surf.ns, surf.ng, surf.p, surf.uv, surf.dpdu);
-        }
-        let wo = -ray.dir.normalize();
-        let front = surf.ng.dot(wo) > 0.0;
-        let (n, ng) = if front {
-            (surf.ns, surf.ng)
-        } else {
-            (-surf.ns, -surf.ng)
-        };
-        let crossing = (mat.transparency > 0.0).then(|| media.cross(surf.material, mat.ior, front));
+        let it = scene.interaction(&ray, &hit, Needs::Full, None);
+        let (surf, bsdf) = (&it.surf, &it.bsdf);
+        let crossing = bsdf.crossing(&media);
         if let Some(c) = crossing
             && c.is_false()
         {
@@ -323,61 +297,34 @@ fn trace_one(
             ray = Ray::new(offset_ray_origin(surf.p, surf.ng, ray.dir), ray.dir);
             continue;
         }
-        let lobes = mat.lobes(kd);
-        if lobes.diffuse.max_element() > 0.0 {
-            let store = match kind {
-                MapKind::Global => true,
-                MapKind::Caustic => specular_bounced,
-            };
-            if store {
-                out.push(Photon {
-                    position: surf.p,
-                    power,
-                    dir: wo,
-                    normal: ng,
-                    direct: !diffuse_bounced,
-                });
-            }
+        let store = match kind {
+            MapKind::Global => true,
+            MapKind::Caustic => specular_bounced,
+        };
+        if store && bsdf.lobes().diffuse.max_element() > 0.0 {
+            out.push(Photon {
+                position: surf.p,
+                power,
+                dir: bsdf.wo,
+                normal: bsdf.ng,
+                direct: !diffuse_bounced,
+            });
         }
-        // Russian roulette over the material's behaviours.
-        let (pd, pm, pt) = (
-            lobes.diffuse.max_element(),
-            lobes.mirror.max_element(),
-            lobes.dielectric,
-        );
-        let scale = (pd + pm + pt).max(1.0);
-        let (pd, pm, pt) = (pd / scale, pm / scale, pt / scale);
-        let xi = rng.next_f32();
-        let next = if xi < pd {
-            if kind == MapKind::Caustic {
-                return; // caustic paths end at their first diffuse surface
-            }
-            diffuse_bounced = true;
-            power *= lobes.diffuse / pd;
-            let d = crate::light::cosine_around(n, (rng.next_f32(), rng.next_f32()));
-            if d.dot(ng) <= 0.0 {
-                return;
-            }
-            d
-        } else if xi < pd + pm {
-            specular_bounced = true;
-            power *= lobes.mirror / pm;
-            reflect_above(wo, n, ng)
-        } else if xi < pd + pm + pt {
-            specular_bounced = true;
-            let c = crossing.expect("dielectric weight implies a crossing");
-            let f = fresnel::dielectric(n.dot(wo).max(0.0), c.n_from / c.n_to);
-            match fresnel::refract(wo, n, c.n_from / c.n_to) {
-                Some(wt) if rng.next_f32() >= f && wt.dot(ng) < 0.0 => {
-                    media = c.after;
-                    wt
-                }
-                _ => reflect_above(wo, n, ng),
-            }
-        } else {
+        // Russian roulette over the material's lobes.
+        let Some(next) = bsdf.sample(crossing.as_ref(), rng) else {
             return;
         };
-        ray = Ray::new(offset_ray_origin(surf.p, ng, next), next);
+        match next.lobe {
+            // Caustic paths end at their first diffuse surface.
+            Lobe::Diffuse if kind == MapKind::Caustic => return,
+            Lobe::Diffuse => diffuse_bounced = true,
+            Lobe::Mirror | Lobe::Dielectric => specular_bounced = true,
+        }
+        power *= next.weight;
+        if let Some(after) = next.media {
+            media = after;
+        }
+        ray = Ray::new(offset_ray_origin(surf.p, bsdf.ng, next.dir), next.dir);
     }
 }
 

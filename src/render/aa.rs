@@ -11,16 +11,18 @@
 //! corners. Flat areas thus cost about one ray per pixel, and edges up to `(2^d + 1)²`. It draws
 //! no random numbers, so it is deterministic by construction.
 
-use super::shade::Tracer;
-use super::{RayCounts, RenderOptions, Sampling, shade};
+use super::{PassOptions, Radiance, Sampling};
+use crate::camera::Camera;
 use crate::sampling::{Pass, Rng, point_key, stratified_2d};
+use crate::stats::RayCounts;
 use glam::Vec3A;
 use rayon::prelude::*;
 
 /// Samples pixels of one render; shared by the worker threads.
 pub struct PixelSampler<'a> {
-    tracer: &'a Tracer<'a>,
-    opts: &'a RenderOptions,
+    camera: &'a Camera,
+    integrator: &'a dyn Radiance,
+    opts: &'a PassOptions,
     /// Adaptive mode: radiance at every pixel corner of the window, `(w + 1) × (h + 1)` row-major.
     corners: Vec<Vec3A>,
     corner_counts: RayCounts,
@@ -28,9 +30,14 @@ pub struct PixelSampler<'a> {
 
 impl<'a> PixelSampler<'a> {
     /// Prepares sampling; in adaptive mode traces every corner ray of the window (in parallel).
-    pub fn new(tracer: &'a Tracer<'a>, opts: &'a RenderOptions) -> PixelSampler<'a> {
+    pub fn new(
+        camera: &'a Camera,
+        integrator: &'a dyn Radiance,
+        opts: &'a PassOptions,
+    ) -> PixelSampler<'a> {
         let mut sampler = PixelSampler {
-            tracer,
+            camera,
+            integrator,
             opts,
             corners: Vec::new(),
             corner_counts: RayCounts::default(),
@@ -85,9 +92,8 @@ impl<'a> PixelSampler<'a> {
     /// Returns the radiance along the camera ray through image-plane position `(x, y)`.
     fn trace(&self, x: f32, y: f32, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
         counts.primary += 1;
-        let ray = self.tracer.camera.ray(x, y);
-        self.tracer
-            .radiance(&ray, shade::PathState::camera(), rng, counts)
+        let ray = self.camera.ray(x, y);
+        self.integrator.radiance(&ray, rng, counts)
     }
 
     /// Returns the radiance through `(x, y)` with the random stream of that image-plane point, so

@@ -2,7 +2,10 @@
 #![allow(dead_code)]
 
 use caustic::camera::Camera;
-use caustic::render::{Film, render};
+use caustic::film::{Film, Window};
+use caustic::integrator::{GiMode, Settings};
+use caustic::progress::NoProgress;
+use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
 use caustic::scene::desc::{RenderDesc, SceneDesc};
 use caustic::scene::lua::run_source;
@@ -71,12 +74,38 @@ pub fn render_films(
         Box::new(move |desc: &SceneDesc, r: &RenderDesc| {
             let scene = build_scene(desc, r)?;
             let camera = Camera::new(&r.camera, r.width, r.height);
-            let (film, _) = render(&scene, &camera, r.width, r.height);
+            let film = render_scene(&scene, &camera, r.width, r.height, &whitted());
             sink.borrow_mut().push((r.clone(), camera, film));
             Ok(())
         }),
     )?;
     Ok(Rc::try_unwrap(films).ok().unwrap().into_inner())
+}
+
+/// Returns the frame settings of the course's renderer: one centre ray per pixel, no photon maps.
+pub fn whitted() -> Settings {
+    Settings {
+        gi: GiMode::Off,
+        ..Settings::default()
+    }
+}
+
+/// Renders the whole `width × height` image of `scene` through the one frame call.
+pub fn render_scene(
+    scene: &Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    settings: &Settings,
+) -> Film {
+    caustic::frame::render(
+        scene,
+        camera,
+        Window::full(width, height),
+        settings,
+        &NoProgress,
+    )
+    .0
 }
 
 /// Renders a corpus script as if run from its own folder.

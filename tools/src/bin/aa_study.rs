@@ -12,7 +12,10 @@
 //! photon maps are rendered without them (`--gi off` in the CLI's terms): this is about pixels.
 
 use caustic::camera::Camera;
-use caustic::render::{Film, RenderOptions, Sampling, render_with};
+use caustic::film::{Film, Window};
+use caustic::integrator::{GiMode, Settings};
+use caustic::progress::NoProgress;
+use caustic::render::Sampling;
 use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
 use caustic::scene::lua::run_script;
@@ -57,15 +60,17 @@ fn timed(
     sampling: Sampling,
     reps: u32,
 ) -> (Film, f64) {
-    let opts = RenderOptions {
+    let settings = Settings {
         sampling,
-        ..RenderOptions::new(w, h)
+        gi: GiMode::Off,
+        ..Settings::default()
     };
     let mut best = f64::INFINITY;
     let mut film = None;
     for _ in 0..reps.max(1) {
         let start = Instant::now();
-        let (f, _) = render_with(scene, camera, None, &opts, &|| {});
+        let (f, _) =
+            caustic::frame::render(scene, camera, Window::full(w, h), &settings, &NoProgress);
         best = best.min(start.elapsed().as_secs_f64());
         film = Some(f);
     }

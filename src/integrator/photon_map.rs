@@ -1,6 +1,7 @@
-//! Global illumination from photon maps: caustics and indirect diffuse light at a shaded point.
+//! The photon-mapping integrator (Jensen): caustics and indirect diffuse light from photon maps.
 //!
-//! [`Gi::build`] runs the photon phases (trace, then build the kd-trees) for one render;
+//! Phases ([`render`]): trace photons, build maps, precompute irradiance (together
+//! [`Gi::build_with`]), then the camera pass with the maps as the eye path's diffuse term.
 //! [`Gi::diffuse`] answers what a diffuse surface receives other than directly from the lights:
 //! - caustics: a density estimate of the caustic map at the point;
 //! - indirect diffuse light, in one of two modes ([`Indirect`]):
@@ -29,17 +30,20 @@
 //! normal disagrees with the surface's (light leaking round corners and through thin walls), and
 //! weight them with a [`Filter`] that integrates to one.
 
-use super::RayCounts;
-use super::shade::Tracer;
+use super::eye::{DiffuseTerm, Tracer};
+use super::{Plan, Settings, camera_pass};
+use crate::camera::Camera;
+use crate::film::{Film, Window};
 use crate::geometry::{Ray, offset_ray_origin};
-use crate::light::cosine_around;
+use crate::material::bsdf::Bsdf;
 use crate::photon::estimate::Filter;
-use crate::photon::trace::{
-    LightCounts, MapKind, NoProgress, Progress, photon_budget, trace_map_with,
-};
+use crate::photon::trace::{LightCounts, MapKind, TracedMap, photon_budget, trace_map_with};
 use crate::photon::{Photon, PhotonId, PhotonMap};
+use crate::progress::{NoProgress, Progress};
 use crate::sampling::{Rng, stratified_2d};
 use crate::scene::Scene;
+use crate::scene::interaction::Needs;
+use crate::stats::{RayCounts, RenderStats};
 use glam::Vec3A;
 use std::cell::RefCell;
 use std::f32::consts::FRAC_1_PI;
@@ -104,10 +108,14 @@ impl Default for GiSettings {
 }
 
 /// Counters of the photon phases, for `--stats`.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct GiStats {
+    /// Photons emitted and stored per light, for each map.
     pub global: Vec<LightCounts>,
     pub caustic: Vec<LightCounts>,
+    /// Bytes each map owns ([`PhotonMap::bytes`]).
+    pub global_bytes: usize,
+    pub caustic_bytes: usize,
     pub trace_time: Duration,
     pub build_time: Duration,
     /// Time to precompute irradiance (zero without), and the points it was computed at.
@@ -133,45 +141,91 @@ thread_local! {
     static FOUND: RefCell<Vec<(f32, PhotonId)>> = const { RefCell::new(Vec::new()) };
 }
 
+/// Renders `window` of the image of `scene` through `camera` with photon maps, running the
+/// phases in turn: trace photons, build maps, precompute irradiance ([`Gi::build_with`]), then
+/// the camera pass with the maps as the eye path's diffuse term.
+pub fn render(
+    scene: &Scene,
+    camera: &Camera,
+    window: Window,
+    settings: &Settings,
+    plan: &Plan,
+    progress: &dyn Progress,
+) -> (Film, RenderStats, GiStats) {
+    let gi_settings = GiSettings {
+        caustics: plan.caustics,
+        ..settings.photons.clone()
+    };
+    let gi = Gi::build_with(scene, &gi_settings, progress);
+    let tracer = Tracer {
+        scene,
+        camera,
+        light_samples: settings.light_samples,
+        diffuse: DiffuseTerm::Photons(&gi),
+    };
+    let (film, stats) = camera_pass(camera, &tracer, window, settings, progress);
+    (film, stats, gi.stats)
+}
+
+/// Phase 1: traces the global map's photons and, when asked, the caustic map's, with each
+/// light's share of the budget.
+fn trace_photons(
+    scene: &Scene,
+    settings: &GiSettings,
+    progress: &dyn Progress,
+) -> (TracedMap, Option<TracedMap>) {
+    let budget: Vec<u64> = photon_budget(&scene.lights, settings.photons)
+        .into_iter()
+        .map(|n| (n as f64 * settings.photon_scale).round() as u64)
+        .collect();
+    let global = trace_map_with(scene, &budget, MapKind::Global, settings.seed, progress);
+    let caustic = settings
+        .caustics
+        .then(|| trace_map_with(scene, &budget, MapKind::Caustic, settings.seed, progress));
+    (global, caustic)
+}
+
+/// Phase 2: builds the kd-trees of the traced photons.
+fn build_maps(global: &TracedMap, caustic: Option<&TracedMap>) -> (PhotonMap, Option<PhotonMap>) {
+    (
+        PhotonMap::from_chunks(&global.chunks),
+        caustic.map(|c| PhotonMap::from_chunks(&c.chunks)),
+    )
+}
+
 impl Gi {
     /// Traces and stores the photons of `scene` (both cores) and builds their kd-trees.
     pub fn build(scene: &Scene, settings: &GiSettings) -> Gi {
         Gi::build_with(scene, settings, &NoProgress)
     }
 
-    /// [`Gi::build`], reporting each phase (tracing each map, precomputing irradiance) to
-    /// `progress`.
+    /// [`Gi::build`], reporting each phase to `progress`. The phases: trace photons, build
+    /// maps, precompute irradiance.
     pub fn build_with(scene: &Scene, settings: &GiSettings, progress: &dyn Progress) -> Gi {
-        let budget: Vec<u64> = photon_budget(&scene.lights, settings.photons)
-            .into_iter()
-            .map(|n| (n as f64 * settings.photon_scale).round() as u64)
-            .collect();
         let start = Instant::now();
-        let global = trace_map_with(scene, &budget, MapKind::Global, settings.seed, progress);
-        let caustic = settings
-            .caustics
-            .then(|| trace_map_with(scene, &budget, MapKind::Caustic, settings.seed, progress));
+        let (global, caustic) = trace_photons(scene, settings, progress);
         let trace_time = start.elapsed();
         let start = Instant::now();
-        let global_map = PhotonMap::from_chunks(&global.chunks);
-        let caustic_map = caustic.as_ref().map(|c| PhotonMap::from_chunks(&c.chunks));
+        let (global_map, caustic_map) = build_maps(&global, caustic.as_ref());
         let build_time = start.elapsed();
         let extent = scene.extent().max(f32::MIN_POSITIVE);
         let r = settings.max_radius * extent;
         let mut gi = Gi {
+            stats: GiStats {
+                global: global.per_light,
+                caustic: caustic.map(|c| c.per_light).unwrap_or_default(),
+                trace_time,
+                build_time,
+                global_bytes: global_map.bytes(),
+                caustic_bytes: caustic_map.as_ref().map_or(0, |m| m.bytes()),
+                ..GiStats::default()
+            },
             global: global_map,
             caustic: caustic_map.filter(|m| !m.is_empty()),
             precomputed: None,
             settings: settings.clone(),
             global_r2: r * r,
             caustic_r2: 0.25 * r * r,
-            stats: GiStats {
-                global: global.per_light,
-                caustic: caustic.map(|c| c.per_light).unwrap_or_default(),
-                trace_time,
-                build_time,
-                ..GiStats::default()
-            },
         };
         let gathers = matches!(settings.indirect, Indirect::Gather { .. });
         if settings.precompute && gathers && !gi.global.is_empty() {
@@ -184,7 +238,7 @@ impl Gi {
         gi
     }
 
-    /// Returns a map of every [`PRECOMPUTE_STRIDE`]th global photon (in kd-tree order, so spread as
+    /// Phase 3: returns a map of every [`PRECOMPUTE_STRIDE`]th global photon (in kd-tree order, so spread as
     /// the photons are) carrying the global map's irradiance estimate at it as its power.
     fn precompute_irradiance(&self, progress: &dyn Progress) -> PhotonMap {
         use rayon::prelude::*;
@@ -284,39 +338,36 @@ impl Gi {
         self.irradiance(&self.global, self.global_r2, p, n, false, counts)
     }
 
-    /// Returns the caustic and indirect light leaving a diffuse surface of colour `kd` at `p`
-    /// (normals `n`, `ng` facing the viewer), eye-path depth `depth`.
-    #[allow(clippy::too_many_arguments)]
+    /// Returns the caustic and indirect light leaving the diffuse lobe of `bsdf` at `p` towards its
+    /// `wo`, at eye-path depth `depth`.
     pub fn diffuse(
         &self,
-        tracer: &Tracer,
+        scene: &Scene,
         p: Vec3A,
-        n: Vec3A,
-        ng: Vec3A,
-        kd: Vec3A,
+        bsdf: &Bsdf,
         depth: u32,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Vec3A {
+        let ng = bsdf.ng;
         let mut e = self.caustic_at(p, ng, counts);
         match self.settings.indirect {
             Indirect::Gather { rays } if depth <= MAX_GATHER_DEPTH => {
                 let mut sum = Vec3A::ZERO;
                 for u in stratified_2d(rng, rays) {
-                    let d = cosine_around(n, u);
-                    if d.dot(ng) <= 0.0 {
+                    let Some(d) = bsdf.sample_diffuse(u) else {
                         continue;
-                    }
+                    };
                     counts.secondary += 1;
                     let ray = Ray::new(offset_ray_origin(p, ng, d), d);
-                    sum += self.gathered_radiance(tracer.scene, &ray, counts);
+                    sum += self.gathered_radiance(scene, &ray, counts);
                 }
                 // Cosine-distributed rays: E = π · mean(L).
                 e += sum * (std::f32::consts::PI / rays as f32);
             }
             _ => e += self.irradiance(&self.global, self.global_r2, p, ng, true, counts),
         }
-        kd * FRAC_1_PI * e
+        bsdf.kd * FRAC_1_PI * e
     }
 
     /// Returns the radiance a final-gather ray brings back: the global map's estimate of the
@@ -325,17 +376,11 @@ impl Gi {
         let Some(hit) = scene.intersect(ray) else {
             return Vec3A::ZERO;
         };
-        let surf = scene.surface(ray, &hit);
-        let mat = &scene.materials[surf.material as usize];
-        let kd = mat.lobes(mat.diffuse(surf.uv)).diffuse;
+        let it = scene.interaction(ray, &hit, Needs::Albedo, None);
+        let kd = it.bsdf.lobes().diffuse;
         if kd.max_element() <= 0.0 {
             return Vec3A::ZERO;
         }
-        let ng = if surf.ng.dot(ray.dir) > 0.0 {
-            -surf.ng
-        } else {
-            surf.ng
-        };
-        kd * FRAC_1_PI * self.gathered_irradiance(surf.p, ng, counts)
+        kd * FRAC_1_PI * self.gathered_irradiance(it.surf.p, it.bsdf.ng, counts)
     }
 }

@@ -5,17 +5,23 @@
 //! colour of its power (normalised by its map's mean power): global photons as single pixels,
 //! caustic photons as small crosses, brighter, so the two maps are told apart.
 
-use super::{Film, Window};
 use crate::camera::Camera;
+use crate::film::{Film, Window};
 use crate::geometry::Ray;
 use crate::photon::{PhotonId, PhotonMap};
-use crate::render::gi::Gi;
 use crate::scene::Scene;
 use glam::Vec3A;
 use rayon::prelude::*;
 
-/// Returns the photon picture of `gi`'s maps over a dim view of `scene`.
-pub fn photon_image(scene: &Scene, camera: &Camera, gi: &Gi, width: u32, height: u32) -> Film {
+/// Returns the picture of the `global` and `caustic` maps' photons over a dim view of `scene`.
+pub fn photon_image(
+    scene: &Scene,
+    camera: &Camera,
+    global: &PhotonMap,
+    caustic: Option<&PhotonMap>,
+    width: u32,
+    height: u32,
+) -> Film {
     let mut pixels: Vec<Vec3A> = (0..width * height)
         .into_par_iter()
         .map(|i| {
@@ -66,8 +72,8 @@ pub fn photon_image(scene: &Scene, camera: &Camera, gi: &Gi, width: u32, height:
             }
         }
     };
-    draw(&gi.global, 0.5, false);
-    if let Some(c) = &gi.caustic {
+    draw(global, 0.5, false);
+    if let Some(c) = caustic {
         draw(c, 1.0, true);
     }
     let film = Film {
@@ -77,6 +83,6 @@ pub fn photon_image(scene: &Scene, camera: &Camera, gi: &Gi, width: u32, height:
         pixels,
         window: Window::full(width, height),
     };
-    super::film_log::record(&film);
+    crate::film::log::record(&film);
     film
 }

@@ -1,4 +1,5 @@
-//! The effect plan: which parts of light transport a render simulates, decided from its scene.
+//! The effect plan: which integrator a frame uses and which parts of light transport it
+//! simulates, decided from its scene before any pass runs.
 //!
 //! A render simulates only what its scene calls for:
 //! - **photon maps** (global illumination) when the command line asks (`--gi on`) or, with
@@ -10,6 +11,7 @@
 //! - soft shadows only for area and sphere lights; refraction only where `t > 0`; and so on, by
 //!   construction of the shading code.
 
+use super::Integrator;
 use crate::photon::trace::specular_targets;
 use crate::scene::Scene;
 
@@ -24,7 +26,9 @@ pub enum GiMode {
 /// The effects one render simulates, with the reasons, for `--stats`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Plan {
-    pub photon_maps: bool,
+    /// The light-transport method: photon mapping when global illumination is on.
+    pub integrator: Integrator,
+    /// Whether the photon-mapping integrator traces a caustic map.
     pub caustics: bool,
     pub reasons: Vec<String>,
 }
@@ -61,7 +65,11 @@ pub fn plan(scene: &Scene, mode: GiMode) -> Plan {
         "soft shadows: off (point lights only)".to_string()
     });
     Plan {
-        photon_maps,
+        integrator: if photon_maps {
+            Integrator::PhotonMap
+        } else {
+            Integrator::Whitted
+        },
         caustics,
         reasons,
     }

@@ -1,0 +1,360 @@
+//! The command line: clap's arguments ([`Cli`]), turned into the library's settings
+//! ([`settings`]), each command a call into the library ([`crate::frame`]), and what it prints
+//! ([`report`]). No pass is wired here.
+
+pub mod report;
+pub mod settings;
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::frame;
+use crate::integrator::photon_map::GiSettings;
+use crate::io::image::{Tonemap, write_image, write_sample_map};
+use crate::scene::build::build_scene;
+use crate::scene::desc::{RenderDesc, SceneDesc};
+use crate::scene::lua::{ScriptOptions, run_script, run_script_with};
+use clap::{Args, Parser, Subcommand};
+use report::Bar;
+use settings::RenderJob;
+use std::cell::Cell;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::rc::Rc;
+use std::time::Instant;
+
+/// caustic: a photon-mapping ray tracer for CS488 Lua scenes.
+#[derive(Debug, Parser)]
+#[command(name = "caustic", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run a scene script; every gr.render call renders and writes its image.
+    Render(RenderArgs),
+    /// Run a scene script without rendering and summarise what it describes.
+    Info(InfoArgs),
+    /// Assemble tiles rendered with --crop into the full image.
+    Stitch(StitchArgs),
+    /// Trace a scene's photons and draw them from its camera (global: dots; caustic: crosses).
+    Photons(PhotonsArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct PhotonsArgs {
+    /// The Lua scene script.
+    pub scene: PathBuf,
+    /// The picture to write (default: the script's image name with `_photons` added).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<PathBuf>,
+    /// Photons per map.
+    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    pub photons: u64,
+    /// Seed of the photon streams.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// Draw at this multiple of the script's image size.
+    #[arg(long, value_name = "F", default_value_t = 1.0)]
+    pub scale: f64,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The Lua scene script.
+    pub scene: PathBuf,
+    /// Write the image here instead of the script's file name (scripts that render one image).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<PathBuf>,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Seed of every random stream, so a render is repeatable.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// Print counters and timings for each image.
+    #[arg(long)]
+    pub stats: bool,
+    /// Render at this multiple of the script's image size (0.25 for a quick preview).
+    #[arg(long, value_name = "F", default_value_t = 1.0)]
+    pub scale: f64,
+    /// Stratified samples per pixel (1 = one ray through the pixel centre, as the course).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub spp: u32,
+    /// Adaptive anti-aliasing: trace pixel corners and refine where they differ (replaces --spp).
+    #[arg(long)]
+    pub adaptive: bool,
+    /// Adaptive: refine a square whose corners differ by more than this in any channel.
+    #[arg(long, value_name = "T", default_value_t = 0.1)]
+    pub aa_threshold: f32,
+    /// Adaptive: split a pixel at most this many times (up to (2^D+1)² rays per pixel).
+    #[arg(long, value_name = "D", default_value_t = 3)]
+    pub aa_depth: u32,
+    /// Also write a grey image of how many camera rays each pixel took (white = most).
+    #[arg(long, value_name = "OUT.png")]
+    pub aa_map: Option<PathBuf>,
+    /// Render only the window x0,y0,x1,y1 (pixels, end exclusive) of each image, as a tile for
+    /// `caustic stitch`.
+    #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop)]
+    pub crop: Option<[u32; 4]>,
+    /// How radiance becomes 8-bit PNG values: clamp (the course's) or srgb (exposure + sRGB curve).
+    #[arg(long, value_enum, default_value_t = TonemapArg::Clamp)]
+    pub tonemap: TonemapArg,
+    /// Exposure in stops for --tonemap srgb (radiance is multiplied by 2^E).
+    #[arg(long, value_name = "E", default_value_t = 0.0)]
+    pub exposure: f32,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Shadow-ray samples per area or sphere light at each shaded point (soft shadows).
+    #[arg(long, value_name = "N", default_value_t = 16)]
+    pub light_samples: u32,
+    /// Photon mapping: auto (when a light has power or num_photons), on, or off (ambient term).
+    #[arg(long, value_enum, default_value_t = GiArg::Auto)]
+    pub gi: GiArg,
+    /// Photons per map, shared by lights without num_photons in proportion to their power.
+    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    pub photons: u64,
+    /// Indirect diffuse light: gather (final gathering, accurate) or direct (the global map seen
+    /// directly, fast and blotchy).
+    #[arg(long, value_enum, default_value_t = IndirectArg::Gather)]
+    pub indirect: IndirectArg,
+    /// Final-gather rays per shaded point.
+    #[arg(long, value_name = "N", default_value_t = 64)]
+    pub gather_rays: u32,
+    /// What a final-gather ray reads where it lands: precomputed (irradiance computed beforehand
+    /// at one global photon in four, Christensen's method, fast) or estimate (a density estimate
+    /// at the hit, slower and sharper).
+    #[arg(long, value_enum, default_value_t = GatherLookup::Precomputed)]
+    pub gather_lookup: GatherLookup,
+    /// Nearest photons per density estimate.
+    #[arg(long, value_name = "K", default_value_t = 50)]
+    pub photon_k: usize,
+    /// Multiply every light's photon count by F, the scene's num_photons included (previews).
+    #[arg(long, value_name = "F", default_value_t = 1.0)]
+    pub photon_scale: f64,
+    /// What a missing or unreadable texture is: an error (default), or a warning (once per file)
+    /// with the material rendered in its kd colour.
+    #[arg(long, value_enum, default_value_t = MissingTextures::Error)]
+    pub missing_textures: MissingTextures,
+}
+
+/// The `--missing-textures` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MissingTextures {
+    Error,
+    Warn,
+}
+
+/// The `--gi` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GiArg {
+    Auto,
+    On,
+    Off,
+}
+
+/// The `--indirect` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum IndirectArg {
+    Gather,
+    Direct,
+}
+
+/// The `--gather-lookup` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GatherLookup {
+    Precomputed,
+    Estimate,
+}
+
+/// The `--tonemap` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TonemapArg {
+    Clamp,
+    Srgb,
+}
+
+#[derive(Debug, Args)]
+pub struct StitchArgs {
+    /// Tiles written by `caustic render --crop` (PNG), in any order.
+    #[arg(required = true)]
+    pub tiles: Vec<PathBuf>,
+    /// The full image to write.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+}
+
+/// Parses `x0,y0,x1,y1`.
+fn parse_crop(s: &str) -> std::result::Result<[u32; 4], String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u32>().map_err(|e| format!("'{p}': {e}")))
+        .collect::<std::result::Result<_, _>>()?;
+    match v[..] {
+        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok([x0, y0, x1, y1]),
+        [_, _, _, _] => Err("need x0 < x1 and y0 < y1".into()),
+        _ => Err("expected four numbers x0,y0,x1,y1".into()),
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The Lua scene script.
+    pub scene: PathBuf,
+}
+
+/// Runs the parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Render(args) => render_command(args),
+        Command::Info(args) => info_command(args),
+        Command::Stitch(args) => crate::io::image::stitch(&args.tiles, &args.output),
+        Command::Photons(args) => photons_command(args),
+    }
+}
+
+fn render_command(args: RenderArgs) -> Result<()> {
+    if !(args.scale > 0.0 && args.scale <= 16.0) {
+        return Err(Error::Usage(format!(
+            "--scale must be in (0, 16], got {}",
+            args.scale
+        )));
+    }
+    if let Some(n) = args.threads {
+        if n == 0 {
+            return Err(Error::Usage("--threads must be at least 1".into()));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| Error::Usage(format!("cannot start {n} threads: {e}")))?;
+    }
+    let rendered = Rc::new(Cell::new(0u32));
+    let count = Rc::clone(&rendered);
+    let output = args.output.clone();
+    let job = RenderJob::from_args(&args)?;
+    let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
+        count.set(count.get() + 1);
+        let out = match &output {
+            None => r.output.clone(),
+            Some(o) if count.get() == 1 => o.clone(),
+            Some(_) => {
+                return Err(Error::at(
+                    &r.loc,
+                    "this script renders more than one image, so -o cannot name its output; run without -o",
+                ));
+            }
+        };
+        render_one(desc, r, &job, &out)
+    });
+    let options = ScriptOptions {
+        missing_textures_warn: args.missing_textures == MissingTextures::Warn,
+    };
+    run_script_with(&args.scene, hook, options)?;
+    if rendered.get() == 0 {
+        eprintln!(
+            "warning: {} never called gr.render; no image written",
+            args.scene.display()
+        );
+    }
+    Ok(())
+}
+
+/// Renders and writes the image of one `gr.render` call.
+fn render_one(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    job: &RenderJob,
+    out: &std::path::Path,
+) -> Result<()> {
+    let start = Instant::now();
+    let bar = Bar::new(job.progress, out);
+    let frame = frame::render_desc(desc, r, job.scale, job.crop, &job.settings, &bar);
+    bar.finish();
+    let frame = frame?;
+    write_image(&frame.film, out, job.tonemap)?;
+    if let Some(map) = &job.aa_map {
+        write_sample_map(&frame.film, map)?;
+    }
+    let (fw, fh) = frame.film.window.size();
+    eprintln!(
+        "wrote {} ({fw}x{fh}) in {:.2} s",
+        out.display(),
+        start.elapsed().as_secs_f64()
+    );
+    if job.stats {
+        report::print_stats(&frame, r, out);
+    }
+    Ok(())
+}
+
+fn photons_command(args: PhotonsArgs) -> Result<()> {
+    if !(args.scale > 0.0 && args.scale <= 16.0) {
+        return Err(Error::Usage(format!(
+            "--scale must be in (0, 16], got {}",
+            args.scale
+        )));
+    }
+    let count = Rc::new(Cell::new(0u32));
+    let counter = Rc::clone(&count);
+    let output = args.output.clone();
+    let (photons, seed, scale) = (args.photons, args.seed, args.scale);
+    let progress = !args.quiet && std::io::stderr().is_terminal();
+    let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
+        counter.set(counter.get() + 1);
+        let out = match &output {
+            Some(o) if counter.get() == 1 => o.clone(),
+            Some(_) => {
+                return Err(Error::at(
+                    &r.loc,
+                    "this script renders more than one image, so -o cannot name its output",
+                ));
+            }
+            None => {
+                let stem = r
+                    .output
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                r.output.with_file_name(format!("{stem}_photons.png"))
+            }
+        };
+        let size = frame::scaled_size(r, scale);
+        let scene = build_scene(desc, r)?;
+        let camera = Camera::new(&r.camera, size.0, size.1);
+        let settings = GiSettings {
+            seed,
+            photons,
+            ..GiSettings::default()
+        };
+        let bar = Bar::new(progress, &out);
+        let (film, stats) = frame::photon_view(&scene, &camera, size, &settings, &bar);
+        bar.finish();
+        write_image(&film, &out, Tonemap::Clamp)?;
+        let stored =
+            |c: &[crate::photon::trace::LightCounts]| c.iter().map(|c| c.stored).sum::<u64>();
+        eprintln!(
+            "wrote {} ({} global, {} caustic photons)",
+            out.display(),
+            stored(&stats.global),
+            stored(&stats.caustic)
+        );
+        Ok(())
+    });
+    run_script(&args.scene, hook)?;
+    Ok(())
+}
+
+fn info_command(args: InfoArgs) -> Result<()> {
+    let desc = run_script(&args.scene, Box::new(|_, _| Ok(())))?;
+    print!(
+        "{}",
+        report::describe(&args.scene.display().to_string(), &desc)?
+    );
+    Ok(())
+}

@@ -1,0 +1,226 @@
+//! What the command line prints: the progress bar, `--stats` and `caustic info`'s summary.
+
+use crate::error::Result;
+use crate::frame::Frame;
+use crate::integrator::photon_map::GiStats;
+use crate::progress::Progress;
+use crate::scene::build::count_placements;
+use crate::scene::desc::{RenderDesc, SceneDesc};
+use crate::stats::RenderStats;
+use std::path::Path;
+
+/// The progress bar of one image on stderr (hidden unless `show`): one phase after another, each
+/// with its own count, elapsed time and estimate of time left.
+pub struct Bar {
+    bar: indicatif::ProgressBar,
+    /// The image's path, shown before each phase's name.
+    image: String,
+}
+
+impl Bar {
+    /// Returns the bar of the image written to `out`, shown only when `show`.
+    pub fn new(show: bool, out: &std::path::Path) -> Bar {
+        let bar = if show {
+            let bar = indicatif::ProgressBar::new(0);
+            if let Ok(style) = indicatif::ProgressStyle::with_template(
+                "{msg} [{bar:40}] {human_pos}/{human_len}, {elapsed} elapsed, {eta} left",
+            ) {
+                bar.set_style(style.progress_chars("=> "));
+            }
+            bar
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        Bar {
+            bar,
+            image: out.display().to_string(),
+        }
+    }
+
+    /// Removes the bar from the terminal.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+impl Progress for Bar {
+    fn start(&self, what: &str, total: u64) {
+        self.bar.reset();
+        self.bar.set_length(total);
+        self.bar.set_message(format!("{}: {what}", self.image));
+    }
+
+    fn advance(&self, n: u64) {
+        self.bar.inc(n);
+    }
+}
+
+/// Prints `--stats` for one frame written to `out` from the `gr.render` call `r`.
+pub fn print_stats(frame: &Frame, r: &RenderDesc, out: &Path) {
+    let (scene, film, rstats) = (&frame.scene, &frame.film, &frame.stats.render);
+    let b = &scene.stats;
+    println!(
+        "image {}: {}x{} from {}",
+        out.display(),
+        film.width,
+        film.height,
+        r.loc
+    );
+    let kinds: Vec<String> = b.by_kind.iter().map(|(k, v)| format!("{k} {v}")).collect();
+    println!(
+        "  scene: {} instances ({}), {} lights",
+        scene.instances.len(),
+        kinds.join(", "),
+        scene.lights.len()
+    );
+    println!(
+        "  triangles: {} placed, {} stored; BVH {} bytes; build {:.3} s",
+        b.triangles_placed,
+        b.triangles_stored,
+        b.bvh_bytes,
+        b.build_time.as_secs_f64()
+    );
+    let n = film.samples.len().max(1) as f64;
+    let total: u64 = film.samples.iter().map(|&s| s as u64).sum();
+    let (lo, hi) = (
+        film.samples.iter().min().copied().unwrap_or(0),
+        film.samples.iter().max().copied().unwrap_or(0),
+    );
+    println!(
+        "  camera rays per pixel: mean {:.2}, min {lo}, max {hi}",
+        total as f64 / n
+    );
+    let secs = rstats.time.as_secs_f64();
+    let rays = rstats.primary_rays + rstats.shadow_rays + rstats.secondary_rays;
+    println!(
+        "  rays: {} primary, {} shadow, {} secondary; render {:.3} s ({:.2} Mrays/s, {} threads)",
+        rstats.primary_rays,
+        rstats.shadow_rays,
+        rstats.secondary_rays,
+        secs,
+        rays as f64 / secs.max(1e-9) / 1e6,
+        rayon::current_num_threads()
+    );
+    // Thread time summed over workers, against wall time times the workers.
+    let busy = secs * rayon::current_num_threads() as f64;
+    println!(
+        "  materials (textures, bump maps, Perlin noise): {:.3} s of thread time, {:.1}% of render time",
+        rstats.material_time.as_secs_f64(),
+        100.0 * rstats.material_time.as_secs_f64() / busy.max(1e-9)
+    );
+    println!("  effects: {}", frame.stats.plan.reasons.join("; "));
+    if let Some(photons) = &frame.stats.photons {
+        print_photon_stats(photons, rstats);
+    }
+}
+
+/// Prints the photon passes' counters and the camera pass's photon lookups.
+fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
+    for (name, counts, bytes) in [
+        ("global", &s.global, s.global_bytes),
+        ("caustic", &s.caustic, s.caustic_bytes),
+    ] {
+        let emitted: u64 = counts.iter().map(|c| c.emitted).sum();
+        let stored: u64 = counts.iter().map(|c| c.stored).sum();
+        let per_light: Vec<String> = counts
+            .iter()
+            .map(|c| format!("{}/{}", c.stored, c.emitted))
+            .collect();
+        println!(
+            "  {name} map: {emitted} photons emitted, {stored} stored (per light stored/emitted: {}), {:.1} bytes per photon",
+            per_light.join(", "),
+            bytes as f64 / stored.max(1) as f64
+        );
+    }
+    let (lookups, used) = (rstats.lookups, rstats.photons_used);
+    println!(
+        "  photon phases: trace {:.3} s, kd-tree build {:.3} s, irradiance precomputed at {} points in {:.3} s",
+        s.trace_time.as_secs_f64(),
+        s.build_time.as_secs_f64(),
+        s.precomputed_points,
+        s.precompute_time.as_secs_f64(),
+    );
+    println!(
+        "  photon lookups while rendering: {lookups}, {:.1} photons per lookup",
+        used as f64 / lookups.max(1) as f64
+    );
+}
+
+/// Returns the summary `caustic info` prints for a script's description.
+pub fn describe(name: &str, desc: &SceneDesc) -> Result<String> {
+    use std::collections::BTreeMap;
+    use std::fmt::Write;
+    let mut s = String::new();
+    let mut kinds: BTreeMap<&str, usize> = BTreeMap::new();
+    for n in &desc.nodes {
+        *kinds.entry(n.kind.label()).or_default() += 1;
+    }
+    let list = |m: &BTreeMap<&str, usize>| {
+        m.iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let triangles: usize = desc.meshes.iter().map(|m| m.data.triangles.len()).sum();
+    let _ = writeln!(s, "scene {name}");
+    let _ = writeln!(s, "  nodes: {} ({})", desc.nodes.len(), list(&kinds));
+    let _ = writeln!(
+        s,
+        "  meshes: {} files, {triangles} triangles",
+        desc.meshes.len()
+    );
+    for m in &desc.meshes {
+        let _ = writeln!(
+            s,
+            "    {}: {} triangles",
+            m.data.source.display(),
+            m.data.triangles.len()
+        );
+    }
+    let _ = writeln!(s, "  materials: {}", desc.materials.len());
+    let _ = writeln!(s, "  lights: {}", desc.lights.len());
+    let _ = writeln!(s, "  renders: {}", desc.renders.len());
+    for (i, r) in desc.renders.iter().enumerate() {
+        let c = &r.camera;
+        let placed = count_placements(desc, r.root)?;
+        let _ = writeln!(
+            s,
+            "  render {} at {}: {} {}x{}",
+            i + 1,
+            r.loc,
+            r.output.display(),
+            r.width,
+            r.height
+        );
+        let _ = writeln!(
+            s,
+            "    camera: eye ({}, {}, {}) view ({}, {}, {}) up ({}, {}, {}) fov {}°",
+            c.eye.x,
+            c.eye.y,
+            c.eye.z,
+            c.view.x,
+            c.view.y,
+            c.view.z,
+            c.up.x,
+            c.up.y,
+            c.up.z,
+            c.fov_deg
+        );
+        let _ = writeln!(
+            s,
+            "    root '{}', ambient ({}, {}, {}), {} lights",
+            desc.node(r.root).name,
+            r.ambient.x,
+            r.ambient.y,
+            r.ambient.z,
+            r.lights.len()
+        );
+        let _ = writeln!(
+            s,
+            "    placed: {} ({} triangles)",
+            list(&placed.by_kind),
+            placed.triangles
+        );
+    }
+    Ok(s)
+}

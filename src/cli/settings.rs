@@ -1,0 +1,114 @@
+//! The command line's render options turned into the library's [`Settings`], with every numeric
+//! flag checked against its range (a usage error names the flag).
+
+use super::{GatherLookup, GiArg, IndirectArg, RenderArgs, TonemapArg};
+use crate::error::{Error, Result};
+use crate::integrator::photon_map::{GiSettings, Indirect};
+use crate::integrator::{GiMode, Settings};
+use crate::io::image::Tonemap;
+use crate::render::Sampling;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+/// What `caustic render` does with each image, checked: the frame's settings and what the
+/// command line adds around them.
+pub struct RenderJob {
+    /// The frame's settings, passed to [`crate::frame::render_desc`] unchanged.
+    pub settings: Settings,
+    /// Multiple of the script's image size.
+    pub scale: f64,
+    /// The window to render, `[x0, y0, x1, y1]`.
+    pub crop: Option<[u32; 4]>,
+    pub tonemap: Tonemap,
+    /// Where to write the camera-ray count image.
+    pub aa_map: Option<PathBuf>,
+    /// Print counters and timings.
+    pub stats: bool,
+    /// Show a progress bar.
+    pub progress: bool,
+}
+
+impl RenderJob {
+    /// Returns the job the arguments ask for, or a usage error naming the flag out of range.
+    pub fn from_args(a: &RenderArgs) -> Result<RenderJob> {
+        if a.spp == 0 || a.spp > 1 << 16 {
+            return Err(Error::Usage(format!(
+                "--spp must be in [1, 65536], got {}",
+                a.spp
+            )));
+        }
+        if !(a.aa_threshold >= 0.0 && a.aa_threshold.is_finite()) || a.aa_depth > 8 {
+            return Err(Error::Usage(
+                "--aa-threshold must be >= 0 and --aa-depth at most 8".into(),
+            ));
+        }
+        if !(a.photon_scale >= 0.0 && a.photon_scale <= 1e3) {
+            return Err(Error::Usage(format!(
+                "--photon-scale must be in [0, 1000], got {}",
+                a.photon_scale
+            )));
+        }
+        if !a.exposure.is_finite() {
+            return Err(Error::Usage("--exposure must be finite".into()));
+        }
+        for (name, value, max) in [
+            ("--light-samples", a.light_samples as u64, 4096),
+            ("--photon-k", a.photon_k as u64, 10_000),
+            ("--gather-rays", a.gather_rays as u64, 65_536),
+        ] {
+            if !(1..=max).contains(&value) {
+                return Err(Error::Usage(format!(
+                    "{name} must be in [1, {max}], got {value}"
+                )));
+            }
+        }
+        let sampling = if a.adaptive {
+            Sampling::Adaptive {
+                threshold: a.aa_threshold,
+                max_depth: a.aa_depth,
+            }
+        } else {
+            Sampling::Stratified { spp: a.spp }
+        };
+        let tonemap = match a.tonemap {
+            TonemapArg::Clamp => Tonemap::Clamp,
+            TonemapArg::Srgb => Tonemap::Srgb {
+                exposure: a.exposure,
+            },
+        };
+        let settings = Settings {
+            seed: a.seed,
+            sampling,
+            light_samples: a.light_samples,
+            timing: a.stats,
+            gi: match a.gi {
+                GiArg::Auto => GiMode::Auto,
+                GiArg::On => GiMode::On,
+                GiArg::Off => GiMode::Off,
+            },
+            photons: GiSettings {
+                seed: a.seed,
+                photons: a.photons,
+                photon_scale: a.photon_scale,
+                k: a.photon_k,
+                indirect: match a.indirect {
+                    IndirectArg::Gather => Indirect::Gather {
+                        rays: a.gather_rays,
+                    },
+                    IndirectArg::Direct => Indirect::Direct,
+                },
+                precompute: a.gather_lookup == GatherLookup::Precomputed,
+                ..GiSettings::default()
+            },
+        };
+        Ok(RenderJob {
+            settings,
+            scale: a.scale,
+            crop: a.crop,
+            tonemap,
+            aa_map: a.aa_map.clone(),
+            stats: a.stats,
+            progress: !a.quiet && std::io::stderr().is_terminal(),
+        })
+    }
+}

@@ -1,0 +1,131 @@
+//! A frame as one library call: the effect plan, then the integrator's passes (photon passes,
+//! camera pass), into a [`Film`] and [`Stats`]. The command line, every test helper and every
+//! tool render through here; nothing else wires passes together.
+//!
+//! ```
+//! use caustic::{frame, integrator::Settings, progress::NoProgress};
+//! let src = b"s = gr.sphere('s') s:set_material(gr.material({1,1,1}, {0,0,0}, 0))
+//!     gr.render(s, 'x.png', 9, 9, {0,0,5}, {0,0,-1}, {0,1,0}, 50, {0,0,0},
+//!               {gr.light({0,0,5}, {1,1,1}, {1,0,0})})";
+//! let no_render = Box::new(|_: &_, _: &_| Ok(()));
+//! let desc = caustic::scene::lua::run_source(src, "doc.lua", ".".as_ref(), no_render).unwrap();
+//! let f = frame::render_desc(&desc, &desc.renders[0], 1.0, None, &Settings::default(), &NoProgress)
+//!     .unwrap();
+//! // The sphere faces the light head-on at the centre: kd · I · cos 0 / att(4) = 1.
+//! assert!((f.film.get(4, 4).x - 1.0).abs() < 0.01);
+//! ```
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::film::{Film, Window};
+use crate::integrator::photon_map::{Gi, GiSettings, GiStats};
+use crate::integrator::{GiMode, Settings, plan};
+use crate::progress::Progress;
+use crate::scene::desc::{RenderDesc, SceneDesc};
+use crate::scene::{Scene, build_scene};
+
+pub use crate::integrator::Stats;
+
+/// A rendered frame with the scene it was rendered from.
+pub struct Frame {
+    pub scene: Scene,
+    pub film: Film,
+    pub stats: Stats,
+}
+
+/// Renders `window` of the image of `scene` through `camera`: plans the frame, then runs the
+/// chosen integrator's phases, reporting each to `progress`.
+pub fn render(
+    scene: &Scene,
+    camera: &Camera,
+    window: Window,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> (Film, Stats) {
+    let plan = plan(scene, settings.gi);
+    let (film, render, photons) = plan
+        .integrator
+        .render(scene, camera, window, settings, &plan, progress);
+    (
+        film,
+        Stats {
+            plan,
+            render,
+            photons,
+        },
+    )
+}
+
+/// Builds the scene of the `gr.render` call `r` and renders it at `scale` times its size, or the
+/// window `crop` (`[x0, y0, x1, y1]`, end exclusive) of it.
+pub fn render_desc(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scale: f64,
+    crop: Option<[u32; 4]>,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<Frame> {
+    let window = window(r, scale, crop)?;
+    let scene = build_scene(desc, r)?;
+    let camera = Camera::new(&r.camera, window.full_width, window.full_height);
+    let (film, stats) = render(&scene, &camera, window, settings, progress);
+    Ok(Frame { scene, film, stats })
+}
+
+/// Returns the size of `r`'s image at `scale` times the script's.
+pub fn scaled_size(r: &RenderDesc, scale: f64) -> (u32, u32) {
+    let s = |v: u32| ((v as f64 * scale).round() as u32).max(1);
+    (s(r.width), s(r.height))
+}
+
+/// Returns the window of `r`'s image at `scale` that `crop` names (the whole image without one),
+/// or an error at `r`'s line when it is not inside the image.
+pub fn window(r: &RenderDesc, scale: f64, crop: Option<[u32; 4]>) -> Result<Window> {
+    let (w, h) = scaled_size(r, scale);
+    let Some([x0, y0, x1, y1]) = crop else {
+        return Ok(Window::full(w, h));
+    };
+    let win = Window {
+        x0,
+        y0,
+        x1,
+        y1,
+        full_width: w,
+        full_height: h,
+    };
+    if !win.is_valid() {
+        return Err(Error::at(
+            &r.loc,
+            format!("--crop {x0},{y0},{x1},{y1} is not inside the {w}x{h} image"),
+        ));
+    }
+    Ok(win)
+}
+
+/// Traces the photon maps of `scene` (global illumination on, no irradiance precomputation) and
+/// draws the stored photons from `camera` into a `width × height` film (`caustic photons`).
+pub fn photon_view(
+    scene: &Scene,
+    camera: &Camera,
+    (width, height): (u32, u32),
+    photons: &GiSettings,
+    progress: &dyn Progress,
+) -> (Film, GiStats) {
+    let plan = plan(scene, GiMode::On);
+    let settings = GiSettings {
+        caustics: plan.caustics,
+        precompute: false,
+        ..photons.clone()
+    };
+    let gi = Gi::build_with(scene, &settings, progress);
+    let film = crate::photon::view::photon_image(
+        scene,
+        camera,
+        &gi.global,
+        gi.caustic.as_ref(),
+        width,
+        height,
+    );
+    (film, gi.stats)
+}

@@ -1,0 +1,228 @@
+//! The eye path both integrators share: what one eye ray sees, by the course's deterministic
+//! splitting (Whitted 1980), with the diffuse indirect term left to the integrator
+//! ([`DiffuseTerm`]).
+//!
+//! At each hit the [`Bsdf`] (built once, [`Scene::interaction`]) weights:
+//! - with `1 − t`, the opaque part: direct light from every light by shadow rays
+//!   `Σ att(d)·I(θ)·(kd·max(0, n·l) + ks·max(0, r·v)^p)` (area and sphere lights averaged over
+//!   `light_samples` stratified samples: soft shadows), the diffuse indirect term, and `ks` times
+//!   the mirror-reflected radiance;
+//! - with `t`, the dielectric interface: `F` times the reflected and `1 − F` times the refracted
+//!   radiance, between the media on either side.
+//!
+//! Rays carry a [`MediumStack`], so nested and touching dielectrics refract with the ratio of the
+//! two media at each interface, and the boundary of a solid inside a denser one (a water surface
+//! inside a glass ball) is passed through untouched. Paths stop at [`MAX_DEPTH`] bounces or when
+//! their weight falls below [`MIN_WEIGHT`].
+
+use super::photon_map::Gi;
+use crate::camera::Camera;
+use crate::geometry::{Ray, offset_ray_origin};
+use crate::material::bsdf::Bsdf;
+use crate::material::medium::{Crossing, MediumStack};
+use crate::render::Radiance;
+use crate::sampling::{Rng, stratified_2d};
+use crate::scene::Scene;
+use crate::scene::interaction::{Interaction, Needs};
+use crate::stats::RayCounts;
+use glam::Vec3A;
+
+/// Deepest chain of reflections and refractions followed.
+pub const MAX_DEPTH: u32 = 12;
+/// Paths whose weight falls below this are not traced further.
+pub const MIN_WEIGHT: f32 = 1e-3;
+
+/// Where an eye path stands: how deep, how much it still matters, which medium it is in.
+#[derive(Clone, Copy, Debug)]
+pub struct PathState {
+    pub depth: u32,
+    /// Largest channel of the product of weights so far.
+    pub weight: f32,
+    pub media: MediumStack,
+}
+
+impl PathState {
+    /// Returns the state of a camera ray (in air).
+    pub fn camera() -> PathState {
+        PathState {
+            depth: 0,
+            weight: 1.0,
+            media: MediumStack::air(),
+        }
+    }
+
+    fn child(&self, weight: f32, media: MediumStack) -> PathState {
+        PathState {
+            depth: self.depth + 1,
+            weight: self.weight * weight,
+            media,
+        }
+    }
+}
+
+/// Returns the background seen along `dir`: a vertical gradient in the camera's frame, so objects
+/// stand out against it wherever they are.
+pub fn background(camera: &Camera, dir: Vec3A) -> Vec3A {
+    let s = (0.5 * (dir.normalize().dot(camera.v) + 1.0)).clamp(0.0, 1.0);
+    let bottom = Vec3A::new(0.02, 0.02, 0.08);
+    let top = Vec3A::new(0.30, 0.42, 0.75);
+    bottom + (top - bottom) * s
+}
+
+/// What a diffuse surface receives besides direct light: the integrator's part of the eye path.
+#[derive(Clone, Copy, Debug)]
+pub enum DiffuseTerm<'a> {
+    /// The course's ambient term `ambient·kd` (Whitted).
+    Ambient(Vec3A),
+    /// Caustics and indirect light from photon maps (Jensen).
+    Photons(&'a Gi),
+}
+
+/// Everything an eye path needs besides the ray.
+pub struct Tracer<'a> {
+    pub scene: &'a Scene,
+    pub camera: &'a Camera,
+    /// Shadow-ray samples per area or sphere light at each shaded point.
+    pub light_samples: u32,
+    pub diffuse: DiffuseTerm<'a>,
+}
+
+impl Radiance for Tracer<'_> {
+    fn radiance(&self, ray: &Ray, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
+        self.radiance(ray, PathState::camera(), rng, counts)
+    }
+}
+
+impl Tracer<'_> {
+    /// Returns the radiance arriving along `ray` (towards its origin).
+    pub fn radiance(
+        &self,
+        ray: &Ray,
+        state: PathState,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
+        let Some(hit) = self.scene.intersect(ray) else {
+            return background(self.camera, ray.dir);
+        };
+        let clock = counts.timing.then_some(&mut counts.material_nanos);
+        let it = self.scene.interaction(ray, &hit, Needs::Full, clock);
+        let t = it.bsdf.material.transparency;
+        let mut out = Vec3A::ZERO;
+        if let Some(crossing) = it.bsdf.crossing(&state.media) {
+            if crossing.is_false() {
+                // The boundary of a solid inside a denser one: no surface here, go straight on.
+                if state.depth >= MAX_DEPTH {
+                    return Vec3A::ZERO;
+                }
+                let next = Ray::new(offset_ray_origin(it.surf.p, it.surf.ng, ray.dir), ray.dir);
+                counts.secondary += 1;
+                return self.radiance(&next, state.child(1.0, crossing.after), rng, counts);
+            }
+            if state.depth < MAX_DEPTH {
+                out += t * self.dielectric(&it, &crossing, state, rng, counts);
+            }
+        }
+        if t < 1.0 {
+            out += (1.0 - t) * self.opaque(&it, state, rng, counts);
+        }
+        out
+    }
+
+    /// Returns the direct light from every light at the surface of `bsdf` (at `p`) towards its
+    /// `wo`, by shadow rays.
+    pub fn direct(&self, p: Vec3A, bsdf: &Bsdf, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
+        let (n, ng) = (bsdf.n, bsdf.ng);
+        let mut colour = Vec3A::ZERO;
+        for light in &self.scene.lights {
+            let samples = if light.is_area() {
+                stratified_2d(rng, self.light_samples)
+            } else {
+                vec![(0.5, 0.5)]
+            };
+            let mut sum = Vec3A::ZERO;
+            for &u in &samples {
+                let ls = light.sample(p, u);
+                let to_light = ls.position - p;
+                let d = to_light.length();
+                if d == 0.0 || ls.intensity == Vec3A::ZERO {
+                    continue;
+                }
+                let wi = to_light / d;
+                if n.dot(wi) <= 0.0 || ng.dot(wi) <= 0.0 {
+                    continue;
+                }
+                let origin = offset_ray_origin(p, ng, wi);
+                let shadow = Ray::new(origin, ls.position - origin).with_tmax(1.0 - 1e-4);
+                counts.shadow += 1;
+                if self.scene.occluded(&shadow) {
+                    continue;
+                }
+                sum += ls.intensity * light.attenuation(d) * bsdf.phong(wi);
+            }
+            colour += sum / samples.len() as f32;
+        }
+        colour
+    }
+
+    /// Returns the light the opaque part of a surface sends towards its `wo`.
+    fn opaque(
+        &self,
+        it: &Interaction,
+        state: PathState,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
+        let (p, bsdf) = (it.surf.p, &it.bsdf);
+        let mat = bsdf.material;
+        let mut colour = self.direct(p, bsdf, rng, counts);
+        match self.diffuse {
+            DiffuseTerm::Ambient(ambient) => colour += ambient * bsdf.kd,
+            DiffuseTerm::Photons(gi) => {
+                if bsdf.kd.max_element() > 0.0 {
+                    colour += gi.diffuse(self.scene, p, bsdf, state.depth, rng, counts);
+                }
+            }
+        }
+        let weight = mat.ks.max_element();
+        if mat.is_reflective() && state.depth < MAX_DEPTH && state.weight * weight > MIN_WEIGHT {
+            let wr = bsdf.reflected();
+            let ray = Ray::new(offset_ray_origin(p, bsdf.ng, wr), wr);
+            counts.secondary += 1;
+            colour += mat.ks * self.radiance(&ray, state.child(weight, state.media), rng, counts);
+        }
+        colour
+    }
+
+    /// Returns the light a dielectric interface sends towards its `wo`: Fresnel-weighted
+    /// reflection and refraction between the media on either side of `crossing`.
+    fn dielectric(
+        &self,
+        it: &Interaction,
+        crossing: &Crossing,
+        state: PathState,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
+        let (p, ng) = (it.surf.p, it.bsdf.ng);
+        let split = it.bsdf.dielectric(crossing);
+        let f = split.f;
+        let mut out = Vec3A::ZERO;
+        if f > 0.0 && state.weight * f > MIN_WEIGHT {
+            let wr = split.reflected;
+            let ray = Ray::new(offset_ray_origin(p, ng, wr), wr);
+            counts.secondary += 1;
+            out += f * self.radiance(&ray, state.child(f, state.media), rng, counts);
+        }
+        if f < 1.0
+            && state.weight * (1.0 - f) > MIN_WEIGHT
+            && let Some(wt) = split.refracted
+        {
+            let ray = Ray::new(offset_ray_origin(p, ng, wt), wt);
+            counts.secondary += 1;
+            out +=
+                (1.0 - f) * self.radiance(&ray, state.child(1.0 - f, crossing.after), rng, counts);
+        }
+        out
+    }
+}

@@ -1,0 +1,131 @@
+//! Integrators: how light transport is computed for one frame, a closed family ([`Integrator`]),
+//! one file per method, each a short list of named phases.
+//!
+//! - [`whitted`]: the course's ray tracer. Phases: camera pass.
+//! - [`photon_map`]: Jensen's photon mapping. Phases: trace photons, build maps, precompute
+//!   irradiance, camera pass.
+//!
+//! Both share the eye path ([`eye`]): direct light by shadow rays and deterministic specular
+//! splitting through the one scattering model ([`crate::material::bsdf`]); they differ in what a
+//! diffuse surface receives besides direct light ([`eye::DiffuseTerm`]). Which one a frame uses,
+//! and which of its effects, is the effect plan's decision ([`plan`]).
+//!
+//! To add an integrator: a variant here, a file beside these with its phases, and its case in
+//! [`Integrator::render`] and in [`plan::plan`].
+
+pub mod eye;
+pub mod photon_map;
+pub mod plan;
+pub mod whitted;
+
+use crate::camera::Camera;
+use crate::film::{Film, Window};
+use crate::progress::Progress;
+use crate::scene::Scene;
+use crate::stats::RenderStats;
+
+pub use plan::{GiMode, Plan, plan};
+
+/// The light-transport methods caustic implements.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// Whitted-style ray tracing with the course's ambient term (the A4 renderer).
+    Whitted,
+    /// Photon mapping: caustic and global maps, final gathering or the global map seen directly.
+    PhotonMap,
+}
+
+impl Integrator {
+    /// Returns the integrator's name, as `--stats` and the plan print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Whitted => "whitted",
+            Integrator::PhotonMap => "photon map",
+        }
+    }
+}
+
+/// What shapes a frame besides the scene, the camera and the window.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Seed of every random stream (the camera pass's; the photon passes take
+    /// `photons.seed`).
+    pub seed: u64,
+    pub sampling: crate::render::Sampling,
+    /// Shadow-ray samples per area or sphere light at each shaded point.
+    pub light_samples: u32,
+    /// Whether to simulate global illumination (`--gi`).
+    pub gi: GiMode,
+    /// The photon passes and estimates (photon-mapping integrator).
+    pub photons: photon_map::GiSettings,
+    /// Time material evaluation for `--stats`.
+    pub timing: bool,
+}
+
+impl Default for Settings {
+    /// Returns the course's defaults: one centre ray per pixel, photon maps when a light asks.
+    fn default() -> Settings {
+        Settings {
+            seed: 0,
+            sampling: crate::render::Sampling::Stratified { spp: 1 },
+            light_samples: 16,
+            gi: GiMode::Auto,
+            photons: photon_map::GiSettings::default(),
+            timing: false,
+        }
+    }
+}
+
+/// What a frame reports besides its film, for `--stats`.
+#[derive(Debug)]
+pub struct Stats {
+    pub plan: Plan,
+    /// The camera pass's counters.
+    pub render: RenderStats,
+    /// The photon passes' counters, when the frame traced photons.
+    pub photons: Option<photon_map::GiStats>,
+}
+
+impl Integrator {
+    /// Renders `window` of the image through `camera` with this integrator, running its phases
+    /// in turn and reporting each to `progress`.
+    pub fn render(
+        self,
+        scene: &Scene,
+        camera: &Camera,
+        window: Window,
+        settings: &Settings,
+        plan: &Plan,
+        progress: &dyn Progress,
+    ) -> (Film, RenderStats, Option<photon_map::GiStats>) {
+        match self {
+            Integrator::Whitted => {
+                let (film, stats) = whitted::render(scene, camera, window, settings, progress);
+                (film, stats, None)
+            }
+            Integrator::PhotonMap => {
+                let (film, stats, photons) =
+                    photon_map::render(scene, camera, window, settings, plan, progress);
+                (film, stats, Some(photons))
+            }
+        }
+    }
+}
+
+/// Runs the camera pass of a frame with `tracer`, reporting rows to `progress`.
+fn camera_pass(
+    camera: &Camera,
+    tracer: &eye::Tracer,
+    window: Window,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> (Film, RenderStats) {
+    let opts = crate::render::PassOptions {
+        seed: settings.seed,
+        sampling: settings.sampling.clone(),
+        window,
+        timing: settings.timing,
+    };
+    progress.start("rendering rows", window.size().1 as u64);
+    crate::render::camera_pass(camera, tracer, &opts, &|| progress.advance(1))
+}

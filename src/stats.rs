@@ -1,0 +1,46 @@
+//! Counters of the camera pass: rays by kind, photon lookups, material time. A leaf: the passes
+//! fill them per thread ([`RayCounts`]) and `--stats` prints the sums ([`RenderStats`]).
+
+use std::time::Duration;
+
+/// Counters from one render, printed by `--stats`.
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    pub primary_rays: u64,
+    pub shadow_rays: u64,
+    pub secondary_rays: u64,
+    pub time: Duration,
+    /// Thread time spent in texture, bump-map and Perlin-noise evaluation (with `timing`).
+    pub material_time: Duration,
+    /// Photon-map estimates made while rendering, and the photons they found.
+    pub lookups: u64,
+    pub photons_used: u64,
+}
+
+/// Per-thread ray counts, summed into [`RenderStats`] once per row.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RayCounts {
+    pub primary: u64,
+    pub shadow: u64,
+    pub secondary: u64,
+    /// Whether to time material evaluation (textures, bump maps, noise): `--stats` only, since
+    /// reading the clock twice per hit costs time of its own.
+    pub timing: bool,
+    /// Nanoseconds spent evaluating materials, when `timing`.
+    pub material_nanos: u64,
+    /// Photon-map lookups and the photons they found.
+    pub lookups: u64,
+    pub photons_used: u64,
+}
+
+impl RayCounts {
+    /// Adds `o`'s counts to these.
+    pub fn add(&mut self, o: &RayCounts) {
+        self.primary += o.primary;
+        self.shadow += o.shadow;
+        self.secondary += o.secondary;
+        self.material_nanos += o.material_nanos;
+        self.lookups += o.lookups;
+        self.photons_used += o.photons_used;
+    }
+}

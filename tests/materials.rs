@@ -147,8 +147,11 @@ fn corpus_textured_scenes_render_with_their_images() {
     let project = common::corpus("tengyucai__Computer-Graphics/Project");
     for name in ["texture", "bump", "perlin"] {
         let src = std::fs::read(project.join(format!("Assets/{name}.lua"))).unwrap();
-        // Run as the project does, from Project/, so 'Assets/dirt.png' resolves.
-        let films = render_films(&src, &format!("{name}.lua"), &project).unwrap();
+        // Run as the project does, from Project/, so 'Assets/dirt.png' resolves. Textures are the
+        // subject, so without photon maps (which would cost minutes at 512²).
+        let films =
+            common::render_films_with(&src, &format!("{name}.lua"), &project, &common::whitted())
+                .unwrap();
         let (_, _, film) = &films[0];
         // The floor is the bottom-centre of the image; its kd is flat green (0.1, 0.7, 0.1) and
         // its look must come from the texture or the noise instead: many distinct colours.

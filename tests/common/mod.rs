@@ -59,14 +59,26 @@ pub fn lua_error(src: &str) -> String {
     }
 }
 
-/// Runs a script, rendering every `gr.render` call into a film (nothing is written to disk).
+/// Runs a script, rendering every `gr.render` call into a film with the command line's default
+/// settings (photon maps where a light asks for them); nothing is written to disk.
 pub fn render_films(
     src: &[u8],
     name: &str,
     dir: &Path,
 ) -> Result<Vec<(RenderDesc, Camera, Film)>, caustic::Error> {
+    render_films_with(src, name, dir, &Settings::default())
+}
+
+/// [`render_films`] with `settings`.
+pub fn render_films_with(
+    src: &[u8],
+    name: &str,
+    dir: &Path,
+    settings: &Settings,
+) -> Result<Vec<(RenderDesc, Camera, Film)>, caustic::Error> {
     let films = Rc::new(RefCell::new(Vec::new()));
     let sink = Rc::clone(&films);
+    let settings = settings.clone();
     run_source(
         src,
         name,
@@ -74,7 +86,7 @@ pub fn render_films(
         Box::new(move |desc: &SceneDesc, r: &RenderDesc| {
             let scene = build_scene(desc, r)?;
             let camera = Camera::new(&r.camera, r.width, r.height);
-            let film = render_scene(&scene, &camera, r.width, r.height, &whitted());
+            let film = render_scene(&scene, &camera, r.width, r.height, &settings);
             sink.borrow_mut().push((r.clone(), camera, film));
             Ok(())
         }),

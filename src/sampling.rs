@@ -80,12 +80,10 @@ impl Rng {
 /// Returns `n` jittered sample positions in the unit square, stratified in x and in y
 /// ("n-rooks": sample `i` lies in column `i` and in row `perm(i)` of an `n × n` grid).
 ///
-/// With `n = 1` the single sample is the square's centre, so one sample per pixel reproduces the
-/// course's ray through the pixel centre exactly.
+/// Every sample is uniform over the square on its own, so the mean of any function over the
+/// samples is unbiased for any `n`, one included (one sample is a uniform point, not the
+/// centre: a one-sample area light casts soft shadows in expectation, not hard ones).
 pub fn stratified_2d(rng: &mut Rng, n: u32) -> Vec<(f32, f32)> {
-    if n == 1 {
-        return vec![(0.5, 0.5)];
-    }
     let mut rows: Vec<u32> = (0..n).collect();
     for i in (1..n).rev() {
         rows.swap(i as usize, rng.below(i + 1) as usize);
@@ -142,6 +140,28 @@ mod tests {
             rows[(y * 16.0) as usize] += 1;
         }
         assert_eq!((cols, rows), ([1; 16], [1; 16]));
-        assert_eq!(stratified_2d(&mut r, 1), vec![(0.5, 0.5)]);
+    }
+
+    #[test]
+    fn one_stratified_sample_is_uniform_over_the_square() {
+        // Mean (1/2, 1/2) and variance 1/12 per axis, and the four quadrants equally often: the
+        // centre alone (the old n = 1 case) would fail the variance by 1/12.
+        let mut r = Rng::new(4, Pass::Pixel, 1);
+        let n = 100_000;
+        let (mut m, mut v, mut quad) = ((0.0f64, 0.0f64), (0.0f64, 0.0f64), [0u32; 4]);
+        for _ in 0..n {
+            let s = stratified_2d(&mut r, 1);
+            assert_eq!(s.len(), 1);
+            let (x, y) = (s[0].0 as f64, s[0].1 as f64);
+            m = (m.0 + x, m.1 + y);
+            v = (v.0 + (x - 0.5).powi(2), v.1 + (y - 0.5).powi(2));
+            quad[usize::from(x >= 0.5) + 2 * usize::from(y >= 0.5)] += 1;
+        }
+        let n = n as f64;
+        assert!((m.0 / n - 0.5).abs() < 0.005 && (m.1 / n - 0.5).abs() < 0.005);
+        assert!((v.0 / n - 1.0 / 12.0).abs() < 0.002 && (v.1 / n - 1.0 / 12.0).abs() < 0.002);
+        for q in quad {
+            assert!((q as f64 / n - 0.25).abs() < 0.01, "{quad:?}");
+        }
     }
 }

@@ -110,7 +110,12 @@ impl<'a> PixelSampler<'a> {
                 let win = self.opts.window;
                 let index = y as u64 * win.full_width as u64 + x as u64;
                 let mut rng = Rng::new(self.opts.seed, Pass::Pixel, index);
-                let positions = stratified_2d(&mut rng, spp);
+                // One sample is the pixel centre, as the course renders; more are stratified.
+                let positions = if spp == 1 {
+                    vec![(0.5, 0.5)]
+                } else {
+                    stratified_2d(&mut rng, spp)
+                };
                 let sum: Vec3A = positions
                     .iter()
                     .map(|&(u, v)| self.trace(x as f32 + u, y as f32 + v, &mut rng, counts))

@@ -32,6 +32,7 @@
 //!   so that direct and photon lighting agree.
 //! - Attenuation applies to light from lights only, never to the ambient term.
 
+use crate::geometry::Ray;
 use crate::scene::desc::{LightDesc, LightShape};
 use glam::Vec3A;
 use std::f32::consts::{PI, TAU};
@@ -188,6 +189,65 @@ impl Light {
                 }
             }
         }
+    }
+
+    /// Returns where `ray` first meets the light's emitting surface within `(tmin, tmax)` and the
+    /// radiance it sees there: `I_phys/A` (that is `π·rgb/A`) on the emitting side of an area
+    /// light and black on its back, `I_phys/(πR²)` (that is `rgb/R²`) on a sphere light. Point
+    /// lights are never seen. The course's falloff does not apply to seen emitters: only the
+    /// light they shed on surfaces is attenuated.
+    pub fn seen_by(&self, ray: &Ray, tmax: f32) -> Option<(f32, Vec3A)> {
+        let (t, radiance) = match self.shape {
+            Shape::Point { .. } => return None,
+            Shape::Area {
+                centre,
+                u,
+                v,
+                normal,
+                area,
+            } => {
+                let denom = ray.dir.dot(normal);
+                if denom == 0.0 || area <= 0.0 {
+                    return None;
+                }
+                let t = (centre - ray.origin).dot(normal) / denom;
+                let q = ray.at(t) - centre;
+                // Coordinates along the edges by the dual basis: |s|, |r| <= 1/2 inside.
+                let (uu, uv, vv) = (u.dot(u), u.dot(v), v.dot(v));
+                let det = uu * vv - uv * uv;
+                let (qu, qv) = (q.dot(u), q.dot(v));
+                let s = (qu * vv - qv * uv) / det;
+                let r = (qv * uu - qu * uv) / det;
+                if !(s.abs() <= 0.5 && r.abs() <= 0.5) {
+                    return None;
+                }
+                // Arriving at the emitting side means travelling against the normal.
+                let front = denom < 0.0;
+                (
+                    t,
+                    if front {
+                        PI * self.colour / area
+                    } else {
+                        Vec3A::ZERO
+                    },
+                )
+            }
+            Shape::Sphere { centre, radius } => {
+                let oc = ray.origin - centre;
+                let a = ray.dir.dot(ray.dir);
+                let b = oc.dot(ray.dir);
+                let c = oc.dot(oc) - radius * radius;
+                let disc = b * b - a * c;
+                if disc < 0.0 || radius <= 0.0 {
+                    return None;
+                }
+                let root = disc.sqrt();
+                let t0 = (-b - root) / a;
+                let t = if t0 > ray.tmin { t0 } else { (-b + root) / a };
+                (t, self.colour / (radius * radius))
+            }
+        };
+        (t > ray.tmin && t < tmax).then_some((t, radiance))
     }
 
     /// Returns a photon's emission from four uniform numbers in [0, 1).

@@ -198,7 +198,9 @@ fn area_light_irradiance_matches_quadrature_and_casts_soft_shadows() {
         }
         e as f32
     };
-    for (x, y) in [(24, 24), (30, 20), (36, 36), (12, 30)] {
+    // The camera looks down on the light's back: black, and it hides the floor below it.
+    assert_eq!(film.get(24, 24), Vec3A::ZERO);
+    for (x, y) in [(30, 20), (36, 36), (12, 30), (32, 29)] {
         let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
         let p = ray.at(-ray.origin.y / ray.dir.y);
         if p.x < -2.0 {
@@ -220,4 +222,78 @@ fn area_light_irradiance_matches_quadrature_and_casts_soft_shadows() {
         .filter(|&&v| v > 0.1 * lit && v < 0.6 * lit)
         .count();
     assert!(partial >= 2, "no penumbra in {row:?}");
+}
+
+/// Area and sphere lights are seen by camera rays, in mirrors and through glass, with the
+/// radiance of the lighting model (`I_phys/A = π·rgb/A` on an area light's emitting side, black
+/// on its back, `rgb/R²` on a sphere light), and nowhere counted twice with direct light.
+#[test]
+fn emitters_are_seen_with_their_radiance_directly_in_mirrors_and_through_glass() {
+    let render = |body: &str, eye: &str, view: &str| {
+        let src = format!(
+            "root = gr.node('root')\n{body}\n\
+             gr.render(root, 'x.png', 9, 9, {eye}, {view}, {{1, 0, 0}}, 10, {{0, 0, 0}}, lights)"
+        );
+        let films =
+            common::render_films_with(src.as_bytes(), "e.lua", Path::new("."), &common::whitted())
+                .unwrap();
+        films[0].2.get(4, 4)
+    };
+    // A 2 × 0.5 light (area 1) at y = 3 emitting downwards, rgb (0.5, 1, 2).
+    let light = "lights = {gr.area_light({0, 3, 0}, {0.5, 1, 2}, {0, 0, 1}, nil, nil, {2, 0, 0}, {0, 0, 0.5})}";
+    let pi = std::f32::consts::PI;
+    let want = Vec3A::new(0.5, 1.0, 2.0) * pi;
+    let below = render(light, "{0, 0, 0}", "{0, 1, 0}");
+    assert!(
+        (below - want).abs().max_element() < 1e-4 * want.max_element(),
+        "{below}"
+    );
+    let above = render(light, "{0, 6, 0}", "{0, -1, 0}");
+    assert_eq!(above, Vec3A::ZERO, "the back of an area light is black");
+    // Straight down into a mirror (ks 0.8, no highlight) below the light, and straight up
+    // through a glass slab of index 1.5.
+    let seen = render(
+        &format!(
+            "{light}\nm = gr.material({{0, 0, 0}}, {{0.8, 0.8, 0.8}}, 0)\n\
+             s = gr.cube('s'); s:scale(4, 0.1, 4); s:translate(-2, -1.1, -2); s:set_material(m); root:add_child(s)"
+        ),
+        "{0, 0, 0}",
+        "{0, -1, 0}",
+    );
+    assert!(
+        (seen - 0.8 * want).abs().max_element() < 1e-3 * want.max_element(),
+        "{seen}"
+    );
+    let slab = |light: &str| {
+        render(
+            &format!(
+                "{light}\ng = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 1.5)\n\
+                 s = gr.cube('s'); s:scale(4, 0.5, 4); s:translate(-2, 1, -2); s:set_material(g); root:add_child(s)"
+            ),
+            "{0, 0, 0}",
+            "{0, 1, 0}",
+        )
+    };
+    // What the slab shows of the light alone: the same view with a black light subtracted (the
+    // 4% reflected down at each face sees the background).
+    let dark = light.replace("{0.5, 1, 2}", "{0, 0, 0}");
+    let glass = slab(light) - slab(&dark);
+    // Two interfaces at normal incidence transmit (1 − R)² with R = 0.04, the light bouncing
+    // between them (1 + R² + R⁴ …), and the n² factors of entering and leaving cancel.
+    let t = (1.0f32 - 0.04).powi(2) / (1.0 - 0.04 * 0.04);
+    assert!(
+        (glass - t * want).abs().max_element() < 1e-3 * want.max_element(),
+        "{glass} vs {}",
+        t * want
+    );
+    // A sphere light of radius 0.5 and rgb 1 has radiance rgb / R² = 4.
+    let sphere = render(
+        "lights = {gr.sphere_light({0, 3, 0}, {1, 1, 1}, {0, 0, 1}, nil, nil, 0.5)}",
+        "{0, 0, 0}",
+        "{0, 1, 0}",
+    );
+    assert!(
+        (sphere - Vec3A::splat(4.0)).abs().max_element() < 1e-4,
+        "{sphere}"
+    );
 }

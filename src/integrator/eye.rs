@@ -8,7 +8,12 @@
 //!   `light_samples` stratified samples: soft shadows), the diffuse indirect term, and `ks` times
 //!   the mirror-reflected radiance;
 //! - with `t`, the dielectric interface: `F` times the reflected and `1 − F` times the refracted
-//!   radiance, between the media on either side.
+//!   radiance, between the media on either side, the latter scaled by `(n_from/n_to)²` (radiance
+//!   under water is n² times brighter than the same light seen from air).
+//!
+//! Area and sphere lights are seen by camera rays and by the specular paths that follow them
+//! ([`emitter_seen`]): their direct light on surfaces comes from shadow rays, so seeing them
+//! only along eye paths counts nothing twice. Point lights stay invisible, as in the course.
 //!
 //! Rays carry a [`MediumStack`], so nested and touching dielectrics refract with the ratio of the
 //! two media at each interface, and the boundary of a solid inside a denser one (a water surface
@@ -39,6 +44,10 @@ pub struct PathState {
     /// Largest channel of the product of weights so far.
     pub weight: f32,
     pub media: MediumStack,
+    /// Whether an area or sphere light met along the ray shows its radiance: true for camera
+    /// rays and specular paths from them, false after a reflection whose Phong highlight
+    /// already stands for the lights' reflection.
+    pub sees_emitters: bool,
 }
 
 impl PathState {
@@ -48,6 +57,7 @@ impl PathState {
             depth: 0,
             weight: 1.0,
             media: MediumStack::air(),
+            sees_emitters: true,
         }
     }
 
@@ -56,6 +66,7 @@ impl PathState {
             depth: self.depth + 1,
             weight: self.weight * weight,
             media,
+            sees_emitters: self.sees_emitters,
         }
     }
 }
@@ -67,6 +78,19 @@ pub fn background(camera: &Camera, dir: Vec3A) -> Vec3A {
     let bottom = Vec3A::new(0.02, 0.02, 0.08);
     let top = Vec3A::new(0.30, 0.42, 0.75);
     bottom + (top - bottom) * s
+}
+
+/// Returns the radiance of the nearest area or sphere light that `ray` meets before `tmax`, if
+/// any ([`crate::light::Light::seen_by`]).
+pub fn emitter_seen(scene: &Scene, ray: &Ray, tmax: f32) -> Option<Vec3A> {
+    let mut best: Option<(f32, Vec3A)> = None;
+    for light in &scene.lights {
+        let limit = best.map_or(tmax, |b| b.0);
+        if let Some(seen) = light.seen_by(ray, limit) {
+            best = Some(seen);
+        }
+    }
+    best.map(|b| b.1)
 }
 
 /// What a diffuse surface receives besides direct light: the integrator's part of the eye path.
@@ -102,7 +126,14 @@ impl Tracer<'_> {
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Vec3A {
-        let Some(hit) = self.scene.intersect(ray) else {
+        let hit = self.scene.intersect(ray);
+        if state.sees_emitters {
+            let tmax = hit.map_or(ray.tmax, |h| h.t);
+            if let Some(radiance) = emitter_seen(self.scene, ray, tmax) {
+                return radiance;
+            }
+        }
+        let Some(hit) = hit else {
             return background(self.camera, ray.dir);
         };
         let clock = counts.timing.then_some(&mut counts.material_nanos);
@@ -180,7 +211,7 @@ impl Tracer<'_> {
             DiffuseTerm::Ambient(ambient) => colour += ambient * bsdf.kd,
             DiffuseTerm::Photons(gi) => {
                 if bsdf.kd.max_element() > 0.0 {
-                    colour += gi.diffuse(self.scene, p, bsdf, state.depth, rng, counts);
+                    colour += gi.diffuse(self.scene, p, bsdf, &state, rng, counts);
                 }
             }
         }
@@ -189,7 +220,10 @@ impl Tracer<'_> {
             let wr = bsdf.reflected();
             let ray = Ray::new(offset_ray_origin(p, bsdf.ng, wr), wr);
             counts.secondary += 1;
-            colour += mat.ks * self.radiance(&ray, state.child(weight, state.media), rng, counts);
+            let mut child = state.child(weight, state.media);
+            // A Phong highlight already reflects the lights; the mirror image would count them twice.
+            child.sees_emitters &= mat.shininess <= 0.0;
+            colour += mat.ks * self.radiance(&ray, child, rng, counts);
         }
         colour
     }
@@ -220,8 +254,8 @@ impl Tracer<'_> {
         {
             let ray = Ray::new(offset_ray_origin(p, ng, wt), wt);
             counts.secondary += 1;
-            out +=
-                (1.0 - f) * self.radiance(&ray, state.child(1.0 - f, crossing.after), rng, counts);
+            let radiance = self.radiance(&ray, state.child(1.0 - f, crossing.after), rng, counts);
+            out += (1.0 - f) * split.radiance_scale * radiance;
         }
         out
     }

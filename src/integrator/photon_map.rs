@@ -30,12 +30,13 @@
 //! normal disagrees with the surface's (light leaking round corners and through thin walls), and
 //! weight them with a [`Filter`] that integrates to one.
 
-use super::eye::{DiffuseTerm, Tracer};
+use super::eye::{DiffuseTerm, PathState, Tracer};
 use super::{Plan, Settings, camera_pass};
 use crate::camera::Camera;
 use crate::film::{Film, Window};
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::material::bsdf::Bsdf;
+use crate::material::medium::MediumStack;
 use crate::photon::estimate::Filter;
 use crate::photon::trace::{LightCounts, MapKind, TracedMap, photon_budget, trace_map_with};
 use crate::photon::{Photon, PhotonId, PhotonMap};
@@ -52,6 +53,10 @@ use std::time::{Duration, Instant};
 /// Deepest eye-path depth (specular bounces) at which final gathering is used; deeper points
 /// see the global map directly. Surfaces seen through a glass ball are at depth 2.
 pub const MAX_GATHER_DEPTH: u32 = 3;
+
+/// Most specular bounces a final-gather ray follows before it reads the map where it is (a
+/// glass ball under water is four interfaces deep).
+pub const MAX_GATHER_SPECULAR: u32 = 8;
 
 /// One global photon in this many carries a precomputed irradiance estimate (see
 /// [`GiSettings::precompute`]).
@@ -339,20 +344,20 @@ impl Gi {
     }
 
     /// Returns the caustic and indirect light leaving the diffuse lobe of `bsdf` at `p` towards its
-    /// `wo`, at eye-path depth `depth`.
+    /// `wo`, for an eye path in `state`.
     pub fn diffuse(
         &self,
         scene: &Scene,
         p: Vec3A,
         bsdf: &Bsdf,
-        depth: u32,
+        state: &PathState,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Vec3A {
         let ng = bsdf.ng;
         let mut e = self.caustic_at(p, ng, counts);
         match self.settings.indirect {
-            Indirect::Gather { rays } if depth <= MAX_GATHER_DEPTH => {
+            Indirect::Gather { rays } if state.depth <= MAX_GATHER_DEPTH => {
                 let mut sum = Vec3A::ZERO;
                 for u in stratified_2d(rng, rays) {
                     let Some(d) = bsdf.sample_diffuse(u) else {
@@ -360,7 +365,7 @@ impl Gi {
                     };
                     counts.secondary += 1;
                     let ray = Ray::new(offset_ray_origin(p, ng, d), d);
-                    sum += self.gathered_radiance(scene, &ray, counts);
+                    sum += self.gathered_radiance(scene, &ray, state.media, rng, counts);
                 }
                 // Cosine-distributed rays: E = π · mean(L).
                 e += sum * (std::f32::consts::PI / rays as f32);
@@ -370,17 +375,55 @@ impl Gi {
         bsdf.kd * FRAC_1_PI * e
     }
 
-    /// Returns the radiance a final-gather ray brings back: the global map's estimate of the
-    /// diffuse radiance leaving the surface it hits (nothing from the background).
-    fn gathered_radiance(&self, scene: &Scene, ray: &Ray, counts: &mut RayCounts) -> Vec3A {
-        let Some(hit) = scene.intersect(ray) else {
-            return Vec3A::ZERO;
-        };
-        let it = scene.interaction(ray, &hit, Needs::Albedo, None);
-        let kd = it.bsdf.lobes().diffuse;
-        if kd.max_element() <= 0.0 {
-            return Vec3A::ZERO;
+    /// Returns the radiance a final-gather ray (in `media`) brings back: where it lands on a
+    /// diffuse lobe, the global map's estimate of the light leaving it; where it lands on a
+    /// mirror or a dielectric, the same read where the path continues, chosen by the one BSDF's
+    /// roulette, for up to [`MAX_GATHER_SPECULAR`] specular bounces. Emitters seen along the way
+    /// count nothing: light → (specular) → this point is the direct term or the caustic map's.
+    fn gathered_radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        mut media: MediumStack,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
+        let (mut ray, mut throughput, mut out) = (*ray, Vec3A::ONE, Vec3A::ZERO);
+        let mut bounces = 0;
+        loop {
+            let Some(hit) = scene.intersect(&ray) else {
+                return out;
+            };
+            let specular = scene.materials[hit.material as usize].is_specular();
+            let needs = if specular { Needs::Full } else { Needs::Albedo };
+            let it = scene.interaction(&ray, &hit, needs, None);
+            let (p, bsdf) = (it.surf.p, &it.bsdf);
+            let crossing = bsdf.crossing(&media);
+            if let Some(c) = crossing
+                && c.is_false()
+            {
+                media = c.after;
+                ray = Ray::new(offset_ray_origin(p, it.surf.ng, ray.dir), ray.dir);
+                continue;
+            }
+            let kd = bsdf.lobes().diffuse;
+            if kd.max_element() > 0.0 {
+                let e = self.gathered_irradiance(p, bsdf.ng, counts);
+                out += throughput * kd * FRAC_1_PI * e;
+            }
+            if !specular || bounces == MAX_GATHER_SPECULAR {
+                return out;
+            }
+            let Some(next) = bsdf.sample_specular(crossing.as_ref(), rng) else {
+                return out;
+            };
+            throughput *= next.weight * next.radiance_scale;
+            if let Some(after) = next.media {
+                media = after;
+            }
+            bounces += 1;
+            counts.secondary += 1;
+            ray = Ray::new(offset_ray_origin(p, bsdf.ng, next.dir), next.dir);
         }
-        kd * FRAC_1_PI * self.gathered_irradiance(it.surf.p, it.bsdf.ng, counts)
     }
 }

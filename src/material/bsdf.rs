@@ -8,7 +8,8 @@
 //!   from a light, the course's Phong highlight `ks·(r·v)^p` ([`Bsdf::phong`]);
 //! - with weight `t`, a smooth dielectric interface between the media on either side
 //!   ([`Bsdf::crossing`]): Fresnel reflectance `F` reflects, `1 − F` refracts
-//!   ([`Bsdf::dielectric`]).
+//!   ([`Bsdf::dielectric`]). Radiance refracted from index `n_to` into `n_from` (wo's side) is
+//!   scaled by `(n_from/n_to)²`; flux (photons) is not.
 //!
 //! # Conventions
 //! - Directions point away from the surface: `wo` towards where the ray came from, `wi` towards
@@ -61,6 +62,10 @@ pub struct Sample {
     pub lobe: Lobe,
     /// The media beyond the surface when the path refracted into them.
     pub media: Option<MediumStack>,
+    /// What radiance (not flux) is multiplied by on the way: `(n_from/n_to)²` where the path
+    /// refracted (radiance is compressed into a denser medium's narrower cone), else 1.
+    /// Photons carry flux and ignore it.
+    pub radiance_scale: f32,
 }
 
 /// The lobes a path can scatter by.
@@ -82,6 +87,11 @@ pub struct Split {
     /// The refracted direction, `None` under total internal reflection or when a bent shading
     /// normal would send it back out.
     pub refracted: Option<Vec3A>,
+    /// `(n_from/n_to)²`: what the radiance arriving along the refracted direction is multiplied
+    /// by when it crosses to `wo`'s side (pbrt-v4's radiance-mode BTDF scaling, Veach 1997
+    /// §5.2). Light entering a denser medium is squeezed into a narrower cone, so radiance under
+    /// water is n² times what it was in air; seen from above it is divided by n² again.
+    pub radiance_scale: f32,
 }
 
 impl<'a> Bsdf<'a> {
@@ -154,6 +164,7 @@ impl<'a> Bsdf<'a> {
             f,
             reflected: self.reflected(),
             refracted: fresnel::refract(self.wo, self.n, eta).filter(|wt| wt.dot(self.ng) < 0.0),
+            radiance_scale: eta * eta,
         }
     }
 
@@ -175,37 +186,70 @@ impl<'a> Bsdf<'a> {
             lobes.dielectric,
         );
         let scale = (pd + pm + pt).max(1.0);
-        let (pd, pm, pt) = (pd / scale, pm / scale, pt / scale);
+        let p = [pd / scale, pm / scale, pt / scale];
         let xi = rng.next_f32();
-        if xi < pd {
-            let weight = lobes.diffuse / pd;
+        if xi < p[0] {
+            let weight = lobes.diffuse / p[0];
             let dir = self.sample_diffuse((rng.next_f32(), rng.next_f32()))?;
             Some(Sample {
                 dir,
                 weight,
                 lobe: Lobe::Diffuse,
                 media: None,
+                radiance_scale: 1.0,
             })
-        } else if xi < pd + pm {
+        } else {
+            self.specular(&lobes, xi, p, crossing, rng)
+        }
+    }
+
+    /// Chooses one of the specular lobes (mirror or dielectric) by Russian roulette on their
+    /// weights and samples it: how a radiance path (a final-gather ray) continues through a
+    /// specular surface whose diffuse lobe it has already evaluated.
+    pub fn sample_specular(&self, crossing: Option<&Crossing>, rng: &mut Rng) -> Option<Sample> {
+        let lobes = self.lobes();
+        let (pm, pt) = (lobes.mirror.max_element(), lobes.dielectric);
+        let scale = (pm + pt).max(1.0);
+        let xi = rng.next_f32();
+        self.specular(&lobes, xi, [0.0, pm / scale, pt / scale], crossing, rng)
+    }
+
+    /// The specular choices of [`Bsdf::sample`]: `xi` against the lobe probabilities `p`
+    /// (diffuse, mirror, dielectric).
+    fn specular(
+        &self,
+        lobes: &Lobes,
+        xi: f32,
+        p: [f32; 3],
+        crossing: Option<&Crossing>,
+        rng: &mut Rng,
+    ) -> Option<Sample> {
+        if xi < p[0] + p[1] {
             Some(Sample {
                 dir: self.reflected(),
-                weight: lobes.mirror / pm,
+                weight: lobes.mirror / p[1],
                 lobe: Lobe::Mirror,
                 media: None,
+                radiance_scale: 1.0,
             })
-        } else if xi < pd + pm + pt {
+        } else if xi < p[0] + p[1] + p[2] {
             let c = crossing?;
             let eta = c.n_from / c.n_to;
             let f = fresnel::dielectric(self.n.dot(self.wo).max(0.0), eta);
-            let (dir, media) = match fresnel::refract(self.wo, self.n, eta) {
-                Some(wt) if rng.next_f32() >= f && wt.dot(self.ng) < 0.0 => (wt, Some(c.after)),
-                _ => (self.reflected(), None),
+            let (dir, media, radiance_scale) = match fresnel::refract(self.wo, self.n, eta) {
+                Some(wt) if rng.next_f32() >= f && wt.dot(self.ng) < 0.0 => {
+                    (wt, Some(c.after), eta * eta)
+                }
+                _ => (self.reflected(), None, 1.0),
             };
+            // Probability p[2] of the lobe, times F or 1 − F for the branch, against weight t
+            // times F or 1 − F: t / p[2] (1 unless the lobes' weights were scaled down).
             Some(Sample {
                 dir,
-                weight: Vec3A::ONE,
+                weight: Vec3A::splat(lobes.dielectric / p[2]),
                 lobe: Lobe::Dielectric,
                 media,
+                radiance_scale,
             })
         } else {
             None

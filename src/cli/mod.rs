@@ -40,6 +40,24 @@ pub enum Command {
     Stitch(StitchArgs),
     /// Trace a scene's photons and draw them from its camera (global: dots; caustic: crosses).
     Photons(PhotonsArgs),
+    /// Write a scene as a Mitsuba 3 XML scene (spheres, cubes, meshes; diffuse, mirror and
+    /// dielectric materials; point, area and sphere lights), for validation.
+    ExportMitsuba(ExportArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// The Lua scene script (its first gr.render is exported).
+    pub scene: PathBuf,
+    /// The XML file to write; meshes are written beside it.
+    #[arg(short, long, value_name = "OUT.xml")]
+    pub output: PathBuf,
+    /// Export at this multiple of the script's image size.
+    #[arg(long, value_name = "F", default_value_t = 1.0)]
+    pub scale: f64,
+    /// Samples per pixel of the Mitsuba render.
+    #[arg(long, value_name = "N", default_value_t = 256)]
+    pub spp: u32,
 }
 
 #[derive(Debug, Args)]
@@ -215,6 +233,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info(args) => info_command(args),
         Command::Stitch(args) => crate::io::image::stitch(&args.tiles, &args.output),
         Command::Photons(args) => photons_command(args),
+        Command::ExportMitsuba(args) => export_command(args),
     }
 }
 
@@ -347,6 +366,32 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         Ok(())
     });
     run_script(&args.scene, hook)?;
+    Ok(())
+}
+
+fn export_command(args: ExportArgs) -> Result<()> {
+    if !(args.scale > 0.0 && args.scale <= 16.0) || !(1..=1 << 20).contains(&args.spp) {
+        return Err(Error::Usage(
+            "--scale must be in (0, 16] and --spp in [1, 1048576]".into(),
+        ));
+    }
+    let desc = run_script(&args.scene, Box::new(|_, _| Ok(())))?;
+    let Some(r) = desc.renders.first() else {
+        return Err(Error::Usage(format!(
+            "{} never calls gr.render: nothing to export",
+            args.scene.display()
+        )));
+    };
+    let scene = build_scene(&desc, r)?;
+    let size = frame::scaled_size(r, args.scale);
+    crate::io::mitsuba::export(&desc, r, &scene, size, args.spp, &args.output)?;
+    eprintln!(
+        "wrote {} ({}x{}, {} spp)",
+        args.output.display(),
+        size.0,
+        size.1,
+        args.spp
+    );
     Ok(())
 }
 

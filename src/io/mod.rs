@@ -2,4 +2,5 @@
 
 pub mod gltf;
 pub mod image;
+pub mod mitsuba;
 pub mod obj;

@@ -1,0 +1,309 @@
+//! `caustic export-mitsuba`: a built scene as a Mitsuba 3 XML scene, for the subset both renderers
+//! share, so that Mitsuba's path tracer can serve as the reference caustic converges to.
+//!
+//! # The shared subset, and how it maps
+//! - Shapes: spheres (uniform scale) become Mitsuba spheres, cubes become `cube` shapes with the
+//!   unit cube `[0, 1]³` mapped onto Mitsuba's `[-1, 1]³`, triangle meshes become OBJ files
+//!   written beside the XML in world space (vertex normals kept).
+//! - Materials (caustic shades both sides of every surface, so opaque BSDFs are `twosided`):
+//!   diffuse `kd` (`ks = 0`, `t = 0`) → `diffuse`; a mirror (`kd = 0`, `t = 0`, no Phong
+//!   highlight: `p = 0`) → `conductor` with `material = none` and `specular_reflectance = ks`;
+//!   a clear dielectric (`t = 1`) → `dielectric` with `int_ior = ior` and `ext_ior` the index of
+//!   the densest dielectric whose box holds it (glass in water), else 1.
+//! - Lights (physical falloff `{0, 0, 1}` only): point → `point` with intensity `π·rgb`; area →
+//!   an emitting `rectangle` of radiance `π·rgb/A` on the side of `u × v`, black behind; sphere
+//!   → an emitting `sphere` of radiance `rgb/R²` (see [`crate::light`] for why those are the
+//!   same lights).
+//! - The camera: `perspective` with the vertical field of view, a box pixel filter, an HDR film.
+//!   The integrator: `path`, unbounded depth with Russian roulette.
+//!
+//! Anything else is an error naming the object and, where there is one, the script line:
+//! CSG, cylinders, cones, Phong highlights, partly transparent or mixed materials, textures,
+//! normal maps, Perlin noise, the course's falloff, non-uniformly scaled spheres, overlapping
+//! dielectrics. Never a silent approximation. Caustic's background gradient has no Mitsuba
+//! counterpart (black there): validation scenes are closed.
+
+use crate::error::{Error, Loc, Result};
+use crate::light::{Light, Shape as LightShape};
+use crate::material::Material;
+use crate::scene::desc::{RenderDesc, SceneDesc};
+use crate::scene::{Scene, Shape};
+use glam::{Affine3A, Vec3A};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Writes the Mitsuba 3 scene of `scene` (built from `desc`'s `gr.render` call `r`) to `xml`, at
+/// `width × height` pixels and `spp` samples per pixel; meshes go to OBJ files beside it.
+pub fn export(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scene: &Scene,
+    (width, height): (u32, u32),
+    spp: u32,
+    xml: &Path,
+) -> Result<()> {
+    let mut s = String::new();
+    let _ = writeln!(s, "<scene version=\"3.0.0\">");
+    let _ = writeln!(
+        s,
+        "  <!-- exported by caustic export-mitsuba from {} -->",
+        r.loc
+    );
+    let _ = writeln!(
+        s,
+        "  <integrator type=\"path\"><integer name=\"max_depth\" value=\"-1\"/></integrator>"
+    );
+    sensor(&mut s, r, (width, height), spp);
+    let dir = xml.parent().unwrap_or(Path::new("."));
+    let stem = xml
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    for (i, inst) in scene.instances.iter().enumerate() {
+        let node = desc.node(inst.node);
+        let at = |what: String| Error::at(&node.loc, format!("node '{}': {what}", node.name));
+        if inst.mesh_materials {
+            return Err(at(
+                "per-triangle materials from a mesh file are outside the Mitsuba subset; set one material on the node".into(),
+            ));
+        }
+        let material = &scene.materials[inst.material as usize];
+        let bsdf = bsdf(material, ext_ior(scene, i))
+            .map_err(|e| Error::at(material_loc(desc, inst.material, &node.loc), e))?;
+        let m = inst.world_from_object;
+        match inst.shape {
+            Shape::Sphere => {
+                let radius = uniform_scale(&m).ok_or_else(|| {
+                    at("a non-uniformly scaled sphere is outside the Mitsuba subset".into())
+                })?;
+                let c = m.translation;
+                let _ = writeln!(
+                    s,
+                    "  <shape type=\"sphere\"><point name=\"center\" value=\"{}, {}, {}\"/><float name=\"radius\" value=\"{radius}\"/>{bsdf}</shape>",
+                    c.x, c.y, c.z
+                );
+            }
+            Shape::Cube => {
+                // Mitsuba's cube spans [-1, 1]³: to_world = M · translate(½) · scale(½).
+                let unit = Affine3A::from_scale_rotation_translation(
+                    glam::Vec3::splat(0.5),
+                    glam::Quat::IDENTITY,
+                    glam::Vec3::splat(0.5),
+                );
+                let _ = writeln!(
+                    s,
+                    "  <shape type=\"cube\">{}{bsdf}</shape>",
+                    matrix(&(m * unit))
+                );
+            }
+            Shape::Mesh(k) => {
+                let name = format!("{stem}_mesh{i}.obj");
+                write_obj(scene, k, &m, inst.normal_to_world, &dir.join(&name))?;
+                let _ = writeln!(
+                    s,
+                    "  <shape type=\"obj\"><string name=\"filename\" value=\"{name}\"/>{bsdf}</shape>"
+                );
+            }
+            Shape::Cylinder | Shape::Cone | Shape::Csg(_) => {
+                return Err(at(format!(
+                    "a {} is outside the Mitsuba subset (spheres, cubes and triangle meshes)",
+                    inst.shape.label()
+                )));
+            }
+        }
+    }
+    for (l, light) in scene.lights.iter().enumerate() {
+        let loc = &desc.lights[r.lights[l].0 as usize].loc;
+        emitter(&mut s, light).map_err(|e| Error::at(loc, e))?;
+    }
+    let _ = writeln!(s, "</scene>");
+    std::fs::write(xml, s).map_err(|e| Error::File {
+        path: xml.to_path_buf(),
+        message: format!("cannot write the Mitsuba scene: {e}"),
+    })
+}
+
+/// Returns the script line of scene material `id` (materials past the script's come from mesh
+/// files: the node's line).
+fn material_loc<'a>(desc: &'a SceneDesc, id: u32, node: &'a Loc) -> &'a Loc {
+    desc.materials.get(id as usize).map_or(node, |m| &m.loc)
+}
+
+fn sensor(s: &mut String, r: &RenderDesc, (width, height): (u32, u32), spp: u32) {
+    let c = &r.camera;
+    let target = c.eye + c.view;
+    let _ = writeln!(
+        s,
+        "  <sensor type=\"perspective\"><float name=\"fov\" value=\"{}\"/><string name=\"fov_axis\" value=\"y\"/>\
+         <transform name=\"to_world\"><lookat origin=\"{}, {}, {}\" target=\"{}, {}, {}\" up=\"{}, {}, {}\"/></transform>\
+         <sampler type=\"independent\"><integer name=\"sample_count\" value=\"{spp}\"/></sampler>\
+         <film type=\"hdrfilm\"><integer name=\"width\" value=\"{width}\"/><integer name=\"height\" value=\"{height}\"/>\
+         <string name=\"pixel_format\" value=\"rgb\"/><rfilter type=\"box\"/></film></sensor>",
+        c.fov_deg, c.eye.x, c.eye.y, c.eye.z, target.x, target.y, target.z, c.up.x, c.up.y, c.up.z
+    );
+}
+
+/// Returns the Mitsuba BSDF of `m`, or why it is outside the subset.
+fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
+    if m.texture.is_some() || m.bump.is_some() || m.perlin_scale > 0.0 {
+        return Err("textures, normal maps and Perlin noise are outside the Mitsuba subset".into());
+    }
+    let rgb = |v: Vec3A| format!("{}, {}, {}", v.x, v.y, v.z);
+    let black = |v: Vec3A| v.max_element() <= 0.0;
+    if m.transparency == 1.0 {
+        return Ok(format!(
+            "<bsdf type=\"dielectric\"><float name=\"int_ior\" value=\"{}\"/><float name=\"ext_ior\" value=\"{ext_ior}\"/></bsdf>",
+            m.ior
+        ));
+    }
+    if m.transparency > 0.0 {
+        return Err(format!(
+            "a partly transparent material (t = {}) is outside the Mitsuba subset (t = 0 or 1)",
+            m.transparency
+        ));
+    }
+    if black(m.ks) {
+        return Ok(format!(
+            "<bsdf type=\"twosided\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"{}\"/></bsdf></bsdf>",
+            rgb(m.kd)
+        ));
+    }
+    if black(m.kd) && m.shininess <= 0.0 {
+        return Ok(format!(
+            "<bsdf type=\"twosided\"><bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/>\
+             <rgb name=\"specular_reflectance\" value=\"{}\"/></bsdf></bsdf>",
+            rgb(m.ks)
+        ));
+    }
+    Err("a material with a Phong highlight (p > 0) or both kd and ks is outside the Mitsuba subset (diffuse, mirror with p = 0, or t = 1)".into())
+}
+
+/// Returns the index outside dielectric instance `i`: the densest other dielectric whose box
+/// holds its box, else 1 (air). Caustic's media rule (the highest index wins) agrees there.
+fn ext_ior(scene: &Scene, i: usize) -> f32 {
+    let inner = &scene.instances[i];
+    let b = inner.bounds;
+    let mut ior = 1.0f32;
+    for (j, other) in scene.instances.iter().enumerate() {
+        let m = &scene.materials[other.material as usize];
+        if j == i || m.transparency <= 0.0 {
+            continue;
+        }
+        let o = other.bounds;
+        if o.min.cmple(b.min).all() && o.max.cmpge(b.max).all() {
+            ior = ior.max(m.ior);
+        }
+    }
+    ior
+}
+
+/// Returns the scale of `m` when it is a uniform scale times a rotation (within 1e-4).
+fn uniform_scale(m: &Affine3A) -> Option<f32> {
+    let (x, y, z) = (m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis);
+    let r = x.length();
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * r.max(1e-30);
+    (close(y.length(), r) && close(z.length(), r) && close(x.dot(y), 0.0) && close(x.dot(z), 0.0))
+        .then_some(r)
+}
+
+/// Returns `m` as a Mitsuba `to_world` transform (row-major 4 × 4).
+fn matrix(m: &Affine3A) -> String {
+    let c = [
+        m.matrix3.x_axis,
+        m.matrix3.y_axis,
+        m.matrix3.z_axis,
+        m.translation,
+    ];
+    let rows: Vec<String> = (0..3)
+        .map(|i| format!("{} {} {} {}", c[0][i], c[1][i], c[2][i], c[3][i]))
+        .collect();
+    format!(
+        "<transform name=\"to_world\"><matrix value=\"{} 0 0 0 1\"/></transform>",
+        rows.join(" ")
+    )
+}
+
+fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
+    if light.falloff != [0.0, 0.0, 1.0] {
+        return Err(format!(
+            "the course's falloff {:?} is outside the Mitsuba subset (only {{0, 0, 1}}, the physical inverse square)",
+            light.falloff
+        ));
+    }
+    let pi = std::f32::consts::PI;
+    let rgb = |v: Vec3A| format!("{}, {}, {}", v.x, v.y, v.z);
+    let black = "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0, 0, 0\"/></bsdf>";
+    match light.shape {
+        LightShape::Point { position } => {
+            let _ = writeln!(
+                s,
+                "  <emitter type=\"point\"><point name=\"position\" value=\"{}\"/><rgb name=\"intensity\" value=\"{}\"/></emitter>",
+                rgb(position),
+                rgb(pi * light.colour)
+            );
+        }
+        LightShape::Area {
+            centre,
+            u,
+            v,
+            normal,
+            area,
+        } => {
+            let m = Affine3A::from_cols(
+                (u * 0.5).into(),
+                (v * 0.5).into(),
+                normal.into(),
+                centre.into(),
+            );
+            let _ = writeln!(
+                s,
+                "  <shape type=\"rectangle\">{}{black}<emitter type=\"area\"><rgb name=\"radiance\" value=\"{}\"/></emitter></shape>",
+                matrix(&m),
+                rgb(pi * light.colour / area)
+            );
+        }
+        LightShape::Sphere { centre, radius } => {
+            let _ = writeln!(
+                s,
+                "  <shape type=\"sphere\"><point name=\"center\" value=\"{}\"/><float name=\"radius\" value=\"{radius}\"/>{black}\
+                 <emitter type=\"area\"><rgb name=\"radiance\" value=\"{}\"/></emitter></shape>",
+                rgb(centre),
+                rgb(light.colour / (radius * radius))
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Writes mesh `k` placed by `m` as a world-space OBJ (with vertex normals when it has them).
+fn write_obj(
+    scene: &Scene,
+    k: u32,
+    m: &Affine3A,
+    normal_to_world: glam::Mat3A,
+    path: &Path,
+) -> Result<()> {
+    let mesh = &scene.meshes[k as usize];
+    let mut s = String::with_capacity(mesh.positions.len() * 40 + mesh.triangles.len() * 24);
+    for p in &mesh.positions {
+        let q = m.transform_point3a(*p);
+        let _ = writeln!(s, "v {} {} {}", q.x, q.y, q.z);
+    }
+    for n in &mesh.normals {
+        let q = (normal_to_world * *n).normalize_or_zero();
+        let _ = writeln!(s, "vn {} {} {}", q.x, q.y, q.z);
+    }
+    let with_normals = !mesh.normals.is_empty();
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| i + 1);
+        if with_normals {
+            let _ = writeln!(s, "f {a}//{a} {b}//{b} {c}//{c}");
+        } else {
+            let _ = writeln!(s, "f {a} {b} {c}");
+        }
+    }
+    std::fs::write(path, s).map_err(|e| Error::File {
+        path: path.to_path_buf(),
+        message: format!("cannot write mesh: {e}"),
+    })
+}

@@ -649,7 +649,8 @@ pub fn describe(name: &str, desc: &SceneDesc) -> Result<String> {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let triangles: usize = desc.meshes.iter().map(|m| m.data.triangles.len()).sum();
+    let meshes = crate::scene::meshes::load_meshes(desc)?;
+    let triangles: usize = meshes.iter().map(|m| m.triangles.len()).sum();
     let _ = writeln!(s, "scene {name}");
     let _ = writeln!(s, "  nodes: {} ({})", desc.nodes.len(), list(&kinds));
     let _ = writeln!(
@@ -657,12 +658,12 @@ pub fn describe(name: &str, desc: &SceneDesc) -> Result<String> {
         "  meshes: {} files, {triangles} triangles",
         desc.meshes.len()
     );
-    for m in &desc.meshes {
+    for m in &meshes {
         let _ = writeln!(
             s,
             "    {}: {} triangles",
-            m.data.source.display(),
-            m.data.triangles.len()
+            m.source.display(),
+            m.triangles.len()
         );
     }
     let _ = writeln!(s, "  materials: {}", desc.materials.len());

@@ -22,8 +22,9 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::scene::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
 use crate::scene::images::ImageCache;
+use crate::scene::meshes::MeshCache;
 use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3A};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::time::{Duration, Instant};
 
 /// Most node visits flattening may make before it reports a runaway instancing graph.
@@ -127,7 +128,9 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         fallback,
         materials,
         images,
+        mesh_files: MeshCache::new(),
         meshes: Vec::new(),
+        warned_empty: HashSet::new(),
         mesh_index: HashMap::new(),
         csgs: Vec::new(),
         instances: Vec::new(),
@@ -174,13 +177,16 @@ pub struct PlacementCounts {
 }
 
 /// Counts the geometry placed under `root` (instancing included), as `caustic info` prints it.
+///
+/// Reads the mesh files placed, to count their triangles.
 pub fn count_placements(desc: &SceneDesc, root: NodeId) -> Result<PlacementCounts> {
     let mut counts = PlacementCounts::default();
+    let mut meshes = MeshCache::new();
     for p in flatten(desc, root)? {
         let kind = &desc.node(p.node).kind;
         *counts.by_kind.entry(kind.label()).or_default() += 1;
         if let NodeKind::Mesh(m) = kind {
-            counts.triangles += desc.meshes[m.0 as usize].data.triangles.len();
+            counts.triangles += meshes.get(desc, *m)?.triangles.len();
         }
     }
     Ok(counts)
@@ -244,8 +250,12 @@ struct Builder<'a> {
     /// The script's materials, the fallback, then each built mesh's file materials.
     materials: Vec<Material>,
     images: ImageCache,
+    /// Mesh files read so far by this build.
+    mesh_files: MeshCache,
     meshes: Vec<MeshGeom>,
     mesh_index: HashMap<MeshId, u32>,
+    /// Mesh nodes already reported as having no triangles.
+    warned_empty: HashSet<NodeId>,
     csgs: Vec<CsgTree>,
     instances: Vec<Instance>,
     bounds: Vec<Bounds>,
@@ -363,6 +373,15 @@ impl Builder<'_> {
                 let index = self.mesh(*id)?;
                 let mesh = &self.meshes[index as usize];
                 if mesh.triangles.is_empty() {
+                    if self.warned_empty.insert(p.node) {
+                        let source = self.mesh_files.get(self.desc, *id)?;
+                        eprintln!(
+                            "{}: warning: mesh '{}' ({}) has no triangles",
+                            node.loc,
+                            node.name,
+                            source.source.display()
+                        );
+                    }
                     return Ok(());
                 }
                 self.stats.triangles_placed += mesh.triangles.len();
@@ -431,17 +450,17 @@ impl Builder<'_> {
             return Ok(i);
         }
         let desc = &self.desc.meshes[id.0 as usize];
-        if let Some(bad) = desc.data.positions.iter().position(|p| !p.is_finite()) {
+        let data = self.mesh_files.get(self.desc, id)?;
+        if let Some(bad) = data.positions.iter().position(|p| !p.is_finite()) {
             return Err(Error::at(
                 &desc.loc,
                 format!(
                     "mesh {} has a non-finite vertex (#{})",
-                    desc.data.source.display(),
+                    data.source.display(),
                     bad + 1
                 ),
             ));
         }
-        let data = &desc.data;
         let ids = &data.triangle_materials;
         if !ids.is_empty()
             && (ids.len() != data.triangles.len()
@@ -462,7 +481,7 @@ impl Builder<'_> {
                 self.materials.push(material);
             }
         }
-        let geom = MeshGeom::new(data, first_material);
+        let geom = MeshGeom::new(&data, first_material);
         self.meshes.push(geom);
         let index = self.meshes.len() as u32 - 1;
         self.mesh_index.insert(id, index);

@@ -23,11 +23,10 @@
 //! `getuservalue`, `getupvalue`); `unpack` and `string.gfind` are aliased for legacy scripts.
 
 use crate::error::{Error, Loc, Result};
-use crate::io::{gltf, obj};
 use crate::scene::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
 use crate::scene::desc::{
-    CameraDesc, CsgOp, LightDesc, LightShape, MaterialDesc, MeshDesc, MeshId, NodeKind, RenderDesc,
-    SceneDesc,
+    CameraDesc, CsgOp, LightDesc, LightShape, MaterialDesc, MeshDesc, MeshFormat, MeshId,
+    MeshSource, NodeKind, RenderDesc, SceneDesc,
 };
 use glam::{DAffine3, DVec3};
 use mlua::{Lua, LuaOptions, MetaMethod, MultiValue, StdLib, Table, UserData, Value};
@@ -35,7 +34,6 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
-use std::sync::Arc;
 
 /// Called by every `gr.render`: receives the description as it stands and the render call.
 pub type RenderHook = Box<dyn FnMut(&SceneDesc, &RenderDesc) -> Result<()>>;
@@ -364,20 +362,10 @@ fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         Some(Value::Table(_)) => inline_mesh(s, a)?,
         _ => mesh_from_file(s, a, &a.string(2)?)?,
     };
-    if s.desc.meshes[id.0 as usize].data.triangles.is_empty() {
-        let src = s.desc.meshes[id.0 as usize]
-            .data
-            .source
-            .display()
-            .to_string();
-        s.warn(
-            &a.loc.clone(),
-            format!("mesh '{name}' ({src}) has no triangles"),
-        );
-    }
     new_node(lua, s, a, name, NodeKind::Mesh(id))
 }
 
+/// Resolves a mesh file and checks its format; the file is read when a scene is built.
 fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> {
     let Some(path) = s.resolve_input(given) else {
         return Err(a.fail(s.not_found("mesh file", given)));
@@ -386,24 +374,23 @@ fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> 
     if let Some(&id) = s.mesh_cache.get(&key) {
         return Ok(id);
     }
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
-    let cannot = |e: &dyn std::fmt::Display| a.fail(format!("cannot load mesh '{given}': {e}"));
-    let data = match ext.as_str() {
-        "obj" => obj::load_obj(&path).map_err(|e| cannot(&e))?,
-        "gltf" | "glb" => gltf::load_gltf(&path).map_err(|e| cannot(&e))?,
-        _ => {
-            return Err(a.fail(format!(
-                "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj, .gltf and .glb)"
-            )));
-        }
+    let Some(format) = MeshFormat::from_path(&path) else {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        return Err(a.fail(format!(
+            "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj, .gltf and .glb)"
+        )));
     };
     let id = MeshId(s.desc.meshes.len() as u32);
     s.desc.meshes.push(MeshDesc {
-        data: Arc::new(data),
+        source: MeshSource::File {
+            given: given.to_string(),
+            path,
+            format,
+        },
         loc: a.loc.clone(),
     });
     s.mesh_cache.insert(key, id);
@@ -415,13 +402,10 @@ fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
     let Some(Value::Table(verts)) = a.get(2) else {
         unreachable!("inline_mesh is only called with a table")
     };
-    let Some(Value::Table(faces)) = a.get(3) else {
+    let Some(Value::Table(face_table)) = a.get(3) else {
         return Err(a.bad(3, "table of faces expected"));
     };
-    let mut data = crate::geometry::mesh::MeshData {
-        source: PathBuf::from(format!("{} (inline mesh)", a.loc)),
-        ..Default::default()
-    };
+    let mut positions = Vec::new();
     for (k, v) in verts.clone().sequence_values::<Value>().enumerate() {
         let p = match v? {
             Value::Table(t) if t.raw_len() == 3 => {
@@ -433,10 +417,11 @@ fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
         if !p.is_finite() {
             return Err(a.bad(2, format!("vertex {} is not finite", k + 1)));
         }
-        data.positions.push(p.as_vec3());
+        positions.push(p);
     }
-    let nv = data.positions.len() as i64;
-    for (k, f) in faces.clone().sequence_values::<Value>().enumerate() {
+    let nv = positions.len() as i64;
+    let mut faces = Vec::new();
+    for (k, f) in face_table.clone().sequence_values::<Value>().enumerate() {
         let Value::Table(f) = f? else {
             return Err(a.bad(3, format!("face {} is not a table", k + 1)));
         };
@@ -454,13 +439,11 @@ fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
         if idx.len() < 3 {
             return Err(a.bad(3, format!("face {} has fewer than 3 vertices", k + 1)));
         }
-        for j in 1..idx.len() - 1 {
-            data.triangles.push([idx[0], idx[j], idx[j + 1]]);
-        }
+        faces.push(idx);
     }
     let id = MeshId(s.desc.meshes.len() as u32);
     s.desc.meshes.push(MeshDesc {
-        data: Arc::new(data),
+        source: MeshSource::Inline { positions, faces },
         loc: a.loc.clone(),
     });
     Ok(id)

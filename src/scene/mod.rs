@@ -6,5 +6,6 @@ pub mod build;
 pub mod desc;
 pub mod images;
 pub mod lua;
+pub mod meshes;
 
 pub use build::{Instance, Scene, Shape, build_scene};

@@ -1,15 +1,15 @@
 //! The command line: `caustic render` and `caustic info`, and what each runs.
 
 use crate::camera::Camera;
+use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
+use crate::lua::{ScriptOptions, run_script, run_script_with};
 use crate::photon::trace::Progress;
 use crate::render::gi::{Gi, GiSettings, Indirect};
 use crate::render::plan::{GiMode, plan};
 use crate::render::{Film, RenderOptions, RenderStats, Sampling, Window, render_with};
 use crate::scene::build::{build_scene, count_placements};
-use crate::scene::desc::{RenderDesc, SceneDesc};
-use crate::scene::lua::{ScriptOptions, run_script, run_script_with};
 use clap::{Args, Parser, Subcommand};
 use std::cell::Cell;
 use std::io::IsTerminal;

@@ -3,8 +3,8 @@
 
 mod common;
 
+use caustic::desc::{CsgOp, NodeKind};
 use caustic::scene::build::{build_scene, count_placements};
-use caustic::scene::desc::{CsgOp, NodeKind};
 use caustic::scene::meshes::load_meshes;
 use common::{lua_error, out_dir, run_lua, run_lua_in};
 use glam::DVec3;

@@ -17,7 +17,7 @@
 //! ```
 
 use super::{Crossing, Interval, cone, cube, cylinder, sphere};
-use crate::scene::desc::CsgOp;
+use crate::desc::CsgOp;
 use glam::{Affine3A, Mat3A, Vec3A};
 
 /// A convex primitive a CSG leaf can hold.

@@ -11,6 +11,7 @@
 //! A 1M-triangle mesh instanced 10 times thus costs one mesh of memory plus ten instances.
 
 use crate::accel::{Bounds, Bvh};
+use crate::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
 use crate::error::{Error, Loc, Result};
 use crate::geometry::csg::{CsgNode, CsgTree, LeafShape};
 pub use crate::geometry::hit::{Hit, SurfaceHit};
@@ -20,7 +21,6 @@ use crate::geometry::uv::{analytic_dpdu, analytic_uv};
 use crate::geometry::{Interval, Ray, cone, cube, cylinder, sphere};
 use crate::light::Light;
 use crate::material::Material;
-use crate::scene::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
 use crate::scene::images::ImageCache;
 use crate::scene::meshes::MeshCache;
 use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3A};

@@ -14,10 +14,10 @@
 //! quad = gr.mesh('quad', {{0,0,0}, {1,0,0}, {1,1,0}, {0,1,0}}, {{0, 1, 2, 3}})
 //! ```
 
+use crate::desc::{MeshDesc, MeshFormat, MeshId, MeshSource, SceneDesc};
 use crate::error::{Error, Result};
 use crate::geometry::mesh::MeshData;
 use crate::io::{gltf, obj};
-use crate::scene::desc::{MeshDesc, MeshFormat, MeshId, MeshSource, SceneDesc};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -1,11 +1,9 @@
-//! Scenes: the description a script fills in, the Lua API that fills it, and the step that turns
-//! a description into the render-ready [`Scene`].
+//! Scenes: the step that turns a [`crate::desc::SceneDesc`] into the render-ready [`Scene`]
+//! (flattening, loading mesh files and images, building the two-level BVH) and the per-ray
+//! queries on it.
 
-pub mod args;
 pub mod build;
-pub mod desc;
 pub mod images;
-pub mod lua;
 pub mod meshes;
 
 pub use build::{Instance, Scene, Shape, build_scene};

@@ -2,10 +2,10 @@
 #![allow(dead_code)]
 
 use caustic::camera::Camera;
+use caustic::desc::{RenderDesc, SceneDesc};
+use caustic::lua::run_source;
 use caustic::render::{Film, render};
 use caustic::scene::build::build_scene;
-use caustic::scene::desc::{RenderDesc, SceneDesc};
-use caustic::scene::lua::run_source;
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::process::Command;

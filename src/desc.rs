@@ -1,6 +1,10 @@
 //! The plain scene description a script fills in: no Lua types, every entry tagged with the script
 //! line that made it.
 //!
+//! This is the bottom floor: it imports nothing of geometry, the BVH or file loading. Files are
+//! named here (resolved paths of meshes, textures and output images), never read; `scene` reads
+//! them when it builds a scene. Tests can fill a description in Rust without Lua.
+//!
 //! Index spaces ([`NodeId`], [`MaterialId`], [`LightId`], [`MeshId`]) are positions in the vectors
 //! of [`SceneDesc`]. Entries are only ever appended, so an id stays valid for the whole script, and
 //! an image rendered mid-script sees the description as it stands at that moment.

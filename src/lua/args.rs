@@ -4,8 +4,8 @@
 //! ignored and messages read `bad argument #3 to 'nh_sphere' (number expected, got nil)`. We keep
 //! those messages, prefix them with `script:line:`, and additionally reject NaN and infinity.
 
+use crate::desc::{LightId, MaterialId, NodeId};
 use crate::error::{Error, Loc};
-use crate::scene::desc::{LightId, MaterialId, NodeId};
 use glam::{DVec3, Vec3};
 use mlua::{Lua, MultiValue, Value};
 

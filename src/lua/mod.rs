@@ -22,12 +22,14 @@
 //! memory safety (`setmetatable`, `setuservalue`, `getregistry`, `setupvalue`, `upvaluejoin`,
 //! `getuservalue`, `getupvalue`); `unpack` and `string.gfind` are aliased for legacy scripts.
 
-use crate::error::{Error, Loc, Result};
-use crate::scene::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
-use crate::scene::desc::{
+pub mod args;
+
+use crate::desc::{
     CameraDesc, CsgOp, LightDesc, LightShape, MaterialDesc, MeshDesc, MeshFormat, MeshId,
     MeshSource, NodeKind, RenderDesc, SceneDesc,
 };
+use crate::error::{Error, Loc, Result};
+use crate::lua::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
 use glam::{DAffine3, DVec3};
 use mlua::{Lua, LuaOptions, MetaMethod, MultiValue, StdLib, Table, UserData, Value};
 use std::cell::RefCell;
@@ -505,7 +507,7 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     };
     let texture = image(7, "texture")?;
     let bump = image(8, "bump map")?;
-    let id = crate::scene::desc::MaterialId(s.desc.materials.len() as u32);
+    let id = crate::desc::MaterialId(s.desc.materials.len() as u32);
     s.desc.materials.push(MaterialDesc {
         kd,
         ks,
@@ -568,7 +570,7 @@ fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Res
     {
         return Err(a.bad(5, format!("photon count must be in [0, 1e12], got {n}")));
     }
-    let id = crate::scene::desc::LightId(s.desc.lights.len() as u32);
+    let id = crate::desc::LightId(s.desc.lights.len() as u32);
     s.desc.lights.push(LightDesc {
         shape,
         position,

@@ -368,3 +368,21 @@ fn degenerate_and_extreme_transforms_are_skipped_or_rejected_not_traced() {
         1
     );
 }
+
+#[test]
+fn unknown_gr_functions_list_the_functions_that_exist() {
+    assert_eq!(
+        lua_error("\ns = gr.spere('s')"),
+        "test.lua:2: unknown function gr.spere (caustic has gr.node, gr.joint, gr.sphere, gr.cube, \
+         gr.cylinder, gr.cone, gr.nh_sphere, gr.nh_box, gr.mesh, gr.union, gr.intersection, \
+         gr.difference, gr.material, gr.light, gr.area_light, gr.sphere_light, gr.render)"
+    );
+    assert_eq!(
+        lua_error("s = gr.nh_sphere('s', {0, 0, 0})"),
+        "test.lua:1: bad argument #3 to 'nh_sphere' (number expected, got no value)"
+    );
+    assert_eq!(
+        lua_error("s = gr.sphere('s')\ns:translate(1, 0/0, 0)"),
+        "test.lua:2: bad argument #2 to 'translate' (finite number expected, got NaN)"
+    );
+}

@@ -1,0 +1,538 @@
+//! The `gr` table: every function a script can call, installed from one list of (name, function).
+//!
+//! The API is the CS488 A4 starter's (see `../shared/docs/cs488_lua_api.md` §1–§5) plus the
+//! extended ray tracer's commands, with every extra argument optional:
+//!
+//! ```lua
+//! glass = gr.material({0.2, 0.2, 0.2}, {0.05, 0.05, 0.05}, 25, 0.8, 1.85, 0)
+//! cone  = gr.cone('c')   -- apex at the origin, radius 1 at z = 1
+//! ring  = gr.difference('ring', gr.cylinder('outer'), gr.cylinder('inner'))
+//! light = gr.light({0, 0.5, 0}, {0.7, 0.5, 0.9}, {1, 0, 0}, 10000, 200000)
+//! cow   = gr.mesh('cow', 'cow.obj')   -- resolved here, read when a scene is built
+//! ```
+//!
+//! As in the course, one table is both the global `gr` and the source of every node method, so
+//! `n:translate(1, 2, 3)` is `gr.translate(n, 1, 2, 3)` and `n:render(...)` is `gr.render(n, ...)`.
+//! `gr.render` calls the [`RenderHook`](super::RenderHook) synchronously: the script carries on
+//! after each image. An unknown name (`gr.spere`) fails at the line that used it and lists the
+//! functions that exist.
+
+use super::{MAX_PIXELS, State};
+use crate::desc::{
+    CameraDesc, CsgOp, LightDesc, LightId, LightShape, MaterialDesc, MaterialId, MeshDesc,
+    MeshFormat, MeshId, MeshSource, NodeKind, RenderDesc,
+};
+use crate::error::Error;
+use crate::lua::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
+use glam::{DAffine3, DVec3};
+use mlua::{Lua, MetaMethod, MultiValue, Table, UserData, Value};
+use std::cell::RefCell;
+use std::path::PathBuf;
+use std::rc::Rc;
+
+type GrFn = fn(&Lua, &mut State, &Args) -> mlua::Result<Value>;
+
+/// How a `gr` function is meant to be called.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Call {
+    /// `gr.sphere(...)`: listed when a script names an unknown function.
+    Function,
+    /// `n:translate(...)` (also `gr.translate(n, ...)`): a node method, not listed.
+    Method,
+}
+
+/// Every `gr` function, in the order the unknown-function message lists them.
+const GR: &[(&str, Call, GrFn)] = &[
+    ("node", Call::Function, gr_node),
+    ("joint", Call::Function, gr_joint),
+    ("sphere", Call::Function, |l, s, a| {
+        gr_simple(l, s, a, NodeKind::Sphere)
+    }),
+    ("cube", Call::Function, |l, s, a| {
+        gr_simple(l, s, a, NodeKind::Cube)
+    }),
+    ("cylinder", Call::Function, |l, s, a| {
+        gr_simple(l, s, a, NodeKind::Cylinder)
+    }),
+    ("cone", Call::Function, |l, s, a| {
+        gr_simple(l, s, a, NodeKind::Cone)
+    }),
+    ("nh_sphere", Call::Function, gr_nh_sphere),
+    ("nh_box", Call::Function, gr_nh_box),
+    ("mesh", Call::Function, gr_mesh),
+    ("union", Call::Function, |l, s, a| {
+        gr_csg(l, s, a, CsgOp::Union)
+    }),
+    ("intersection", Call::Function, |l, s, a| {
+        gr_csg(l, s, a, CsgOp::Intersection)
+    }),
+    ("difference", Call::Function, |l, s, a| {
+        gr_csg(l, s, a, CsgOp::Difference)
+    }),
+    ("material", Call::Function, gr_material),
+    ("light", Call::Function, gr_light),
+    ("area_light", Call::Function, gr_area_light),
+    ("sphere_light", Call::Function, gr_sphere_light),
+    ("render", Call::Function, gr_render),
+    ("add_child", Call::Method, gr_add_child),
+    ("set_material", Call::Method, gr_set_material),
+    ("translate", Call::Method, gr_translate),
+    ("scale", Call::Method, gr_scale),
+    ("rotate", Call::Method, gr_rotate),
+];
+
+/// Registry key of the `gr` table, which node values use as their method table.
+const GR_KEY: &str = "caustic.gr";
+
+/// Sets the global `gr` to a table of [`GR`]'s functions, each working on `state`.
+pub(super) fn install(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()> {
+    let gr = lua.create_table()?;
+    for &(name, _, f) in GR {
+        let st = Rc::clone(state);
+        let func = lua.create_function(move |lua, vals: MultiValue| {
+            let args = Args::new(lua, name, vals);
+            let mut s = st
+                .try_borrow_mut()
+                .map_err(|_| args.fail(format!("gr.{name} called while a render is running")))?;
+            f(lua, &mut s, &args)
+        })?;
+        gr.raw_set(name, func)?;
+    }
+    // Unknown names fail loudly at the line that used them instead of yielding nil.
+    let meta = lua.create_table()?;
+    meta.raw_set(
+        "__index",
+        lua.create_function(|lua, (_t, key): (Value, Value)| -> mlua::Result<Value> {
+            let key = key.to_string().unwrap_or_else(|_| "?".into());
+            let listed: Vec<&str> = GR
+                .iter()
+                .filter(|(_, call, _)| *call == Call::Function)
+                .map(|(name, _, _)| *name)
+                .collect();
+            Err(lua_err(Error::at(
+                &caller_loc(lua),
+                format!(
+                    "unknown function gr.{key} (caustic has gr.{})",
+                    listed.join(", gr.")
+                ),
+            )))
+        })?,
+    )?;
+    gr.set_metatable(Some(meta))?;
+    lua.set_named_registry_value(GR_KEY, &gr)?;
+    lua.globals().set("gr", gr)?;
+    Ok(())
+}
+
+fn new_node(
+    lua: &Lua,
+    s: &mut State,
+    a: &Args,
+    name: String,
+    kind: NodeKind,
+) -> mlua::Result<Value> {
+    let id = s.desc.add_node(name, kind, a.loc.clone());
+    Ok(Value::UserData(lua.create_userdata(NodeRef(id))?))
+}
+
+fn gr_node(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    new_node(lua, s, a, a.string(1)?, NodeKind::Group)
+}
+
+fn gr_joint(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    // The A4 starter stores the joint ranges and applies nothing: a joint is a plain node.
+    a.dvec3(2)?;
+    a.dvec3(3)?;
+    new_node(lua, s, a, name, NodeKind::Group)
+}
+
+fn gr_simple(lua: &Lua, s: &mut State, a: &Args, kind: NodeKind) -> mlua::Result<Value> {
+    new_node(lua, s, a, a.string(1)?, kind)
+}
+
+fn gr_nh_sphere(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    let center = a.dvec3(2)?;
+    let radius = a.positive(3, "radius")?;
+    new_node(lua, s, a, name, NodeKind::NhSphere { center, radius })
+}
+
+fn gr_nh_box(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    let corner = a.dvec3(2)?;
+    let size = a.positive(3, "size")?;
+    new_node(lua, s, a, name, NodeKind::NhBox { corner, size })
+}
+
+fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    let id = match a.get(2) {
+        Some(Value::Table(_)) => inline_mesh(s, a)?,
+        _ => mesh_from_file(s, a, &a.string(2)?)?,
+    };
+    new_node(lua, s, a, name, NodeKind::Mesh(id))
+}
+
+/// Resolves a mesh file and checks its format; the file is read when a scene is built.
+fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> {
+    let Some(path) = s.resolve_input(given) else {
+        return Err(a.fail(s.not_found("mesh file", given)));
+    };
+    let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+    if let Some(&id) = s.mesh_cache.get(&key) {
+        return Ok(id);
+    }
+    let Some(format) = MeshFormat::from_path(&path) else {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        return Err(a.fail(format!(
+            "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj, .gltf and .glb)"
+        )));
+    };
+    let id = MeshId(s.desc.meshes.len() as u32);
+    s.desc.meshes.push(MeshDesc {
+        source: MeshSource::File {
+            given: given.to_string(),
+            path,
+            format,
+        },
+        loc: a.loc.clone(),
+    });
+    s.mesh_cache.insert(key, id);
+    Ok(id)
+}
+
+/// The legacy form `gr.mesh(name, {{x,y,z}, …}, {{i,j,k,…}, …})` with 0-based convex faces.
+fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
+    let Some(Value::Table(verts)) = a.get(2) else {
+        unreachable!("inline_mesh is only called with a table")
+    };
+    let Some(Value::Table(face_table)) = a.get(3) else {
+        return Err(a.bad(3, "table of faces expected"));
+    };
+    let mut positions = Vec::new();
+    for (k, v) in verts.clone().sequence_values::<Value>().enumerate() {
+        let p = match v? {
+            Value::Table(t) if t.raw_len() == 3 => {
+                let c: [f64; 3] = [t.raw_get(1)?, t.raw_get(2)?, t.raw_get(3)?];
+                DVec3::from_array(c)
+            }
+            _ => return Err(a.bad(2, format!("vertex {} is not a 3-tuple", k + 1))),
+        };
+        if !p.is_finite() {
+            return Err(a.bad(2, format!("vertex {} is not finite", k + 1)));
+        }
+        positions.push(p);
+    }
+    let nv = positions.len() as i64;
+    let mut faces = Vec::new();
+    for (k, f) in face_table.clone().sequence_values::<Value>().enumerate() {
+        let Value::Table(f) = f? else {
+            return Err(a.bad(3, format!("face {} is not a table", k + 1)));
+        };
+        let mut idx = Vec::new();
+        for i in f.sequence_values::<i64>() {
+            let i = i?;
+            if !(0..nv).contains(&i) {
+                return Err(a.bad(
+                    3,
+                    format!("face {}: index {i} out of range (0..{nv})", k + 1),
+                ));
+            }
+            idx.push(i as u32);
+        }
+        if idx.len() < 3 {
+            return Err(a.bad(3, format!("face {} has fewer than 3 vertices", k + 1)));
+        }
+        faces.push(idx);
+    }
+    let id = MeshId(s.desc.meshes.len() as u32);
+    s.desc.meshes.push(MeshDesc {
+        source: MeshSource::Inline { positions, faces },
+        loc: a.loc.clone(),
+    });
+    Ok(id)
+}
+
+fn gr_csg(lua: &Lua, s: &mut State, a: &Args, op: CsgOp) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    let mut operands = [a.node(2)?, a.node(3)?];
+    for (k, id) in operands.iter_mut().enumerate() {
+        if !s.desc.node(*id).kind.is_geometry() {
+            return Err(a.bad(k + 2, "Geometry node expected"));
+        }
+    }
+    let [x, y] = operands;
+    new_node(lua, s, a, name, NodeKind::Csg { op, a: x, b: y })
+}
+
+fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let kd = a.colour(1)?;
+    let ks = a.colour(2)?;
+    let shininess = a.number(3)?;
+    if shininess < 0.0 {
+        return Err(a.bad(3, format!("Phong exponent must be >= 0, got {shininess}")));
+    }
+    let transparency = a.opt_number(4)?.unwrap_or(0.0);
+    if !(0.0..=1.0).contains(&transparency) {
+        return Err(a.bad(
+            4,
+            format!("transparency must be in [0, 1], got {transparency}"),
+        ));
+    }
+    let ior = a.opt_number(5)?.unwrap_or(1.0);
+    if transparency > 0.0 && ior <= 0.0 {
+        return Err(a.bad(
+            5,
+            format!("index of refraction must be positive, got {ior}"),
+        ));
+    }
+    let perlin_scale = a.opt_number(6)?.unwrap_or(0.0);
+    if perlin_scale < 0.0 {
+        return Err(a.bad(6, format!("Perlin scale must be >= 0, got {perlin_scale}")));
+    }
+    let mut image = |i: usize, what: &str| -> mlua::Result<Option<PathBuf>> {
+        match a.opt_string(i)? {
+            None => Ok(None),
+            Some(given) => match s.resolve_input(&given) {
+                Some(p) => Ok(Some(p)),
+                None if s.desc.missing_textures_warn => {
+                    if s.warned_images.insert(given.clone()) {
+                        let message =
+                            format!("{}; rendering with kd instead", s.not_found(what, &given));
+                        s.warn(&a.loc, message);
+                    }
+                    Ok(None)
+                }
+                None => Err(a.fail(s.not_found(what, &given))),
+            },
+        }
+    };
+    let texture = image(7, "texture")?;
+    let bump = image(8, "bump map")?;
+    let id = MaterialId(s.desc.materials.len() as u32);
+    s.desc.materials.push(MaterialDesc {
+        kd,
+        ks,
+        shininess: shininess as f32,
+        transparency: transparency as f32,
+        ior: if ior > 0.0 { ior as f32 } else { 1.0 },
+        perlin_scale: perlin_scale as f32,
+        texture,
+        bump,
+        loc: a.loc.clone(),
+    });
+    Ok(Value::UserData(lua.create_userdata(MaterialRef(id))?))
+}
+
+fn gr_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    new_light(lua, s, a, LightShape::Point)
+}
+
+/// `gr.area_light(pos, rgb, falloff, power, num_photons, u, v)`: power and num_photons may be nil.
+fn gr_area_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let u = a.vec3(6)?;
+    let v = a.vec3(7)?;
+    if u.cross(v).length_squared() <= f32::MIN_POSITIVE {
+        return Err(a.bad(
+            7,
+            "the edges u and v must span a parallelogram (not zero or parallel)",
+        ));
+    }
+    new_light(lua, s, a, LightShape::Area { u, v })
+}
+
+/// `gr.sphere_light(pos, rgb, falloff, power, num_photons, radius)`.
+fn gr_sphere_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let radius = a.positive(6, "radius")? as f32;
+    new_light(lua, s, a, LightShape::Sphere { radius })
+}
+
+fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Result<Value> {
+    let position = a.vec3(1)?;
+    let colour = a.colour(2)?;
+    let falloff = a.vec3(3)?;
+    if falloff.min_element() < 0.0 || falloff.max_element() <= 0.0 {
+        return Err(a.bad(
+            3,
+            format!(
+                "falloff {{c0, c1, c2}} must be >= 0 and not all 0, got {{{}, {}, {}}}",
+                falloff.x, falloff.y, falloff.z
+            ),
+        ));
+    }
+    let power = a.opt_number(4)?;
+    if let Some(p) = power
+        && p < 0.0
+    {
+        return Err(a.bad(4, format!("power must be >= 0, got {p}")));
+    }
+    let photons = a.opt_number(5)?;
+    if let Some(n) = photons
+        && !(0.0..=1e12).contains(&n)
+    {
+        return Err(a.bad(5, format!("photon count must be in [0, 1e12], got {n}")));
+    }
+    let id = LightId(s.desc.lights.len() as u32);
+    s.desc.lights.push(LightDesc {
+        shape,
+        position,
+        colour,
+        falloff: falloff.to_array(),
+        power: power.map(|p| p as f32),
+        photons: photons.map(|n| n as u64),
+        loc: a.loc.clone(),
+    });
+    Ok(Value::UserData(lua.create_userdata(LightRef(id))?))
+}
+
+fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let root = a.node(1)?;
+    let file = a.string(2)?;
+    let width = a.image_size(3)?;
+    let height = a.image_size(4)?;
+    if width as u64 * height as u64 > MAX_PIXELS {
+        return Err(a.fail(format!(
+            "image {width}x{height} is larger than {MAX_PIXELS} pixels"
+        )));
+    }
+    let eye = a.vec3(5)?;
+    let view = a.vec3(6)?;
+    let up = a.vec3(7)?;
+    let fov_deg = a.number(8)?;
+    let ambient = a.colour(9)?;
+    let lights = a.lights(10)?;
+    if view.length_squared() == 0.0 {
+        return Err(a.bad(6, "view direction must not be zero"));
+    }
+    if view.normalize().cross(up).length_squared() < 1e-12 {
+        return Err(a.bad(7, "up must not be zero or parallel to the view direction"));
+    }
+    if !(fov_deg > 0.0 && fov_deg < 180.0) {
+        return Err(a.bad(
+            8,
+            format!("field of view must be in (0, 180) degrees, got {fov_deg}"),
+        ));
+    }
+    let render = RenderDesc {
+        root,
+        output: s.resolve_output(&file),
+        width,
+        height,
+        camera: CameraDesc {
+            eye,
+            view,
+            up,
+            fov_deg: fov_deg as f32,
+        },
+        ambient,
+        lights,
+        loc: a.loc.clone(),
+    };
+    s.desc.renders.push(render.clone());
+    let State { desc, hook, .. } = s;
+    hook(desc, &render).map_err(|e| match e {
+        e @ (Error::Script { .. } | Error::Lua(_)) => lua_err(e),
+        other => a.fail(other.to_string()),
+    })?;
+    Ok(Value::Nil)
+}
+
+fn gr_add_child(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let parent = a.node(1)?;
+    let child = a.node(2)?;
+    if parent == child {
+        return Err(a.bad(2, "a node cannot be its own child"));
+    }
+    s.desc.nodes[parent.0 as usize]
+        .children
+        .push((child, a.loc.clone()));
+    Ok(Value::Nil)
+}
+
+fn gr_set_material(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let node = a.node(1)?;
+    let material = a.material(2)?;
+    if !s.desc.node(node).kind.is_geometry() {
+        return Err(a.bad(1, "Geometry node expected"));
+    }
+    s.desc.nodes[node.0 as usize].material = Some(material);
+    Ok(Value::Nil)
+}
+
+fn pre_multiply(s: &mut State, a: &Args, t: DAffine3) -> mlua::Result<Value> {
+    let node = a.node(1)?;
+    let m = &mut s.desc.nodes[node.0 as usize].transform;
+    *m = t * *m;
+    Ok(Value::Nil)
+}
+
+fn gr_translate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    a.node(1)?;
+    let t = DAffine3::from_translation(a.dvec3_at(2)?);
+    pre_multiply(s, a, t)
+}
+
+fn gr_scale(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    a.node(1)?;
+    let t = DAffine3::from_scale(a.dvec3_at(2)?);
+    pre_multiply(s, a, t)
+}
+
+fn gr_rotate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    a.node(1)?;
+    let axis = a.string(2)?;
+    if axis.chars().count() != 1 {
+        return Err(a.bad(2, "Single character expected"));
+    }
+    let angle = a.number(3)?.to_radians();
+    let t = match axis.to_ascii_lowercase().as_str() {
+        "x" => DAffine3::from_rotation_x(angle),
+        "y" => DAffine3::from_rotation_y(angle),
+        "z" => DAffine3::from_rotation_z(angle),
+        _ => return Err(a.bad(2, "Axis must be x, y or z")),
+    };
+    pre_multiply(s, a, t)
+}
+
+impl UserData for NodeRef {
+    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
+        // Node methods are the `gr` functions themselves, as in the course where `gr` is the
+        // node metatable's `__index`.
+        methods.add_meta_function(MetaMethod::Index, |lua, (_node, key): (Value, Value)| {
+            let gr: Table = lua.named_registry_value(GR_KEY)?;
+            let f: Value = gr.raw_get(key.clone())?;
+            if f.is_nil() {
+                let key = key.to_string().unwrap_or_else(|_| "?".into());
+                return Err(lua_err(Error::at(
+                    &caller_loc(lua),
+                    format!("gr.node has no method '{key}'"),
+                )));
+            }
+            Ok(f)
+        });
+        methods.add_meta_method(MetaMethod::ToString, |_, node, ()| {
+            Ok(format!("gr.node #{}", node.0.0))
+        });
+    }
+}
+
+impl UserData for MaterialRef {
+    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_meta_method(MetaMethod::ToString, |_, m, ()| {
+            Ok(format!("gr.material #{}", m.0.0))
+        });
+    }
+}
+
+impl UserData for LightRef {
+    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_meta_method(MetaMethod::ToString, |_, l, ()| {
+            Ok(format!("gr.light #{}", l.0.0))
+        });
+    }
+}

@@ -13,12 +13,12 @@
 use crate::accel::{Bounds, Bvh};
 use crate::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
 use crate::error::{Error, Loc, Result};
-use crate::geometry::csg::{CsgNode, CsgTree, LeafShape};
+use crate::geometry::csg::{CsgNode, CsgTree};
 pub use crate::geometry::hit::{Hit, SurfaceHit};
 use crate::geometry::mesh::MeshGeom;
 use crate::geometry::triangle;
 use crate::geometry::uv::{analytic_dpdu, analytic_uv};
-use crate::geometry::{Interval, Ray, cone, cube, cylinder, sphere};
+use crate::geometry::{Analytic, Interval, Ray};
 use crate::light::Light;
 use crate::material::Material;
 use crate::scene::images::ImageCache;
@@ -32,13 +32,12 @@ pub const MAX_NODE_VISITS: usize = 20_000_000;
 /// Deepest CSG tree accepted.
 const MAX_CSG_DEPTH: usize = 64;
 
-/// What an instance places in the world.
+/// What an instance places in the world: the one set of primitives the scene traces. Every
+/// `match` on it names each variant, so a new primitive cannot fall into another's arm.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Shape {
-    Sphere,
-    Cube,
-    Cylinder,
-    Cone,
+    /// A unit analytic primitive in the instance's object space.
+    Analytic(Analytic),
     /// Index into [`Scene::meshes`].
     Mesh(u32),
     /// Index into [`Scene::csgs`].
@@ -49,10 +48,7 @@ impl Shape {
     /// Returns the kind's name, as `--stats` prints it.
     pub fn label(&self) -> &'static str {
         match self {
-            Shape::Sphere => "sphere",
-            Shape::Cube => "cube",
-            Shape::Cylinder => "cylinder",
-            Shape::Cone => "cone",
+            Shape::Analytic(a) => a.label(),
             Shape::Mesh(_) => "mesh",
             Shape::Csg(_) => "csg",
         }
@@ -271,31 +267,39 @@ fn local_transform(kind: &NodeKind) -> DAffine3 {
         NodeKind::NhBox { corner, size } => {
             DAffine3::from_translation(*corner) * DAffine3::from_scale(DVec3::splat(*size))
         }
-        _ => DAffine3::IDENTITY,
+        NodeKind::Group
+        | NodeKind::Sphere
+        | NodeKind::Cube
+        | NodeKind::Cylinder
+        | NodeKind::Cone
+        | NodeKind::Mesh(_)
+        | NodeKind::Csg { .. } => DAffine3::IDENTITY,
     }
 }
 
-fn leaf_shape(kind: &NodeKind) -> Option<LeafShape> {
+/// Returns the analytic primitive a node kind places, or `None` for groups, meshes and CSG nodes.
+fn analytic_of(kind: &NodeKind) -> Option<Analytic> {
     match kind {
-        NodeKind::Sphere | NodeKind::NhSphere { .. } => Some(LeafShape::Sphere),
-        NodeKind::Cube | NodeKind::NhBox { .. } => Some(LeafShape::Cube),
-        NodeKind::Cylinder => Some(LeafShape::Cylinder),
-        NodeKind::Cone => Some(LeafShape::Cone),
-        _ => None,
+        NodeKind::Sphere | NodeKind::NhSphere { .. } => Some(Analytic::Sphere),
+        NodeKind::Cube | NodeKind::NhBox { .. } => Some(Analytic::Cube),
+        NodeKind::Cylinder => Some(Analytic::Cylinder),
+        NodeKind::Cone => Some(Analytic::Cone),
+        NodeKind::Group | NodeKind::Mesh(_) | NodeKind::Csg { .. } => None,
     }
 }
 
-fn leaf_bounds(shape: LeafShape) -> Bounds {
+/// Returns the object-space box of a unit analytic primitive.
+fn analytic_bounds(shape: Analytic) -> Bounds {
     match shape {
-        LeafShape::Cube => Bounds {
+        Analytic::Cube => Bounds {
             min: Vec3A::ZERO,
             max: Vec3A::ONE,
         },
-        LeafShape::Cone => Bounds {
+        Analytic::Cone => Bounds {
             min: Vec3A::new(-1.0, -1.0, 0.0),
             max: Vec3A::ONE,
         },
-        LeafShape::Sphere | LeafShape::Cylinder => Bounds {
+        Analytic::Sphere | Analytic::Cylinder => Bounds {
             min: Vec3A::NEG_ONE,
             max: Vec3A::ONE,
         },
@@ -367,6 +371,7 @@ impl Builder<'_> {
             );
             return Ok(());
         }
+        let analytic = |a: Analytic| (Shape::Analytic(a), analytic_bounds(a));
         let (shape, object_bounds) = match &node.kind {
             NodeKind::Group => return Ok(()),
             NodeKind::Mesh(id) => {
@@ -395,16 +400,10 @@ impl Builder<'_> {
                 self.csgs.push(CsgTree { nodes, root });
                 (Shape::Csg(self.csgs.len() as u32 - 1), bounds)
             }
-            kind => {
-                let leaf = leaf_shape(kind).expect("every other kind is an analytic leaf");
-                let shape = match leaf {
-                    LeafShape::Sphere => Shape::Sphere,
-                    LeafShape::Cube => Shape::Cube,
-                    LeafShape::Cylinder => Shape::Cylinder,
-                    LeafShape::Cone => Shape::Cone,
-                };
-                (shape, leaf_bounds(leaf))
-            }
+            NodeKind::Sphere | NodeKind::NhSphere { .. } => analytic(Analytic::Sphere),
+            NodeKind::Cube | NodeKind::NhBox { .. } => analytic(Analytic::Cube),
+            NodeKind::Cylinder => analytic(Analytic::Cylinder),
+            NodeKind::Cone => analytic(Analytic::Cone),
         };
         let bounds = transform_bounds(&world, object_bounds);
         if !bounds.is_finite() || !to_f32(world).is_finite() || !to_f32(world.inverse()).is_finite()
@@ -422,14 +421,14 @@ impl Builder<'_> {
             Shape::Mesh(m) => {
                 node.material.is_none() && !self.meshes[m as usize].materials.is_empty()
             }
-            _ => false,
+            Shape::Analytic(_) | Shape::Csg(_) => false,
         };
         let material = match shape {
             // A CSG hit takes the material of the operand hit; the instance's is a fallback.
             Shape::Csg(_) => self.fallback,
             // Each triangle takes its file material; the instance's is a fallback.
-            _ if mesh_materials => self.fallback,
-            _ => self.material_of(p.node, None),
+            Shape::Mesh(_) if mesh_materials => self.fallback,
+            Shape::Mesh(_) | Shape::Analytic(_) => self.material_of(p.node, None),
         };
         self.instances.push(Instance {
             shape,
@@ -515,49 +514,46 @@ impl Builder<'_> {
         } else {
             frame * node.transform
         };
-        match &node.kind {
-            NodeKind::Csg { op, a, b } => {
-                let material = node.material.map(|m| m.0).or(inherited);
-                let (ia, ba) = self.csg_node(*a, m, material, nodes, depth + 1, false)?;
-                let (ib, bb) = self.csg_node(*b, m, material, nodes, depth + 1, false)?;
-                nodes.push(CsgNode::Op {
-                    op: *op,
-                    a: ia,
-                    b: ib,
-                });
-                Ok((nodes.len() as u32 - 1, ba.union(bb)))
-            }
-            kind => {
-                let Some(shape) = leaf_shape(kind) else {
-                    return Err(Error::at(
-                        &node.loc,
-                        format!(
-                            "CSG operand '{}' is a {}; CSG takes spheres, cubes, cylinders and other CSG nodes",
-                            node.name,
-                            kind.label()
-                        ),
-                    ));
-                };
-                let m = m * local_transform(kind);
-                if !is_invertible(&m) {
-                    return Err(Error::at(
-                        &node.loc,
-                        format!("CSG operand '{}' has a singular transform", node.name),
-                    ));
-                }
-                let material = self.material_of(id, inherited);
-                nodes.push(CsgNode::Leaf {
-                    shape,
-                    leaf_from_csg: to_f32(m.inverse()),
-                    normal_to_csg: normal_matrix(&m.matrix3),
-                    material,
-                });
-                Ok((
-                    nodes.len() as u32 - 1,
-                    transform_bounds(&m, leaf_bounds(shape)),
-                ))
-            }
+        if let NodeKind::Csg { op, a, b } = &node.kind {
+            let material = node.material.map(|m| m.0).or(inherited);
+            let (ia, ba) = self.csg_node(*a, m, material, nodes, depth + 1, false)?;
+            let (ib, bb) = self.csg_node(*b, m, material, nodes, depth + 1, false)?;
+            nodes.push(CsgNode::Op {
+                op: *op,
+                a: ia,
+                b: ib,
+            });
+            return Ok((nodes.len() as u32 - 1, ba.union(bb)));
         }
+        let kind = &node.kind;
+        let Some(shape) = analytic_of(kind) else {
+            return Err(Error::at(
+                &node.loc,
+                format!(
+                    "CSG operand '{}' is a {}; CSG takes spheres, cubes, cylinders and other CSG nodes",
+                    node.name,
+                    kind.label()
+                ),
+            ));
+        };
+        let m = m * local_transform(kind);
+        if !is_invertible(&m) {
+            return Err(Error::at(
+                &node.loc,
+                format!("CSG operand '{}' has a singular transform", node.name),
+            ));
+        }
+        let material = self.material_of(id, inherited);
+        nodes.push(CsgNode::Leaf {
+            shape,
+            leaf_from_csg: to_f32(m.inverse()),
+            normal_to_csg: normal_matrix(&m.matrix3),
+            material,
+        });
+        Ok((
+            nodes.len() as u32 - 1,
+            transform_bounds(&m, analytic_bounds(shape)),
+        ))
     }
 }
 
@@ -580,7 +576,7 @@ impl Scene {
                     CsgNode::Op { .. } => None,
                 })
                 .collect(),
-            _ => vec![inst.material],
+            Shape::Mesh(_) | Shape::Analytic(_) => vec![inst.material],
         }
     }
 
@@ -615,13 +611,17 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.tlas.any(ray, |r, i| {
             let inst = &self.instances[i];
-            if let Shape::Mesh(m) = inst.shape {
-                let local = object_ray(inst, r);
-                return self.meshes[m as usize]
-                    .any_hit(&local)
-                    .unwrap_or(f32::INFINITY);
+            match inst.shape {
+                Shape::Mesh(m) => {
+                    let local = object_ray(inst, r);
+                    self.meshes[m as usize]
+                        .any_hit(&local)
+                        .unwrap_or(f32::INFINITY)
+                }
+                Shape::Analytic(_) | Shape::Csg(_) => {
+                    self.hit_instance(i, r).map_or(f32::INFINITY, |h| h.t)
+                }
             }
-            self.hit_instance(i, r).map_or(f32::INFINITY, |h| h.t)
         })
     }
 
@@ -642,10 +642,7 @@ impl Scene {
             })
         };
         let hit = match inst.shape {
-            Shape::Sphere => analytic(sphere::interval(local.origin, local.dir)),
-            Shape::Cube => analytic(cube::interval(local.origin, local.dir)),
-            Shape::Cylinder => analytic(cylinder::interval(local.origin, local.dir)),
-            Shape::Cone => analytic(cone::interval(local.origin, local.dir)),
+            Shape::Analytic(a) => analytic(a.interval(local.origin, local.dir)),
             Shape::Mesh(m) => self.meshes[m as usize]
                 .intersect(&local)
                 .map(|(tri, h)| Hit {
@@ -712,13 +709,13 @@ impl Scene {
                 let uv = t0 * w0 + t1 * hit.b1 + t2 * hit.b2;
                 (p, ng, ns, uv, triangle_dpdu([v0, v1, v2], [t0, t1, t2]))
             }
-            Shape::Sphere => {
+            Shape::Analytic(Analytic::Sphere) => {
                 // Re-project onto the sphere: the hit point's error then no longer grows with t.
                 let p = local.at(hit.t);
                 let p = p / p.length();
                 let (uv, dpdu) = (
-                    analytic_uv(LeafShape::Sphere, p, hit.face),
-                    analytic_dpdu(LeafShape::Sphere, p, 0),
+                    analytic_uv(Analytic::Sphere, p, hit.face),
+                    analytic_dpdu(Analytic::Sphere, p, 0),
                 );
                 (p, p, p, uv, dpdu)
             }
@@ -739,13 +736,8 @@ impl Scene {
                 };
                 (p, hit.normal, hit.normal, uv, dpdu)
             }
-            shape => {
+            Shape::Analytic(leaf @ (Analytic::Cube | Analytic::Cylinder | Analytic::Cone)) => {
                 let p = local.at(hit.t);
-                let leaf = match shape {
-                    Shape::Cube => LeafShape::Cube,
-                    Shape::Cylinder => LeafShape::Cylinder,
-                    _ => LeafShape::Cone,
-                };
                 let (uv, dpdu) = (
                     analytic_uv(leaf, p, hit.face),
                     analytic_dpdu(leaf, p, hit.face),

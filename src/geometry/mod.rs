@@ -17,7 +17,6 @@ pub mod hit;
 pub mod mesh;
 pub mod ray;
 pub mod sphere;
-pub mod tri4;
 pub mod triangle;
 pub mod uv;
 pub mod water;

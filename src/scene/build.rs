@@ -10,12 +10,12 @@
 //! over); a mesh instance transforms the ray and traverses the mesh's own BVH (the bottom level).
 //! A 1M-triangle mesh instanced 10 times thus costs one mesh of memory plus ten instances.
 
+use crate::accel::mesh::MeshGeom;
 use crate::accel::{Bounds, Bvh};
 use crate::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
 use crate::error::{Error, Loc, Result};
 use crate::geometry::csg::{CsgNode, CsgTree};
 pub use crate::geometry::hit::{Hit, SurfaceHit};
-use crate::geometry::mesh::MeshGeom;
 use crate::geometry::triangle;
 use crate::geometry::uv::{analytic_dpdu, analytic_uv};
 use crate::geometry::{Analytic, Interval, Ray};

@@ -1,9 +1,16 @@
-//! Scenes: the step that turns a [`crate::desc::SceneDesc`] into the render-ready [`Scene`]
-//! (flattening, loading mesh files and images, building the two-level BVH) and the per-ray
-//! queries on it.
+//! Scenes: the step that turns a [`crate::desc::SceneDesc`] into the render-ready [`Scene`], and
+//! the per-ray queries on it.
+//!
+//! - [`types`]: what the renderer traces ([`Scene`], [`Instance`], the primitive enum [`Shape`]);
+//! - [`build`]: description → scene (flattening, instancing, CSG trees, the two-level BVH), reading
+//!   files through [`meshes`] (mesh files) and [`images`] (textures and normal maps);
+//! - [`query`]: closest hit, any hit and the surface at a hit.
 
 pub mod build;
 pub mod images;
 pub mod meshes;
+pub mod query;
+pub mod types;
 
-pub use build::{Instance, Scene, Shape, build_scene};
+pub use build::build_scene;
+pub use types::{Instance, Scene, Shape};

@@ -43,4 +43,4 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 
-pub use error::{Error, Loc};
+pub use error::{Error, Fault, Loc};

@@ -3,6 +3,7 @@
 
 mod common;
 
+use caustic::Fault;
 use caustic::desc::{CsgOp, NodeKind};
 use caustic::scene::build::{build_scene, count_placements};
 use caustic::scene::meshes::load_meshes;
@@ -146,6 +147,7 @@ fn textures_resolve_like_meshes_and_missing_ones_are_located_errors() {
         &dir,
     )
     .unwrap_err();
+    assert_eq!(e.fault(), Some(Fault::NotFound), "{e}");
     assert!(
         e.to_string()
             .starts_with("test.lua:2: bump map 'nope.png' not found"),
@@ -281,9 +283,9 @@ fn render_arguments_are_validated() {
 #[test]
 fn missing_and_malformed_meshes_name_the_file_and_line() {
     let dir = out_dir("lua-meshes");
-    let e = run_lua_in("\nm = gr.mesh('m', 'nowhere.obj')", &dir)
-        .unwrap_err()
-        .to_string();
+    let e = run_lua_in("\nm = gr.mesh('m', 'nowhere.obj')", &dir).unwrap_err();
+    assert_eq!(e.fault(), Some(Fault::NotFound), "{e}");
+    let e = e.to_string();
     assert!(
         e.starts_with("test.lua:2: mesh file 'nowhere.obj' not found"),
         "{e}"
@@ -292,12 +294,24 @@ fn missing_and_malformed_meshes_name_the_file_and_line() {
     // the error still names the gr.mesh line.
     std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap();
     let d = run_lua_in("m = gr.mesh('m', 'bad.obj')", &dir).unwrap();
-    let e = load_meshes(&d).unwrap_err().to_string();
+    let e = load_meshes(&d).unwrap_err();
+    assert_eq!(e.fault(), Some(Fault::MeshLoad), "{e}");
+    let e = e.to_string();
     assert!(
         e.starts_with("test.lua:1: cannot load mesh 'bad.obj': "),
         "{e}"
     );
     assert!(e.contains("bad.obj:4:"), "the OBJ line must be named: {e}");
+    // Through gr.render the error is the same: the gr.mesh line, not the gr.render one.
+    let src = "m = gr.mesh('m', 'bad.obj')\nr = gr.node('r'); r:add_child(m)\n\
+               gr.render(r, 'x.png', 4, 4, {0,0,5}, {0,0,-1}, {0,1,0}, 50, {0,0,0}, {gr.light({0,0,5}, {1,1,1}, {1,0,0})})";
+    let e = common::render_films(src.as_bytes(), "test.lua", &dir).unwrap_err();
+    assert_eq!(e.fault(), Some(Fault::MeshLoad), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("test.lua:1: cannot load mesh 'bad.obj': "),
+        "{e}"
+    );
 }
 
 #[test]
@@ -371,6 +385,22 @@ fn degenerate_and_extreme_transforms_are_skipped_or_rejected_not_traced() {
 
 #[test]
 fn unknown_gr_functions_list_the_functions_that_exist() {
+    let fault = |src: &str| run_lua(src).unwrap_err().fault();
+    assert_eq!(fault("s = gr.spere('s')"), Some(Fault::UnknownFunction));
+    assert_eq!(
+        fault("s = gr.sphere('s')\ns:spin()"),
+        Some(Fault::UnknownFunction)
+    );
+    assert_eq!(
+        fault("s = gr.nh_sphere('s', {0, 0, 0})"),
+        Some(Fault::BadArgument)
+    );
+    assert_eq!(
+        fault("s = gr.sphere('s')\ns:translate(1, 0/0, 0)"),
+        Some(Fault::BadArgument)
+    );
+    // Errors raised by the script itself are Lua's, with no caustic fault.
+    assert_eq!(fault("error('stop')"), None);
     assert_eq!(
         lua_error("\ns = gr.spere('s')"),
         "test.lua:2: unknown function gr.spere (caustic has gr.node, gr.joint, gr.sphere, gr.cube, \

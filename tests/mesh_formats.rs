@@ -481,13 +481,17 @@ fn gr_mesh_picks_the_loader_by_extension() {
     assert_same_mesh(&meshes[0], &meshes[1]);
     assert_eq!(meshes[0].triangle_count(), 2);
     let error = |src: &str| run_lua_in(src, &dir).unwrap_err().to_string();
+    let ply = run_lua_in("m = gr.mesh('m', 'quad.ply')", &dir).unwrap_err();
+    assert_eq!(ply.fault(), Some(caustic::Fault::MeshLoad), "{ply}");
     assert_eq!(
         error("\nm = gr.mesh('m', 'quad.ply')"),
         "test.lua:2: cannot load mesh 'quad.ply': unsupported format '.ply' (caustic reads .obj, .gltf and .glb)"
     );
     // The format is checked by gr.mesh; the file is read when a scene is built.
     let d = run_lua_in("m = gr.mesh('m', 'bad.gltf')", &dir).unwrap();
-    let e = load_meshes(&d).unwrap_err().to_string();
+    let e = load_meshes(&d).unwrap_err();
+    assert_eq!(e.fault(), Some(caustic::Fault::MeshLoad), "{e}");
+    let e = e.to_string();
     let file = dir.join("bad.gltf");
     let prefix = format!(
         "test.lua:1: cannot load mesh 'bad.gltf': {}: invalid glTF JSON",

@@ -12,7 +12,7 @@
 //! ```
 
 use crate::desc::{LightId, MaterialId, NodeId};
-use crate::error::{Error, Loc};
+use crate::error::{Error, Fault, Loc};
 use glam::{DVec3, Vec3};
 use mlua::{Lua, MultiValue, Value};
 
@@ -91,7 +91,12 @@ impl<'a> Args<'a> {
 
     /// Returns an error at the caller's line with a free-form message.
     pub fn fail(&self, message: impl Into<String>) -> mlua::Error {
-        lua_err(Error::at(&self.loc, message))
+        self.fault(Fault::Other, message)
+    }
+
+    /// Returns an error of kind `fault` at the caller's line.
+    pub fn fault(&self, fault: Fault, message: impl Into<String>) -> mlua::Error {
+        lua_err(Error::fault_at(fault, &self.loc, message))
     }
 
     /// Returns lauxlib's `bad argument #i to 'f' (msg)` error.
@@ -102,9 +107,15 @@ impl<'a> Args<'a> {
             i as i64
         };
         if shown == 0 {
-            return self.fail(format!("calling '{}' on bad self ({msg})", self.fname));
+            return self.fault(
+                Fault::BadArgument,
+                format!("calling '{}' on bad self ({msg})", self.fname),
+            );
         }
-        self.fail(format!("bad argument #{shown} to '{}' ({msg})", self.fname))
+        self.fault(
+            Fault::BadArgument,
+            format!("bad argument #{shown} to '{}' ({msg})", self.fname),
+        )
     }
 
     fn type_error(&self, i: usize, expected: &str) -> mlua::Error {

@@ -22,7 +22,7 @@ use crate::desc::{
     CameraDesc, CsgOp, LightDesc, LightId, LightShape, MaterialDesc, MaterialId, MeshDesc,
     MeshFormat, MeshId, MeshSource, NodeKind, RenderDesc,
 };
-use crate::error::Error;
+use crate::error::{Error, Fault};
 use crate::lua::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
 use glam::{DAffine3, DVec3};
 use mlua::{Lua, MetaMethod, MultiValue, Table, UserData, Value};
@@ -109,7 +109,8 @@ pub(super) fn install(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()>
                 .filter(|(_, call, _)| *call == Call::Function)
                 .map(|(name, _, _)| *name)
                 .collect();
-            Err(lua_err(Error::at(
+            Err(lua_err(Error::fault_at(
+                Fault::UnknownFunction,
                 &caller_loc(lua),
                 format!(
                     "unknown function gr.{key} (caustic has gr.{})",
@@ -177,7 +178,7 @@ fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
 /// Resolves a mesh file and checks its format; the file is read when a scene is built.
 fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> {
     let Some(path) = s.resolve_input(given) else {
-        return Err(a.fail(s.not_found("mesh file", given)));
+        return Err(a.fault(Fault::NotFound, s.not_found("mesh file", given)));
     };
     let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
     if let Some(&id) = s.mesh_cache.get(&key) {
@@ -189,7 +190,7 @@ fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> 
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase)
             .unwrap_or_default();
-        return Err(a.fail(format!(
+        return Err(a.fault(Fault::MeshLoad, format!(
             "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj, .gltf and .glb)"
         )));
     };
@@ -308,7 +309,7 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
                     }
                     Ok(None)
                 }
-                None => Err(a.fail(s.not_found(what, &given))),
+                None => Err(a.fault(Fault::NotFound, s.not_found(what, &given))),
             },
         }
     };
@@ -508,7 +509,8 @@ impl UserData for NodeRef {
             let f: Value = gr.raw_get(key.clone())?;
             if f.is_nil() {
                 let key = key.to_string().unwrap_or_else(|_| "?".into());
-                return Err(lua_err(Error::at(
+                return Err(lua_err(Error::fault_at(
+                    Fault::UnknownFunction,
                     &caller_loc(lua),
                     format!("gr.node has no method '{key}'"),
                 )));

@@ -18,7 +18,7 @@
 use crate::accel::mesh::MeshGeom;
 use crate::accel::{Bounds, Bvh};
 use crate::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
-use crate::error::{Error, Loc, Result};
+use crate::error::{Error, Fault, Loc, Result};
 use crate::geometry::Analytic;
 use crate::geometry::csg::{CsgNode, CsgTree};
 pub use crate::geometry::hit::{Hit, SurfaceHit};
@@ -387,7 +387,8 @@ impl Builder<'_> {
         let desc = &self.desc.meshes[id.0 as usize];
         let data = self.mesh_files.get(self.desc, id)?;
         if let Some(bad) = data.positions.iter().position(|p| !p.is_finite()) {
-            return Err(Error::at(
+            return Err(Error::fault_at(
+                Fault::MeshLoad,
                 &desc.loc,
                 format!(
                     "mesh {} has a non-finite vertex (#{})",
@@ -401,7 +402,8 @@ impl Builder<'_> {
             && (ids.len() != data.triangles.len()
                 || ids.iter().any(|&m| m as usize >= data.materials.len()))
         {
-            return Err(Error::at(
+            return Err(Error::fault_at(
+                Fault::MeshLoad,
                 &desc.loc,
                 format!(
                     "mesh {} has per-triangle materials that do not match its triangles or materials",

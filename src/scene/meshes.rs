@@ -15,7 +15,7 @@
 //! ```
 
 use crate::desc::{MeshDesc, MeshFormat, MeshId, MeshSource, SceneDesc};
-use crate::error::{Error, Result};
+use crate::error::{Error, Fault, Result};
 use crate::geometry::mesh::MeshData;
 use crate::io::{gltf, obj};
 use std::collections::HashMap;
@@ -67,7 +67,11 @@ pub fn load_mesh(mesh: &MeshDesc) -> Result<MeshData> {
             format,
         } => {
             let cannot = |e: &dyn std::fmt::Display| {
-                Error::at(&mesh.loc, format!("cannot load mesh '{given}': {e}"))
+                Error::fault_at(
+                    Fault::MeshLoad,
+                    &mesh.loc,
+                    format!("cannot load mesh '{given}': {e}"),
+                )
             };
             match format {
                 MeshFormat::Obj => obj::load_obj(path).map_err(|e| cannot(&e)),

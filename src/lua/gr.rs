@@ -1,4 +1,4 @@
-//! The `gr` table: every function a script can call, installed from one list of (name, function).
+//! The `gr` table: every function a script can call, installed from one list of entries.
 //!
 //! The API is the CS488 A4 starter's (see `../shared/docs/cs488_lua_api.md` §1–§5) plus the
 //! extended ray tracer's commands, with every extra argument optional:

@@ -3,8 +3,8 @@
 //! Nothing below this layer knows Lua exists: a script run yields plain data, and `gr.render`
 //! hands the description as it stands to a [`RenderHook`] (the CLI builds and renders the scene
 //! there). The layer has three parts:
-//! - [`sandbox`](self::sandbox): the Lua state and its standard library;
-//! - [`gr`](self::gr): the `gr` table, built from one list of (name, function);
+//! - `sandbox.rs`: the Lua state and its standard library;
+//! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
 //! - [`args`]: argument checks with lauxlib's messages and the calling script line.
 //!
 //! This module owns what a run shares: the description being filled, path resolution and

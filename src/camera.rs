@@ -4,8 +4,8 @@
 //! `u = normalize(w × up)`, `v = u × w`. `fov` is the vertical field of view in degrees. Pixel
 //! `(x, y)` spans `[x, x+1) × [y, y+1)` with `y = 0` the top row, so its centre is `(x+½, y+½)`.
 
+use crate::desc::CameraDesc;
 use crate::geometry::Ray;
-use crate::scene::desc::CameraDesc;
 use glam::Vec3A;
 
 /// A camera that turns image-plane positions into world-space rays.

@@ -33,6 +33,24 @@ impl fmt::Display for Loc {
     }
 }
 
+/// What kind of fault an [`Error::Script`] reports, for callers and tests that branch on it
+/// rather than on the message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fault {
+    /// A `gr` function got a bad argument: lauxlib's `bad argument #3 to 'nh_sphere' (…)`.
+    BadArgument,
+    /// The script used a `gr` function or node method that does not exist.
+    UnknownFunction,
+    /// A file the script names (mesh, texture, bump map) is in neither the working directory
+    /// nor the script's folder.
+    NotFound,
+    /// A mesh file could not be read or parsed, is in a format caustic does not read, or holds
+    /// data the scene cannot use (a non-finite vertex, mismatched per-triangle materials).
+    MeshLoad,
+    /// Any other fault at a script line: a cycle, a singular CSG operand, an unreadable texture…
+    Other,
+}
+
 /// Everything that can go wrong between reading a script and writing its images.
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum Error {
@@ -42,7 +60,12 @@ pub enum Error {
     Lua(String),
     /// A fault found by caustic at a known script line (bad argument, missing file, bad scene).
     #[error("{loc}: {message}")]
-    Script { loc: Loc, message: String },
+    Script {
+        loc: Loc,
+        /// What went wrong, for matching; the message says it for people.
+        fault: Fault,
+        message: String,
+    },
     /// A file that could not be read or written, outside any script line.
     #[error("{}: {message}", path.display())]
     File { path: PathBuf, message: String },
@@ -52,11 +75,25 @@ pub enum Error {
 }
 
 impl Error {
-    /// Returns a [`Error::Script`] at `loc`.
+    /// Returns a [`Error::Script`] at `loc` of kind [`Fault::Other`].
     pub fn at(loc: &Loc, message: impl Into<String>) -> Error {
+        Error::fault_at(Fault::Other, loc, message)
+    }
+
+    /// Returns a [`Error::Script`] at `loc` of kind `fault`.
+    pub fn fault_at(fault: Fault, loc: &Loc, message: impl Into<String>) -> Error {
         Error::Script {
             loc: loc.clone(),
+            fault,
             message: message.into(),
+        }
+    }
+
+    /// Returns the kind of a [`Error::Script`], or `None` for the other variants.
+    pub fn fault(&self) -> Option<Fault> {
+        match self {
+            Error::Script { fault, .. } => Some(*fault),
+            Error::Lua(_) | Error::File { .. } | Error::Usage(_) => None,
         }
     }
 }

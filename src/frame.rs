@@ -8,7 +8,7 @@
 //!     gr.render(s, 'x.png', 9, 9, {0,0,5}, {0,0,-1}, {0,1,0}, 50, {0,0,0},
 //!               {gr.light({0,0,5}, {1,1,1}, {1,0,0})})";
 //! let no_render = Box::new(|_: &_, _: &_| Ok(()));
-//! let desc = caustic::scene::lua::run_source(src, "doc.lua", ".".as_ref(), no_render).unwrap();
+//! let desc = caustic::lua::run_source(src, "doc.lua", ".".as_ref(), no_render).unwrap();
 //! let f = frame::render_desc(&desc, &desc.renders[0], 1.0, None, &Settings::default(), &NoProgress)
 //!     .unwrap();
 //! // The sphere faces the light head-on at the centre: kd · I · cos 0 / att(4) = 1.
@@ -16,12 +16,12 @@
 //! ```
 
 use crate::camera::Camera;
+use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::film::{Film, Window};
 use crate::integrator::photon_map::{Gi, GiSettings, GiStats};
 use crate::integrator::{GiMode, Settings, plan};
 use crate::progress::Progress;
-use crate::scene::desc::{RenderDesc, SceneDesc};
 use crate::scene::{Scene, build_scene};
 
 pub use crate::integrator::Stats;

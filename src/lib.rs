@@ -4,7 +4,7 @@
 //! Each arrow is one function a test can call without Lua:
 //!
 //! ```text
-//! Lua script ──scene::lua::run_script──▶ SceneDesc (plain data, every entry tagged with file:line)
+//! Lua script ──lua::run_script──▶ SceneDesc (plain data, every entry tagged with file:line)
 //!            ──scene::build::build_scene──▶ Scene (world-space instances, two-level BVH, materials, lights)
 //!            ──render::render──▶ Film (linear RGB) ──io::image::write_png──▶ PNG on disk
 //! ```
@@ -23,13 +23,14 @@
 //!   or the file at fault. The hot path (traversal, shading) returns values or `Option`, never `Result`.
 //!
 //! # Glossary
-//! - *description*: what the script said ([`scene::desc`]); *scene*: what the renderer traces ([`scene::Scene`]).
+//! - *description*: what the script said ([`desc`]); *scene*: what the renderer traces ([`scene::Scene`]).
 //! - *instance*: one placement of a shape in the world, with its transform and material.
 //! - *TLAS/BLAS*: the top-level BVH over instances and the per-mesh BVH over triangles ([`accel`]).
 
 pub mod accel;
 pub mod camera;
 pub mod cli;
+pub mod desc;
 pub mod error;
 pub mod film;
 pub mod frame;
@@ -37,6 +38,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod io;
 pub mod light;
+pub mod lua;
 pub mod material;
 pub mod mem;
 pub mod photon;
@@ -46,4 +48,4 @@ pub mod sampling;
 pub mod scene;
 pub mod stats;
 
-pub use error::{Error, Loc};
+pub use error::{Error, Fault, Loc};

@@ -32,8 +32,8 @@
 //!   so that direct and photon lighting agree.
 //! - Attenuation applies to light from lights only, never to the ambient term.
 
+use crate::desc::{LightDesc, LightShape};
 use crate::geometry::Ray;
-use crate::scene::desc::{LightDesc, LightShape};
 use glam::Vec3A;
 use std::f32::consts::{PI, TAU};
 

@@ -18,8 +18,8 @@ pub mod medium;
 pub mod perlin;
 pub mod texture;
 
+use crate::desc::MaterialDesc;
 use crate::geometry::mesh::MeshMaterial;
-use crate::scene::desc::MaterialDesc;
 use glam::{Vec2, Vec3A};
 use std::sync::Arc;
 use texture::{BumpMap, Texture};

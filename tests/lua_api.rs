@@ -3,8 +3,10 @@
 
 mod common;
 
+use caustic::Fault;
+use caustic::desc::{CsgOp, NodeKind};
 use caustic::scene::build::{build_scene, count_placements};
-use caustic::scene::desc::{CsgOp, NodeKind};
+use caustic::scene::meshes::load_meshes;
 use common::{lua_error, out_dir, run_lua, run_lua_in};
 use glam::DVec3;
 
@@ -145,6 +147,7 @@ fn textures_resolve_like_meshes_and_missing_ones_are_located_errors() {
         &dir,
     )
     .unwrap_err();
+    assert_eq!(e.fault(), Some(Fault::NotFound), "{e}");
     assert!(
         e.to_string()
             .starts_with("test.lua:2: bump map 'nope.png' not found"),
@@ -280,22 +283,35 @@ fn render_arguments_are_validated() {
 #[test]
 fn missing_and_malformed_meshes_name_the_file_and_line() {
     let dir = out_dir("lua-meshes");
-    let e = run_lua_in("\nm = gr.mesh('m', 'nowhere.obj')", &dir)
-        .unwrap_err()
-        .to_string();
+    let e = run_lua_in("\nm = gr.mesh('m', 'nowhere.obj')", &dir).unwrap_err();
+    assert_eq!(e.fault(), Some(Fault::NotFound), "{e}");
+    let e = e.to_string();
     assert!(
         e.starts_with("test.lua:2: mesh file 'nowhere.obj' not found"),
         "{e}"
     );
+    // A file is read when a scene is built (here: as `caustic info` does, to count its triangles);
+    // the error still names the gr.mesh line.
     std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap();
-    let e = run_lua_in("m = gr.mesh('m', 'bad.obj')", &dir)
-        .unwrap_err()
-        .to_string();
+    let d = run_lua_in("m = gr.mesh('m', 'bad.obj')", &dir).unwrap();
+    let e = load_meshes(&d).unwrap_err();
+    assert_eq!(e.fault(), Some(Fault::MeshLoad), "{e}");
+    let e = e.to_string();
     assert!(
         e.starts_with("test.lua:1: cannot load mesh 'bad.obj': "),
         "{e}"
     );
     assert!(e.contains("bad.obj:4:"), "the OBJ line must be named: {e}");
+    // Through gr.render the error is the same: the gr.mesh line, not the gr.render one.
+    let src = "m = gr.mesh('m', 'bad.obj')\nr = gr.node('r'); r:add_child(m)\n\
+               gr.render(r, 'x.png', 4, 4, {0,0,5}, {0,0,-1}, {0,1,0}, 50, {0,0,0}, {gr.light({0,0,5}, {1,1,1}, {1,0,0})})";
+    let e = common::render_films(src.as_bytes(), "test.lua", &dir).unwrap_err();
+    assert_eq!(e.fault(), Some(Fault::MeshLoad), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("test.lua:1: cannot load mesh 'bad.obj': "),
+        "{e}"
+    );
 }
 
 #[test]
@@ -320,7 +336,10 @@ fn add_child_cycles_are_reported_not_followed() {
 fn legacy_inline_meshes_are_accepted() {
     let d = run_lua("m = gr.mesh('quad', {{0,0,0}, {1,0,0}, {1,1,0}, {0,1,0}}, {{0, 1, 2, 3}})")
         .unwrap();
-    assert_eq!(d.meshes[0].data.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+    assert_eq!(
+        load_meshes(&d).unwrap()[0].triangles,
+        vec![[0, 1, 2], [0, 2, 3]]
+    );
     let e = lua_error("m = gr.mesh('q', {{0,0,0}, {1,0,0}, {1,1,0}}, {{0, 1, 3}})");
     assert_eq!(
         e,
@@ -361,5 +380,39 @@ fn degenerate_and_extreme_transforms_are_skipped_or_rejected_not_traced() {
     assert_eq!(
         build("s = gr.sphere('s'); s:set_material(m); r:add_child(s)").unwrap(),
         1
+    );
+}
+
+#[test]
+fn unknown_gr_functions_list_the_functions_that_exist() {
+    let fault = |src: &str| run_lua(src).unwrap_err().fault();
+    assert_eq!(fault("s = gr.spere('s')"), Some(Fault::UnknownFunction));
+    assert_eq!(
+        fault("s = gr.sphere('s')\ns:spin()"),
+        Some(Fault::UnknownFunction)
+    );
+    assert_eq!(
+        fault("s = gr.nh_sphere('s', {0, 0, 0})"),
+        Some(Fault::BadArgument)
+    );
+    assert_eq!(
+        fault("s = gr.sphere('s')\ns:translate(1, 0/0, 0)"),
+        Some(Fault::BadArgument)
+    );
+    // Errors raised by the script itself are Lua's, with no caustic fault.
+    assert_eq!(fault("error('stop')"), None);
+    assert_eq!(
+        lua_error("\ns = gr.spere('s')"),
+        "test.lua:2: unknown function gr.spere (caustic has gr.node, gr.joint, gr.sphere, gr.cube, \
+         gr.cylinder, gr.cone, gr.nh_sphere, gr.nh_box, gr.mesh, gr.union, gr.intersection, \
+         gr.difference, gr.material, gr.light, gr.area_light, gr.sphere_light, gr.render)"
+    );
+    assert_eq!(
+        lua_error("s = gr.nh_sphere('s', {0, 0, 0})"),
+        "test.lua:1: bad argument #3 to 'nh_sphere' (number expected, got no value)"
+    );
+    assert_eq!(
+        lua_error("s = gr.sphere('s')\ns:translate(1, 0/0, 0)"),
+        "test.lua:2: bad argument #2 to 'translate' (finite number expected, got NaN)"
     );
 }

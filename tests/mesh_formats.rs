@@ -6,6 +6,7 @@ mod common;
 
 use caustic::geometry::mesh::MeshMaterial;
 use caustic::io::gltf::{load_gltf, parse_gltf};
+use caustic::scene::meshes::load_meshes;
 use common::{GltfFile, assert_same_mesh, out_dir};
 use glam::{Vec2, Vec3, vec3};
 use std::path::Path;
@@ -476,14 +477,21 @@ fn gr_mesh_picks_the_loader_by_extension() {
         &dir,
     )
     .unwrap();
-    assert_same_mesh(&d.meshes[0].data, &d.meshes[1].data);
-    assert_eq!(d.meshes[0].data.triangle_count(), 2);
+    let meshes = load_meshes(&d).unwrap();
+    assert_same_mesh(&meshes[0], &meshes[1]);
+    assert_eq!(meshes[0].triangle_count(), 2);
     let error = |src: &str| run_lua_in(src, &dir).unwrap_err().to_string();
+    let ply = run_lua_in("m = gr.mesh('m', 'quad.ply')", &dir).unwrap_err();
+    assert_eq!(ply.fault(), Some(caustic::Fault::MeshLoad), "{ply}");
     assert_eq!(
         error("\nm = gr.mesh('m', 'quad.ply')"),
         "test.lua:2: cannot load mesh 'quad.ply': unsupported format '.ply' (caustic reads .obj, .gltf and .glb)"
     );
-    let e = error("m = gr.mesh('m', 'bad.gltf')");
+    // The format is checked by gr.mesh; the file is read when a scene is built.
+    let d = run_lua_in("m = gr.mesh('m', 'bad.gltf')", &dir).unwrap();
+    let e = load_meshes(&d).unwrap_err();
+    assert_eq!(e.fault(), Some(caustic::Fault::MeshLoad), "{e}");
+    let e = e.to_string();
     let file = dir.join("bad.gltf");
     let prefix = format!(
         "test.lua:1: cannot load mesh 'bad.gltf': {}: invalid glTF JSON",

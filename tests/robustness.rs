@@ -3,9 +3,10 @@
 
 mod common;
 
+use caustic::geometry::Analytic;
 use caustic::geometry::{Ray, offset_ray_origin};
-use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
+use caustic::scene::{Scene, Shape};
 use common::run_lua;
 use glam::Vec3A;
 
@@ -78,12 +79,12 @@ fn spawn_from_hits(scale: f32, primaries: usize, seed: u64) -> (usize, usize) {
         };
         let surf = scene.surface(&ray, &hit);
         kinds[match scene.instances[hit.instance as usize].shape {
-            caustic::scene::Shape::Sphere => 0,
-            caustic::scene::Shape::Cube => 1,
-            caustic::scene::Shape::Cylinder => 2,
-            caustic::scene::Shape::Mesh(_) => 3,
-            caustic::scene::Shape::Csg(_) => 4,
-            caustic::scene::Shape::Cone => 5,
+            Shape::Analytic(Analytic::Sphere) => 0,
+            Shape::Analytic(Analytic::Cube) => 1,
+            Shape::Analytic(Analytic::Cylinder) => 2,
+            Shape::Mesh(_) => 3,
+            Shape::Csg(_) => 4,
+            Shape::Analytic(Analytic::Cone) => 5,
         }] += 1;
         for side in [1.0f32, -1.0] {
             let mut w = rng.direction();

@@ -9,8 +9,9 @@
 //! height field (from above) must all hit, with every kernel.
 
 use caustic::accel::Kernel;
+use caustic::accel::mesh::MeshGeom;
 use caustic::geometry::Ray;
-use caustic::geometry::mesh::{MeshData, MeshGeom};
+use caustic::geometry::mesh::MeshData;
 use caustic::geometry::triangle::{self, RayShear, TriangleHit};
 use glam::{DMat3, DVec3, Vec3, Vec3A};
 use std::collections::{BTreeSet, HashMap};

@@ -1,4 +1,6 @@
-//! Bounding volume hierarchies: the only module that imports obvhs.
+//! Bounding volume hierarchies, everything BVH: the builders, the wide nodes and their SIMD slab
+//! tests, the mesh BLAS ([`mesh::MeshGeom`]) and its four-triangle SIMD blocks ([`tri4`]). The
+//! only module that imports obvhs.
 //!
 //! Two builders ([`Builder`]) make the same kind of tree: an 8-wide BVH with float boxes stored
 //! axis by axis ([`wide`]), so one AVX2 slab test (two SSE2 ones, or a scalar loop, see
@@ -25,9 +27,11 @@
 //! primitives do not get zero-thickness boxes that non-conservative slab tests can miss, and the
 //! callbacks must reject `t <= tmin` themselves.
 
+pub mod mesh;
 mod ploc;
 mod sah;
 mod stack;
+pub mod tri4;
 mod wide;
 
 pub use wide::{Kernel, Leaf};

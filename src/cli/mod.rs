@@ -6,13 +6,13 @@ pub mod report;
 pub mod settings;
 
 use crate::camera::Camera;
+use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::frame;
 use crate::integrator::photon_map::GiSettings;
 use crate::io::image::{Tonemap, write_image, write_sample_map};
+use crate::lua::{ScriptOptions, run_script, run_script_with};
 use crate::scene::build::build_scene;
-use crate::scene::desc::{RenderDesc, SceneDesc};
-use crate::scene::lua::{ScriptOptions, run_script, run_script_with};
 use clap::{Args, Parser, Subcommand};
 use report::Bar;
 use settings::RenderJob;
@@ -370,7 +370,7 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
 }
 
 fn export_command(args: ExportArgs) -> Result<()> {
-    if !(args.scale > 0.0 && args.scale <= 16.0) || !(1..=1 << 20).contains(&args.spp) {
+    if !(args.scale > 0.0 && args.scale <= 16.0 && (1..=1 << 20).contains(&args.spp)) {
         return Err(Error::Usage(
             "--scale must be in (0, 16] and --spp in [1, 1048576]".into(),
         ));

@@ -1,11 +1,11 @@
 //! What the command line prints: the progress bar, `--stats` and `caustic info`'s summary.
 
+use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::Result;
 use crate::frame::Frame;
 use crate::integrator::photon_map::GiStats;
 use crate::progress::Progress;
 use crate::scene::build::count_placements;
-use crate::scene::desc::{RenderDesc, SceneDesc};
 use crate::stats::RenderStats;
 use std::path::Path;
 
@@ -161,7 +161,8 @@ pub fn describe(name: &str, desc: &SceneDesc) -> Result<String> {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let triangles: usize = desc.meshes.iter().map(|m| m.data.triangles.len()).sum();
+    let meshes = crate::scene::meshes::load_meshes(desc)?;
+    let triangles: usize = meshes.iter().map(|m| m.triangles.len()).sum();
     let _ = writeln!(s, "scene {name}");
     let _ = writeln!(s, "  nodes: {} ({})", desc.nodes.len(), list(&kinds));
     let _ = writeln!(
@@ -169,12 +170,12 @@ pub fn describe(name: &str, desc: &SceneDesc) -> Result<String> {
         "  meshes: {} files, {triangles} triangles",
         desc.meshes.len()
     );
-    for m in &desc.meshes {
+    for m in &meshes {
         let _ = writeln!(
             s,
             "    {}: {} triangles",
-            m.data.source.display(),
-            m.data.triangles.len()
+            m.source.display(),
+            m.triangles.len()
         );
     }
     let _ = writeln!(s, "  materials: {}", desc.materials.len());

@@ -1,8 +1,9 @@
 //! Constructive solid geometry over analytic primitives, by interval arithmetic along the ray.
 //!
-//! A CSG tree lives in the frame of its CSG node. Each leaf is a convex primitive (sphere, cube,
-//! cylinder) with its own transform and material; along a line, a leaf occupies one interval, and
-//! union, intersection and difference combine sorted lists of disjoint intervals. A difference
+//! A CSG tree lives in the frame of its CSG node. Each leaf is a convex [`Analytic`] primitive
+//! (sphere, cube, cylinder, cone) with its own transform and material; along a line, a leaf
+//! occupies one interval, and union, intersection and difference combine sorted lists of disjoint
+//! intervals. A difference
 //! turns the subtracted solid's boundaries into the result's boundaries with their normals flipped,
 //! so the inner faces of `a − b` face out of the solid. Every boundary keeps the material of the
 //! leaf that made it.
@@ -16,36 +17,15 @@
 //! ring = gr.difference('ring', gr.cylinder('outer'), inner_cylinder)
 //! ```
 
-use super::{Crossing, Interval, cone, cube, cylinder, sphere};
-use crate::scene::desc::CsgOp;
+use super::{Analytic, Crossing};
+use crate::desc::CsgOp;
 use glam::{Affine3A, Mat3A, Vec3A};
-
-/// A convex primitive a CSG leaf can hold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LeafShape {
-    Sphere,
-    Cube,
-    Cylinder,
-    Cone,
-}
-
-impl LeafShape {
-    /// Returns where the full line `o + t·d` (object space) enters and leaves the primitive.
-    pub fn interval(self, o: Vec3A, d: Vec3A) -> Option<Interval> {
-        match self {
-            LeafShape::Sphere => sphere::interval(o, d),
-            LeafShape::Cube => cube::interval(o, d),
-            LeafShape::Cylinder => cylinder::interval(o, d),
-            LeafShape::Cone => cone::interval(o, d),
-        }
-    }
-}
 
 /// A node of a CSG tree; children are indices into [`CsgTree::nodes`].
 #[derive(Clone, Debug)]
 pub enum CsgNode {
     Leaf {
-        shape: LeafShape,
+        shape: Analytic,
         /// Maps the CSG frame into the leaf's object space.
         leaf_from_csg: Affine3A,
         /// Maps leaf-space normals into the CSG frame (inverse transpose).
@@ -331,9 +311,9 @@ mod tests {
         };
         let tree = CsgTree {
             nodes: vec![
-                leaf(LeafShape::Sphere, Affine3A::IDENTITY, 0),
+                leaf(Analytic::Sphere, Affine3A::IDENTITY, 0),
                 leaf(
-                    LeafShape::Sphere,
+                    Analytic::Sphere,
                     Affine3A::from_translation(Vec3A::new(3.0, 0.0, 0.0).into()),
                     0,
                 ),
@@ -343,7 +323,7 @@ mod tests {
                     b: 1,
                 },
                 leaf(
-                    LeafShape::Cube,
+                    Analytic::Cube,
                     Affine3A::from_translation(glam::Vec3::new(0.5, -2.0, -2.0))
                         * Affine3A::from_scale(glam::Vec3::new(3.0, 4.0, 4.0)),
                     1,

@@ -1,5 +1,10 @@
 //! Shapes and their ray intersections, in object space, plus the ray and hit types they share.
 //!
+//! [`Analytic`] is the closed set of analytic primitives (sphere, cube, cylinder, cone): the scene
+//! places them as instances (`scene::Shape::Analytic`), CSG trees hold them as leaves, and
+//! texture mapping ([`uv`]) dispatches on them, so a new primitive is one new variant that every
+//! `match` must handle.
+//!
 //! Every shape intersects an object-space [`Ray`] and reports `t` in the ray's own parameter, so
 //! instances can transform rays without renormalising them. Normals returned here are geometric,
 //! unnormalised object-space normals; [`crate::scene`] turns them into world-space shading frames.
@@ -12,7 +17,6 @@ pub mod hit;
 pub mod mesh;
 pub mod ray;
 pub mod sphere;
-pub mod tri4;
 pub mod triangle;
 pub mod uv;
 pub mod water;
@@ -20,6 +24,42 @@ pub mod water;
 pub use ray::{Ray, offset_ray_origin};
 
 use glam::Vec3A;
+
+/// An analytic primitive in its own object space (the unit shapes of `gr.sphere`, `gr.cube`,
+/// `gr.cylinder` and `gr.cone`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Analytic {
+    /// Centre (0,0,0), radius 1.
+    Sphere,
+    /// The axis-aligned unit cube from (0,0,0) to (1,1,1).
+    Cube,
+    /// Axis z, radius 1, z in [-1, 1], closed by caps.
+    Cylinder,
+    /// Apex at the origin, axis z, radius 1 at z = 1, closed by a cap at z = 1.
+    Cone,
+}
+
+impl Analytic {
+    /// Returns where the full line `o + t·d` (object space) enters and leaves the primitive.
+    pub fn interval(self, o: Vec3A, d: Vec3A) -> Option<Interval> {
+        match self {
+            Analytic::Sphere => sphere::interval(o, d),
+            Analytic::Cube => cube::interval(o, d),
+            Analytic::Cylinder => cylinder::interval(o, d),
+            Analytic::Cone => cone::interval(o, d),
+        }
+    }
+
+    /// Returns the primitive's name, as `--stats` prints it.
+    pub fn label(self) -> &'static str {
+        match self {
+            Analytic::Sphere => "sphere",
+            Analytic::Cube => "cube",
+            Analytic::Cylinder => "cylinder",
+            Analytic::Cone => "cone",
+        }
+    }
+}
 
 /// A point where a line crosses a shape's boundary, in object space.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -18,10 +18,10 @@ use glam::Vec3A;
 #[derive(Clone, Copy, Debug)]
 pub struct RayShear {
     kz: u8,
-    pub(super) sx: f32,
-    pub(super) sy: f32,
-    pub(super) sz: f32,
-    pub(super) origin: Vec3A,
+    pub(crate) sx: f32,
+    pub(crate) sy: f32,
+    pub(crate) sz: f32,
+    pub(crate) origin: Vec3A,
 }
 
 impl RayShear {
@@ -43,7 +43,7 @@ impl RayShear {
 impl RayShear {
     /// Returns the ray-aligned axes `[kx, ky, kz]`: `kz` is the direction's dominant axis.
     #[inline(always)]
-    pub(super) fn axes(&self) -> [usize; 3] {
+    pub(crate) fn axes(&self) -> [usize; 3] {
         match self.kz {
             0 => [1, 2, 0],
             1 => [2, 0, 1],

@@ -23,10 +23,11 @@
 //! dielectrics. Never a silent approximation. Caustic's background gradient has no Mitsuba
 //! counterpart (black there): validation scenes are closed.
 
+use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Loc, Result};
+use crate::geometry::Analytic;
 use crate::light::{Light, Shape as LightShape};
 use crate::material::Material;
-use crate::scene::desc::{RenderDesc, SceneDesc};
 use crate::scene::{Scene, Shape};
 use glam::{Affine3A, Vec3A};
 use std::fmt::Write as _;
@@ -72,7 +73,7 @@ pub fn export(
             .map_err(|e| Error::at(material_loc(desc, inst.material, &node.loc), e))?;
         let m = inst.world_from_object;
         match inst.shape {
-            Shape::Sphere => {
+            Shape::Analytic(Analytic::Sphere) => {
                 let radius = uniform_scale(&m).ok_or_else(|| {
                     at("a non-uniformly scaled sphere is outside the Mitsuba subset".into())
                 })?;
@@ -83,7 +84,7 @@ pub fn export(
                     c.x, c.y, c.z
                 );
             }
-            Shape::Cube => {
+            Shape::Analytic(Analytic::Cube) => {
                 // Mitsuba's cube spans [-1, 1]³: to_world = M · translate(½) · scale(½).
                 let unit = Affine3A::from_scale_rotation_translation(
                     glam::Vec3::splat(0.5),
@@ -104,7 +105,7 @@ pub fn export(
                     "  <shape type=\"obj\"><string name=\"filename\" value=\"{name}\"/>{bsdf}</shape>"
                 );
             }
-            Shape::Cylinder | Shape::Cone | Shape::Csg(_) => {
+            Shape::Analytic(Analytic::Cylinder | Analytic::Cone) | Shape::Csg(_) => {
                 return Err(at(format!(
                     "a {} is outside the Mitsuba subset (spheres, cubes and triangle meshes)",
                     inst.shape.label()
@@ -249,12 +250,7 @@ fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
             normal,
             area,
         } => {
-            let m = Affine3A::from_cols(
-                (u * 0.5).into(),
-                (v * 0.5).into(),
-                normal.into(),
-                centre.into(),
-            );
+            let m = Affine3A::from_cols(u * 0.5, v * 0.5, normal, centre);
             let _ = writeln!(
                 s,
                 "  <shape type=\"rectangle\">{}{black}<emitter type=\"area\"><rgb name=\"radiance\" value=\"{}\"/></emitter></shape>",

@@ -2,106 +2,39 @@
 //!
 //! Flattening walks the DAG from the render's root and emits one [`Instance`] per placement of a
 //! geometry node: the same node reached through several parents is placed several times
-//! (instancing), but a mesh's triangles and BVH are built once and shared by all its instances.
+//! (instancing), but a mesh's file is read once per build ([`MeshCache`]) and its triangles and
+//! BVH are built once and shared by all its instances. Textures are loaded the same way
+//! ([`ImageCache`]). Bad input found here (cycles, singular or overflowing transforms, broken
+//! mesh files, non-finite vertices) is an error naming the script line.
 //!
-//! # Two-level BVH
-//! The top level ([`Scene::tlas`]) is a BVH over instances' world-space boxes. An analytic shape
-//! is intersected in its object space (the ray is transformed, not renormalised, so `t` carries
-//! over); a mesh instance transforms the ray and traverses the mesh's own BVH (the bottom level).
-//! A 1M-triangle mesh instanced 10 times thus costs one mesh of memory plus ten instances.
+//! ```lua
+//! root = gr.node('root')
+//! for i = 1, 4 do
+//!     n = gr.node('inst' .. i); n:translate(3 * i, 0, 0); n:add_child(cow); root:add_child(n)
+//! end
+//! gr.render(root, ...)   -- build_scene: four instances of one mesh
+//! ```
 
+use crate::accel::mesh::MeshGeom;
 use crate::accel::{Bounds, Bvh};
-use crate::error::{Error, Loc, Result};
-use crate::geometry::csg::{CsgNode, CsgTree, LeafShape};
+use crate::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
+use crate::error::{Error, Fault, Loc, Result};
+use crate::geometry::Analytic;
+use crate::geometry::csg::{CsgNode, CsgTree};
 pub use crate::geometry::hit::{Hit, SurfaceHit};
-use crate::geometry::mesh::MeshGeom;
-use crate::geometry::triangle;
-use crate::geometry::uv::{analytic_dpdu, analytic_uv};
-use crate::geometry::{Interval, Ray, cone, cube, cylinder, sphere};
 use crate::light::Light;
 use crate::material::Material;
-use crate::scene::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
 use crate::scene::images::ImageCache;
-use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3A};
-use std::collections::HashMap;
-use std::time::{Duration, Instant};
+use crate::scene::meshes::MeshCache;
+use crate::scene::types::{BuildStats, Instance, Scene, Shape};
+use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec3A};
+use std::collections::{HashMap, HashSet};
+use std::time::Instant;
 
 /// Most node visits flattening may make before it reports a runaway instancing graph.
 pub const MAX_NODE_VISITS: usize = 20_000_000;
 /// Deepest CSG tree accepted.
 const MAX_CSG_DEPTH: usize = 64;
-
-/// What an instance places in the world.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Shape {
-    Sphere,
-    Cube,
-    Cylinder,
-    Cone,
-    /// Index into [`Scene::meshes`].
-    Mesh(u32),
-    /// Index into [`Scene::csgs`].
-    Csg(u32),
-}
-
-impl Shape {
-    /// Returns the kind's name, as `--stats` prints it.
-    pub fn label(&self) -> &'static str {
-        match self {
-            Shape::Sphere => "sphere",
-            Shape::Cube => "cube",
-            Shape::Cylinder => "cylinder",
-            Shape::Cone => "cone",
-            Shape::Mesh(_) => "mesh",
-            Shape::Csg(_) => "csg",
-        }
-    }
-}
-
-/// One placement of a shape in the world.
-#[derive(Clone, Debug)]
-pub struct Instance {
-    pub shape: Shape,
-    pub world_from_object: Affine3A,
-    pub object_from_world: Affine3A,
-    /// Maps object-space normals to world space (inverse transpose of the linear part).
-    pub normal_to_world: Mat3A,
-    /// Index into [`Scene::materials`].
-    pub material: u32,
-    /// True when a mesh instance shades each triangle with its file's material
-    /// ([`MeshGeom::materials`]) rather than `material`: the script set no material on the node.
-    pub mesh_materials: bool,
-    /// The geometry node this instance places.
-    pub node: NodeId,
-    /// World-space bounding box.
-    pub bounds: Bounds,
-}
-
-/// Counters describing a built scene, for `--stats` and `caustic info`.
-#[derive(Clone, Debug, Default)]
-pub struct BuildStats {
-    /// Instances by [`Shape::label`].
-    pub by_kind: std::collections::BTreeMap<&'static str, usize>,
-    /// Triangles over all mesh instances.
-    pub triangles_placed: usize,
-    /// Triangles stored once per distinct mesh.
-    pub triangles_stored: usize,
-    pub bvh_bytes: usize,
-    pub build_time: Duration,
-}
-
-/// Everything the renderer traces.
-pub struct Scene {
-    /// Instances in top-level BVH order: the TLAS leaf index `i` is instance `i`.
-    pub instances: Vec<Instance>,
-    pub meshes: Vec<MeshGeom>,
-    pub csgs: Vec<CsgTree>,
-    pub materials: Vec<Material>,
-    pub lights: Vec<Light>,
-    pub ambient: Vec3A,
-    pub tlas: Bvh,
-    pub stats: BuildStats,
-}
 
 /// A geometry node reached from the root, with its accumulated `world_from_node`.
 struct Placement {
@@ -127,7 +60,9 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         fallback,
         materials,
         images,
+        mesh_files: MeshCache::new(),
         meshes: Vec::new(),
+        warned_empty: HashSet::new(),
         mesh_index: HashMap::new(),
         csgs: Vec::new(),
         instances: Vec::new(),
@@ -174,13 +109,16 @@ pub struct PlacementCounts {
 }
 
 /// Counts the geometry placed under `root` (instancing included), as `caustic info` prints it.
+///
+/// Reads the mesh files placed, to count their triangles.
 pub fn count_placements(desc: &SceneDesc, root: NodeId) -> Result<PlacementCounts> {
     let mut counts = PlacementCounts::default();
+    let mut meshes = MeshCache::new();
     for p in flatten(desc, root)? {
         let kind = &desc.node(p.node).kind;
         *counts.by_kind.entry(kind.label()).or_default() += 1;
         if let NodeKind::Mesh(m) = kind {
-            counts.triangles += desc.meshes[m.0 as usize].data.triangles.len();
+            counts.triangles += meshes.get(desc, *m)?.triangles.len();
         }
     }
     Ok(counts)
@@ -244,8 +182,12 @@ struct Builder<'a> {
     /// The script's materials, the fallback, then each built mesh's file materials.
     materials: Vec<Material>,
     images: ImageCache,
+    /// Mesh files read so far by this build.
+    mesh_files: MeshCache,
     meshes: Vec<MeshGeom>,
     mesh_index: HashMap<MeshId, u32>,
+    /// Mesh nodes already reported as having no triangles.
+    warned_empty: HashSet<NodeId>,
     csgs: Vec<CsgTree>,
     instances: Vec<Instance>,
     bounds: Vec<Bounds>,
@@ -261,31 +203,39 @@ fn local_transform(kind: &NodeKind) -> DAffine3 {
         NodeKind::NhBox { corner, size } => {
             DAffine3::from_translation(*corner) * DAffine3::from_scale(DVec3::splat(*size))
         }
-        _ => DAffine3::IDENTITY,
+        NodeKind::Group
+        | NodeKind::Sphere
+        | NodeKind::Cube
+        | NodeKind::Cylinder
+        | NodeKind::Cone
+        | NodeKind::Mesh(_)
+        | NodeKind::Csg { .. } => DAffine3::IDENTITY,
     }
 }
 
-fn leaf_shape(kind: &NodeKind) -> Option<LeafShape> {
+/// Returns the analytic primitive a node kind places, or `None` for groups, meshes and CSG nodes.
+fn analytic_of(kind: &NodeKind) -> Option<Analytic> {
     match kind {
-        NodeKind::Sphere | NodeKind::NhSphere { .. } => Some(LeafShape::Sphere),
-        NodeKind::Cube | NodeKind::NhBox { .. } => Some(LeafShape::Cube),
-        NodeKind::Cylinder => Some(LeafShape::Cylinder),
-        NodeKind::Cone => Some(LeafShape::Cone),
-        _ => None,
+        NodeKind::Sphere | NodeKind::NhSphere { .. } => Some(Analytic::Sphere),
+        NodeKind::Cube | NodeKind::NhBox { .. } => Some(Analytic::Cube),
+        NodeKind::Cylinder => Some(Analytic::Cylinder),
+        NodeKind::Cone => Some(Analytic::Cone),
+        NodeKind::Group | NodeKind::Mesh(_) | NodeKind::Csg { .. } => None,
     }
 }
 
-fn leaf_bounds(shape: LeafShape) -> Bounds {
+/// Returns the object-space box of a unit analytic primitive.
+fn analytic_bounds(shape: Analytic) -> Bounds {
     match shape {
-        LeafShape::Cube => Bounds {
+        Analytic::Cube => Bounds {
             min: Vec3A::ZERO,
             max: Vec3A::ONE,
         },
-        LeafShape::Cone => Bounds {
+        Analytic::Cone => Bounds {
             min: Vec3A::new(-1.0, -1.0, 0.0),
             max: Vec3A::ONE,
         },
-        LeafShape::Sphere | LeafShape::Cylinder => Bounds {
+        Analytic::Sphere | Analytic::Cylinder => Bounds {
             min: Vec3A::NEG_ONE,
             max: Vec3A::ONE,
         },
@@ -357,12 +307,22 @@ impl Builder<'_> {
             );
             return Ok(());
         }
+        let analytic = |a: Analytic| (Shape::Analytic(a), analytic_bounds(a));
         let (shape, object_bounds) = match &node.kind {
             NodeKind::Group => return Ok(()),
             NodeKind::Mesh(id) => {
                 let index = self.mesh(*id)?;
                 let mesh = &self.meshes[index as usize];
                 if mesh.triangles.is_empty() {
+                    if self.warned_empty.insert(p.node) {
+                        let source = self.mesh_files.get(self.desc, *id)?;
+                        eprintln!(
+                            "{}: warning: mesh '{}' ({}) has no triangles",
+                            node.loc,
+                            node.name,
+                            source.source.display()
+                        );
+                    }
                     return Ok(());
                 }
                 self.stats.triangles_placed += mesh.triangles.len();
@@ -376,16 +336,10 @@ impl Builder<'_> {
                 self.csgs.push(CsgTree { nodes, root });
                 (Shape::Csg(self.csgs.len() as u32 - 1), bounds)
             }
-            kind => {
-                let leaf = leaf_shape(kind).expect("every other kind is an analytic leaf");
-                let shape = match leaf {
-                    LeafShape::Sphere => Shape::Sphere,
-                    LeafShape::Cube => Shape::Cube,
-                    LeafShape::Cylinder => Shape::Cylinder,
-                    LeafShape::Cone => Shape::Cone,
-                };
-                (shape, leaf_bounds(leaf))
-            }
+            NodeKind::Sphere | NodeKind::NhSphere { .. } => analytic(Analytic::Sphere),
+            NodeKind::Cube | NodeKind::NhBox { .. } => analytic(Analytic::Cube),
+            NodeKind::Cylinder => analytic(Analytic::Cylinder),
+            NodeKind::Cone => analytic(Analytic::Cone),
         };
         let bounds = transform_bounds(&world, object_bounds);
         if !bounds.is_finite() || !to_f32(world).is_finite() || !to_f32(world.inverse()).is_finite()
@@ -403,14 +357,14 @@ impl Builder<'_> {
             Shape::Mesh(m) => {
                 node.material.is_none() && !self.meshes[m as usize].materials.is_empty()
             }
-            _ => false,
+            Shape::Analytic(_) | Shape::Csg(_) => false,
         };
         let material = match shape {
             // A CSG hit takes the material of the operand hit; the instance's is a fallback.
             Shape::Csg(_) => self.fallback,
             // Each triangle takes its file material; the instance's is a fallback.
-            _ if mesh_materials => self.fallback,
-            _ => self.material_of(p.node, None),
+            Shape::Mesh(_) if mesh_materials => self.fallback,
+            Shape::Mesh(_) | Shape::Analytic(_) => self.material_of(p.node, None),
         };
         self.instances.push(Instance {
             shape,
@@ -431,23 +385,25 @@ impl Builder<'_> {
             return Ok(i);
         }
         let desc = &self.desc.meshes[id.0 as usize];
-        if let Some(bad) = desc.data.positions.iter().position(|p| !p.is_finite()) {
-            return Err(Error::at(
+        let data = self.mesh_files.get(self.desc, id)?;
+        if let Some(bad) = data.positions.iter().position(|p| !p.is_finite()) {
+            return Err(Error::fault_at(
+                Fault::MeshLoad,
                 &desc.loc,
                 format!(
                     "mesh {} has a non-finite vertex (#{})",
-                    desc.data.source.display(),
+                    data.source.display(),
                     bad + 1
                 ),
             ));
         }
-        let data = &desc.data;
         let ids = &data.triangle_materials;
         if !ids.is_empty()
             && (ids.len() != data.triangles.len()
                 || ids.iter().any(|&m| m as usize >= data.materials.len()))
         {
-            return Err(Error::at(
+            return Err(Error::fault_at(
+                Fault::MeshLoad,
                 &desc.loc,
                 format!(
                     "mesh {} has per-triangle materials that do not match its triangles or materials",
@@ -462,7 +418,7 @@ impl Builder<'_> {
                 self.materials.push(material);
             }
         }
-        let geom = MeshGeom::new(data, first_material);
+        let geom = MeshGeom::new(&data, first_material);
         self.meshes.push(geom);
         let index = self.meshes.len() as u32 - 1;
         self.mesh_index.insert(id, index);
@@ -496,287 +452,45 @@ impl Builder<'_> {
         } else {
             frame * node.transform
         };
-        match &node.kind {
-            NodeKind::Csg { op, a, b } => {
-                let material = node.material.map(|m| m.0).or(inherited);
-                let (ia, ba) = self.csg_node(*a, m, material, nodes, depth + 1, false)?;
-                let (ib, bb) = self.csg_node(*b, m, material, nodes, depth + 1, false)?;
-                nodes.push(CsgNode::Op {
-                    op: *op,
-                    a: ia,
-                    b: ib,
-                });
-                Ok((nodes.len() as u32 - 1, ba.union(bb)))
-            }
-            kind => {
-                let Some(shape) = leaf_shape(kind) else {
-                    return Err(Error::at(
-                        &node.loc,
-                        format!(
-                            "CSG operand '{}' is a {}; CSG takes spheres, cubes, cylinders and other CSG nodes",
-                            node.name,
-                            kind.label()
-                        ),
-                    ));
-                };
-                let m = m * local_transform(kind);
-                if !is_invertible(&m) {
-                    return Err(Error::at(
-                        &node.loc,
-                        format!("CSG operand '{}' has a singular transform", node.name),
-                    ));
-                }
-                let material = self.material_of(id, inherited);
-                nodes.push(CsgNode::Leaf {
-                    shape,
-                    leaf_from_csg: to_f32(m.inverse()),
-                    normal_to_csg: normal_matrix(&m.matrix3),
-                    material,
-                });
-                Ok((
-                    nodes.len() as u32 - 1,
-                    transform_bounds(&m, leaf_bounds(shape)),
-                ))
-            }
-        }
-    }
-}
-
-impl Scene {
-    /// Returns every material index an instance can shade with (its own, its mesh file's, or its
-    /// CSG operands').
-    pub fn instance_materials(&self, inst: &Instance) -> Vec<u32> {
-        match inst.shape {
-            Shape::Mesh(m) if inst.mesh_materials => {
-                let mut ids = self.meshes[m as usize].materials.clone();
-                ids.sort_unstable();
-                ids.dedup();
-                ids
-            }
-            Shape::Csg(c) => self.csgs[c as usize]
-                .nodes
-                .iter()
-                .filter_map(|n| match n {
-                    CsgNode::Leaf { material, .. } => Some(*material),
-                    CsgNode::Op { .. } => None,
-                })
-                .collect(),
-            _ => vec![inst.material],
-        }
-    }
-
-    /// Returns the diagonal of the box holding every instance (0 for an empty scene).
-    pub fn extent(&self) -> f32 {
-        let b = self
-            .instances
-            .iter()
-            .fold(Bounds::EMPTY, |a, i| a.union(i.bounds));
-        if b.is_finite() {
-            (b.max - b.min).length()
-        } else {
-            0.0
-        }
-    }
-
-    /// Returns the closest hit with `t` in the ray's `(tmin, tmax)`.
-    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let mut best = None;
-        self.tlas
-            .closest(ray, |r, i| match self.hit_instance(i, r) {
-                Some(h) => {
-                    best = Some(h);
-                    h.t
-                }
-                None => f32::INFINITY,
+        if let NodeKind::Csg { op, a, b } = &node.kind {
+            let material = node.material.map(|m| m.0).or(inherited);
+            let (ia, ba) = self.csg_node(*a, m, material, nodes, depth + 1, false)?;
+            let (ib, bb) = self.csg_node(*b, m, material, nodes, depth + 1, false)?;
+            nodes.push(CsgNode::Op {
+                op: *op,
+                a: ia,
+                b: ib,
             });
-        best
-    }
-
-    /// Returns true when anything lies on the ray within `(tmin, tmax)`.
-    pub fn occluded(&self, ray: &Ray) -> bool {
-        self.tlas.any(ray, |r, i| {
-            let inst = &self.instances[i];
-            if let Shape::Mesh(m) = inst.shape {
-                let local = object_ray(inst, r);
-                return self.meshes[m as usize]
-                    .any_hit(&local)
-                    .unwrap_or(f32::INFINITY);
-            }
-            self.hit_instance(i, r).map_or(f32::INFINITY, |h| h.t)
-        })
-    }
-
-    fn hit_instance(&self, i: usize, r: &Ray) -> Option<Hit> {
-        let inst = &self.instances[i];
-        let local = object_ray(inst, r);
-        let analytic = |iv: Option<Interval>| {
-            let c = iv?.first_in(r.tmin, r.tmax)?;
-            Some(Hit {
-                t: c.t as f32,
-                instance: i as u32,
-                prim: 0,
-                b1: 0.0,
-                b2: 0.0,
-                normal: c.normal,
-                material: inst.material,
-                face: c.face,
-            })
-        };
-        let hit = match inst.shape {
-            Shape::Sphere => analytic(sphere::interval(local.origin, local.dir)),
-            Shape::Cube => analytic(cube::interval(local.origin, local.dir)),
-            Shape::Cylinder => analytic(cylinder::interval(local.origin, local.dir)),
-            Shape::Cone => analytic(cone::interval(local.origin, local.dir)),
-            Shape::Mesh(m) => self.meshes[m as usize]
-                .intersect(&local)
-                .map(|(tri, h)| Hit {
-                    material: if inst.mesh_materials {
-                        self.meshes[m as usize].materials[tri as usize]
-                    } else {
-                        inst.material
-                    },
-                    t: h.t,
-                    instance: i as u32,
-                    prim: tri,
-                    b1: h.b1,
-                    b2: h.b2,
-                    normal: Vec3A::ZERO,
-                    face: 0,
-                }),
-            Shape::Csg(c) => self.csgs[c as usize]
-                .first_hit(local.origin, local.dir, r.tmin, r.tmax)
-                .map(|b| Hit {
-                    t: b.t as f32,
-                    instance: i as u32,
-                    prim: b.leaf,
-                    b1: 0.0,
-                    b2: 0.0,
-                    normal: b.normal,
-                    material: b.material,
-                    face: b.face,
-                }),
-        }?;
-        // Rounding f64 to f32 must not move a hit outside the ray's range.
-        (hit.t > r.tmin && hit.t < r.tmax).then_some(hit)
-    }
-
-    /// Returns the world-space surface at `hit`, found by `ray`.
-    pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
-        let inst = &self.instances[hit.instance as usize];
-        let local = object_ray(inst, ray);
-        let perlin = self.materials[hit.material as usize].perlin_scale > 0.0;
-        let (p_obj, ng_obj, ns_obj, uv, dpdu) = match inst.shape {
-            Shape::Mesh(m) => {
-                let mesh = &self.meshes[m as usize];
-                let idx = mesh.triangles[hit.prim as usize];
-                let [v0, v1, v2] = idx.map(|i| mesh.positions[i as usize]);
-                let w0 = 1.0 - hit.b1 - hit.b2;
-                let p = v0 * w0 + v1 * hit.b1 + v2 * hit.b2;
-                let ng = triangle::geometric_normal(v0, v1, v2);
-                // Perlin noise needs a continuous base normal: smooth normals when the file has none.
-                let normals = if mesh.normals.is_empty() && perlin {
-                    mesh.smooth_normals()
-                } else {
-                    &mesh.normals
-                };
-                let ns = if normals.is_empty() {
-                    ng
-                } else {
-                    let [n0, n1, n2] = idx.map(|i| normals[i as usize]);
-                    n0 * w0 + n1 * hit.b1 + n2 * hit.b2
-                };
-                let [t0, t1, t2] = if mesh.uvs.is_empty() {
-                    [Vec2::ZERO, Vec2::X, Vec2::Y]
-                } else {
-                    idx.map(|i| mesh.uvs[i as usize])
-                };
-                let uv = t0 * w0 + t1 * hit.b1 + t2 * hit.b2;
-                (p, ng, ns, uv, triangle_dpdu([v0, v1, v2], [t0, t1, t2]))
-            }
-            Shape::Sphere => {
-                // Re-project onto the sphere: the hit point's error then no longer grows with t.
-                let p = local.at(hit.t);
-                let p = p / p.length();
-                let (uv, dpdu) = (
-                    analytic_uv(LeafShape::Sphere, p, hit.face),
-                    analytic_dpdu(LeafShape::Sphere, p, 0),
-                );
-                (p, p, p, uv, dpdu)
-            }
-            Shape::Csg(c) => {
-                let p = local.at(hit.t);
-                let (uv, dpdu) = match &self.csgs[c as usize].nodes[hit.prim as usize] {
-                    CsgNode::Leaf {
-                        shape,
-                        leaf_from_csg,
-                        ..
-                    } => {
-                        let q = leaf_from_csg.transform_point3a(p);
-                        let t =
-                            leaf_from_csg.matrix3.inverse() * analytic_dpdu(*shape, q, hit.face);
-                        (analytic_uv(*shape, q, hit.face), t)
-                    }
-                    CsgNode::Op { .. } => (Vec2::ZERO, Vec3A::ZERO),
-                };
-                (p, hit.normal, hit.normal, uv, dpdu)
-            }
-            shape => {
-                let p = local.at(hit.t);
-                let leaf = match shape {
-                    Shape::Cube => LeafShape::Cube,
-                    Shape::Cylinder => LeafShape::Cylinder,
-                    _ => LeafShape::Cone,
-                };
-                let (uv, dpdu) = (
-                    analytic_uv(leaf, p, hit.face),
-                    analytic_dpdu(leaf, p, hit.face),
-                );
-                (p, hit.normal, hit.normal, uv, dpdu)
-            }
-        };
-        let p = inst.world_from_object.transform_point3a(p_obj);
-        let ng = (inst.normal_to_world * ng_obj).normalize_or_zero();
-        let ng = if ng == Vec3A::ZERO {
-            -ray.dir.normalize()
-        } else {
-            ng
-        };
-        let mut ns = (inst.normal_to_world * ns_obj).normalize_or_zero();
-        if ns == Vec3A::ZERO {
-            ns = ng;
-        } else if ns.dot(ng) < 0.0 {
-            // Vertex normals wound against the faces: keep the shading normal on ng's side.
-            ns = -ns;
+            return Ok((nodes.len() as u32 - 1, ba.union(bb)));
         }
-        SurfaceHit {
-            p,
-            ng,
-            ns,
-            uv,
-            dpdu: inst.world_from_object.transform_vector3a(dpdu),
-            material: hit.material,
+        let kind = &node.kind;
+        let Some(shape) = analytic_of(kind) else {
+            return Err(Error::at(
+                &node.loc,
+                format!(
+                    "CSG operand '{}' is a {}; CSG takes spheres, cubes, cylinders and other CSG nodes",
+                    node.name,
+                    kind.label()
+                ),
+            ));
+        };
+        let m = m * local_transform(kind);
+        if !is_invertible(&m) {
+            return Err(Error::at(
+                &node.loc,
+                format!("CSG operand '{}' has a singular transform", node.name),
+            ));
         }
-    }
-}
-
-fn object_ray(inst: &Instance, r: &Ray) -> Ray {
-    Ray {
-        origin: inst.object_from_world.transform_point3a(r.origin),
-        dir: inst.object_from_world.transform_vector3a(r.dir),
-        tmin: r.tmin,
-        tmax: r.tmax,
-    }
-}
-
-/// Returns `∂p/∂u` of a triangle from its corners and texture coordinates (an edge when the
-/// texture coordinates are degenerate).
-fn triangle_dpdu(p: [Vec3A; 3], t: [Vec2; 3]) -> Vec3A {
-    let (dp1, dp2) = (p[1] - p[0], p[2] - p[0]);
-    let (d1, d2) = (t[1] - t[0], t[2] - t[0]);
-    let det = d1.x * d2.y - d1.y * d2.x;
-    if det.abs() < 1e-20 {
-        dp1
-    } else {
-        (dp1 * d2.y - dp2 * d1.y) / det
+        let material = self.material_of(id, inherited);
+        nodes.push(CsgNode::Leaf {
+            shape,
+            leaf_from_csg: to_f32(m.inverse()),
+            normal_to_csg: normal_matrix(&m.matrix3),
+            material,
+        });
+        Ok((
+            nodes.len() as u32 - 1,
+            transform_bounds(&m, analytic_bounds(shape)),
+        ))
     }
 }

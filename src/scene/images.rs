@@ -5,11 +5,11 @@
 //! `kd` (or its unbent normal) and a warning is printed once per file. Textures named by mesh
 //! files (MTL `map_Kd`, glTF images) are always treated the second way.
 
+use crate::desc::MaterialDesc;
 use crate::error::{Loc, Result};
 use crate::geometry::mesh::MeshMaterial;
 use crate::material::Material;
 use crate::material::texture::{BumpMap, Texture};
-use crate::scene::desc::MaterialDesc;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -1,11 +1,18 @@
-//! Scenes: the description a script fills in, the Lua API that fills it, and the step that turns
-//! a description into the render-ready [`Scene`].
+//! Scenes: the step that turns a [`crate::desc::SceneDesc`] into the render-ready [`Scene`], and
+//! the per-ray queries on it.
+//!
+//! - [`types`]: what the renderer traces ([`Scene`], [`Instance`], the primitive enum [`Shape`]);
+//! - [`build`]: description → scene (flattening, instancing, CSG trees, the two-level BVH), reading
+//!   files through [`meshes`] (mesh files) and [`images`] (textures and normal maps);
+//! - [`query`]: closest hit, any hit and the surface at a hit;
+//! - [`interaction`]: the per-hit set-up every path shares (surface + BSDF).
 
-pub mod args;
 pub mod build;
-pub mod desc;
 pub mod images;
 pub mod interaction;
-pub mod lua;
+pub mod meshes;
+pub mod query;
+pub mod types;
 
-pub use build::{Instance, Scene, Shape, build_scene};
+pub use build::build_scene;
+pub use types::{Instance, Scene, Shape};

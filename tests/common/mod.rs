@@ -2,13 +2,13 @@
 #![allow(dead_code)]
 
 use caustic::camera::Camera;
+use caustic::desc::{RenderDesc, SceneDesc};
 use caustic::film::{Film, Window};
 use caustic::integrator::{GiMode, Settings};
+use caustic::lua::run_source;
 use caustic::progress::NoProgress;
 use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
-use caustic::scene::desc::{RenderDesc, SceneDesc};
-use caustic::scene::lua::run_source;
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::process::Command;

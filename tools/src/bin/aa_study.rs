@@ -14,11 +14,11 @@
 use caustic::camera::Camera;
 use caustic::film::{Film, Window};
 use caustic::integrator::{GiMode, Settings};
+use caustic::lua::run_script;
 use caustic::progress::NoProgress;
 use caustic::render::Sampling;
 use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
-use caustic::scene::lua::run_script;
 use clap::Parser;
 use std::cell::RefCell;
 use std::path::PathBuf;
@@ -95,7 +95,7 @@ fn main() -> ExitCode {
     let found = Rc::new(RefCell::new(None));
     let sink = Rc::clone(&found);
     let hook = Box::new(
-        move |desc: &caustic::scene::desc::SceneDesc, r: &caustic::scene::desc::RenderDesc| {
+        move |desc: &caustic::desc::SceneDesc, r: &caustic::desc::RenderDesc| {
             if sink.borrow().is_none() {
                 let w = ((r.width as f64 * cli.scale).round() as u32).max(1);
                 let h = ((r.height as f64 * cli.scale).round() as u32).max(1);

@@ -6,9 +6,9 @@
 //! cargo run --release -p caustic-tools --bin bench_photon_trace -- Assets/room2.lua --photons 1000000
 //! ```
 
+use caustic::lua::run_script;
 use caustic::photon::trace::{MapKind, photon_budget, trace_map};
 use caustic::scene::build::build_scene;
-use caustic::scene::lua::run_script;
 use clap::Parser;
 use std::cell::RefCell;
 use std::path::PathBuf;
@@ -34,7 +34,7 @@ fn main() -> ExitCode {
     let scenes = Rc::new(RefCell::new(Vec::new()));
     let sink = Rc::clone(&scenes);
     let hook = Box::new(
-        move |desc: &caustic::scene::desc::SceneDesc, r: &caustic::scene::desc::RenderDesc| {
+        move |desc: &caustic::desc::SceneDesc, r: &caustic::desc::RenderDesc| {
             sink.borrow_mut().push(build_scene(desc, r)?);
             Ok(())
         },

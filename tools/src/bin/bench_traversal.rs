@@ -23,9 +23,10 @@
 //! `(tmin, tmax)`, the files' rays have `tmin = 0`, so only a ray starting exactly on the surface
 //! could differ from Embree's closed interval.
 
+use caustic::accel::mesh::MeshGeom;
 use caustic::accel::{Builder, Kernel};
 use caustic::geometry::Ray;
-use caustic::geometry::mesh::{MeshData, MeshGeom};
+use caustic::geometry::mesh::MeshData;
 use caustic_tools::benchfile::{RayRecord, RaySet, read_mesh, read_rays};
 use caustic_tools::clock::{self, LoadProbe};
 use glam::Vec3A;

@@ -1,12 +1,12 @@
 //! Four triangles tested at once: the corners of a BVH leaf stored coordinate by coordinate, so
-//! each SSE2 lane runs the watertight test of [`super::triangle`] for one triangle.
+//! each SSE2 lane runs the watertight test of [`crate::geometry::triangle`] for one triangle.
 //!
 //! The lanes evaluate exactly the scalar test's IEEE operations in the same order (no fused
 //! multiply-add), so they give bit-identical `t` and barycentrics; a lane whose edge function is
 //! exactly zero (a ray through an edge or a vertex) is redone by the scalar test, which falls back
 //! to double precision there (Woop et al. 2013, §3.3).
 
-use super::triangle::{self, RayShear, TriangleHit};
+use crate::geometry::triangle::{self, RayShear, TriangleHit};
 use glam::Vec3A;
 
 /// Triangles per block.

@@ -1,6 +1,10 @@
 //! The plain scene description a script fills in: no Lua types, every entry tagged with the script
 //! line that made it.
 //!
+//! This is the bottom floor: it imports nothing of geometry, the BVH or file loading. Files are
+//! named here (resolved paths of meshes, textures and output images), never read; `scene` reads
+//! them when it builds a scene. Tests can fill a description in Rust without Lua.
+//!
 //! Index spaces ([`NodeId`], [`MaterialId`], [`LightId`], [`MeshId`]) are positions in the vectors
 //! of [`SceneDesc`]. Entries are only ever appended, so an id stays valid for the whole script, and
 //! an image rendered mid-script sees the description as it stands at that moment.
@@ -10,10 +14,8 @@
 //! the parent's frame, and `world_from_object = M_root · … · M_parent · M_node`.
 
 use crate::error::Loc;
-use crate::geometry::mesh::MeshData;
 use glam::{DAffine3, DVec3, Vec3};
-use std::path::PathBuf;
-use std::sync::Arc;
+use std::path::{Path, PathBuf};
 
 /// Index of a node in [`SceneDesc::nodes`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -24,7 +26,7 @@ pub struct MaterialId(pub u32);
 /// Index of a light in [`SceneDesc::lights`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct LightId(pub u32);
-/// Index of a loaded mesh in [`SceneDesc::meshes`]; nodes made from the same file share one.
+/// Index of a mesh in [`SceneDesc::meshes`]; nodes made from the same file share one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct MeshId(pub u32);
 
@@ -147,10 +149,55 @@ pub struct LightDesc {
     pub loc: Loc,
 }
 
-/// A mesh file read by `gr.mesh`, cached by resolved path.
-#[derive(Clone, Debug)]
+/// The file formats `gr.mesh` reads, told apart by the file's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Wavefront `.obj` (with its `.mtl` libraries).
+    Obj,
+    /// glTF 2.0, `.gltf` (JSON) or `.glb` (binary).
+    Gltf,
+}
+
+impl MeshFormat {
+    /// Returns the format of `path` by its extension (any case), or `None` for one caustic does
+    /// not read.
+    pub fn from_path(path: &Path) -> Option<MeshFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "obj" => Some(MeshFormat::Obj),
+            "gltf" | "glb" => Some(MeshFormat::Gltf),
+            _ => None,
+        }
+    }
+}
+
+/// Where a mesh's triangles come from, as the script gave them; nothing is read here.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MeshSource {
+    /// `gr.mesh(name, 'file')`: the file, read when a scene is built.
+    File {
+        /// The path as the script wrote it, for messages.
+        given: String,
+        /// `given` resolved to a readable file (working directory first, then the script's folder).
+        path: PathBuf,
+        format: MeshFormat,
+    },
+    /// The legacy form `gr.mesh(name, {{x,y,z}, …}, {{i,j,k,…}, …})`.
+    Inline {
+        /// Vertex positions, every one finite.
+        positions: Vec<DVec3>,
+        /// Convex faces as 0-based indices into `positions` (all in range), each with at least
+        /// three corners.
+        faces: Vec<Vec<u32>>,
+    },
+}
+
+/// A mesh named by `gr.mesh`; files are deduplicated by canonical path, so nodes made from the
+/// same file share one.
+#[derive(Clone, Debug, PartialEq)]
 pub struct MeshDesc {
-    pub data: Arc<MeshData>,
+    pub source: MeshSource,
+    /// The `gr.mesh` call that first named it.
     pub loc: Loc,
 }
 

@@ -1,4 +1,4 @@
-//! The `gr` scene API on an embedded Lua 5.4: runs a script and fills a [`SceneDesc`].
+//! The `gr` table: every function a script can call, installed from one list of entries.
 //!
 //! The API is the CS488 A4 starter's (see `../shared/docs/cs488_lua_api.md` §1–§5) plus the
 //! extended ray tracer's commands, with every extra argument optional:
@@ -8,256 +8,86 @@
 //! cone  = gr.cone('c')   -- apex at the origin, radius 1 at z = 1
 //! ring  = gr.difference('ring', gr.cylinder('outer'), gr.cylinder('inner'))
 //! light = gr.light({0, 0.5, 0}, {0.7, 0.5, 0.9}, {1, 0, 0}, 10000, 200000)
+//! cow   = gr.mesh('cow', 'cow.obj')   -- resolved here, read when a scene is built
 //! ```
 //!
 //! As in the course, one table is both the global `gr` and the source of every node method, so
 //! `n:translate(1, 2, 3)` is `gr.translate(n, 1, 2, 3)` and `n:render(...)` is `gr.render(n, ...)`.
-//! `gr.render` calls the [`RenderHook`] synchronously: the script carries on after each image.
-//!
-//! Paths (meshes, textures, output images) resolve against the working directory first, as the
-//! course does, then against the script's folder, so a corpus scene runs both from its own folder
-//! and by path from anywhere.
-//!
-//! The whole standard library is loaded, including `debug` less the functions that could break
-//! memory safety (`setmetatable`, `setuservalue`, `getregistry`, `setupvalue`, `upvaluejoin`,
-//! `getuservalue`, `getupvalue`); `unpack` and `string.gfind` are aliased for legacy scripts.
+//! `gr.render` calls the [`RenderHook`](super::RenderHook) synchronously: the script carries on
+//! after each image. An unknown name (`gr.spere`) fails at the line that used it and lists the
+//! functions that exist.
 
-use crate::error::{Error, Loc, Result};
-use crate::io::{gltf, obj};
-use crate::scene::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
-use crate::scene::desc::{
-    CameraDesc, CsgOp, LightDesc, LightShape, MaterialDesc, MeshDesc, MeshId, NodeKind, RenderDesc,
-    SceneDesc,
+use super::{MAX_PIXELS, State};
+use crate::desc::{
+    CameraDesc, CsgOp, LightDesc, LightId, LightShape, MaterialDesc, MaterialId, MeshDesc,
+    MeshFormat, MeshId, MeshSource, NodeKind, RenderDesc,
 };
+use crate::error::{Error, Fault};
+use crate::lua::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
 use glam::{DAffine3, DVec3};
-use mlua::{Lua, LuaOptions, MetaMethod, MultiValue, StdLib, Table, UserData, Value};
+use mlua::{Lua, MetaMethod, MultiValue, Table, UserData, Value};
 use std::cell::RefCell;
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::rc::Rc;
-use std::sync::Arc;
-
-/// Called by every `gr.render`: receives the description as it stands and the render call.
-pub type RenderHook = Box<dyn FnMut(&SceneDesc, &RenderDesc) -> Result<()>>;
-
-/// Largest image `gr.render` accepts, in pixels (about 8k × 8k).
-pub const MAX_PIXELS: u64 = 1 << 26;
-
-/// How a script run treats recoverable problems.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ScriptOptions {
-    /// `--missing-textures=warn`: a missing texture or bump image is a warning (once per file) and
-    /// the material renders with `kd` instead, rather than an error.
-    pub missing_textures_warn: bool,
-}
-
-/// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
-pub fn run_script(path: &Path, hook: RenderHook) -> Result<SceneDesc> {
-    run_script_with(path, hook, ScriptOptions::default())
-}
-
-/// Runs the script at `path` with `options`.
-pub fn run_script_with(path: &Path, hook: RenderHook, options: ScriptOptions) -> Result<SceneDesc> {
-    let source = std::fs::read(path).map_err(|e| Error::File {
-        path: path.to_path_buf(),
-        message: format!("cannot read script: {e}"),
-    })?;
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    run_source_with(&source, &path.display().to_string(), &dir, hook, options)
-}
-
-/// Runs script text named `name` (used in messages), resolving relative paths in the working
-/// directory and then in `script_dir`.
-pub fn run_source(
-    source: &[u8],
-    name: &str,
-    script_dir: &Path,
-    hook: RenderHook,
-) -> Result<SceneDesc> {
-    run_source_with(source, name, script_dir, hook, ScriptOptions::default())
-}
-
-/// Runs script text with `options` (see [`run_source`]).
-pub fn run_source_with(
-    source: &[u8],
-    name: &str,
-    script_dir: &Path,
-    hook: RenderHook,
-    options: ScriptOptions,
-) -> Result<SceneDesc> {
-    let state = Rc::new(RefCell::new(State {
-        desc: SceneDesc {
-            missing_textures_warn: options.missing_textures_warn,
-            ..SceneDesc::default()
-        },
-        warned_images: std::collections::HashSet::new(),
-        script_dir: script_dir.to_path_buf(),
-        hook,
-        mesh_cache: HashMap::new(),
-    }));
-    let lua = new_lua().map_err(convert_error)?;
-    install_gr(&lua, &state).map_err(convert_error)?;
-    lua.load(source)
-        .set_name(format!("@{name}"))
-        .exec()
-        .map_err(convert_error)?;
-    drop(lua);
-    let state = Rc::try_unwrap(state)
-        .map_err(|_| Error::Lua("internal: scene state still borrowed".into()))?
-        .into_inner();
-    Ok(state.desc)
-}
-
-struct State {
-    desc: SceneDesc,
-    script_dir: PathBuf,
-    hook: RenderHook,
-    mesh_cache: HashMap<PathBuf, MeshId>,
-    /// Missing images already warned about (`--missing-textures=warn`).
-    warned_images: std::collections::HashSet<String>,
-}
-
-impl State {
-    /// Returns the readable file `given` names: as given (working directory), else in the script's folder.
-    fn resolve_input(&self, given: &str) -> Option<PathBuf> {
-        let p = Path::new(given);
-        if p.is_file() {
-            return Some(p.to_path_buf());
-        }
-        let q = self.script_dir.join(p);
-        (p.is_relative() && q.is_file()).then_some(q)
-    }
-
-    /// Returns where to write `given`: as given when its folder exists, else in the script's folder.
-    fn resolve_output(&self, given: &str) -> PathBuf {
-        let folder_exists = |q: &Path| match q.parent() {
-            None => true,
-            Some(d) => d.as_os_str().is_empty() || d.is_dir(),
-        };
-        let p = Path::new(given);
-        let q = self.script_dir.join(p);
-        if folder_exists(p) || p.is_absolute() || !folder_exists(&q) {
-            p.to_path_buf()
-        } else {
-            q
-        }
-    }
-
-    fn warn(&mut self, loc: &Loc, message: String) {
-        let text = format!("{loc}: warning: {message}");
-        eprintln!("{text}");
-        self.desc.warnings.push(text);
-    }
-
-    fn not_found(&self, what: &str, given: &str) -> String {
-        let cwd = std::env::current_dir().unwrap_or_default();
-        format!(
-            "{what} '{given}' not found (looked in the working directory {} and in the script's folder {})",
-            cwd.display(),
-            self.script_dir.display()
-        )
-    }
-}
-
-impl UserData for NodeRef {
-    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
-        // Node methods are the `gr` functions themselves, as in the course where `gr` is the
-        // node metatable's `__index`.
-        methods.add_meta_function(MetaMethod::Index, |lua, (_node, key): (Value, Value)| {
-            let gr: Table = lua.named_registry_value(GR_KEY)?;
-            let f: Value = gr.raw_get(key.clone())?;
-            if f.is_nil() {
-                let key = key.to_string().unwrap_or_else(|_| "?".into());
-                return Err(lua_err(Error::at(
-                    &caller_loc(lua),
-                    format!("gr.node has no method '{key}'"),
-                )));
-            }
-            Ok(f)
-        });
-        methods.add_meta_method(MetaMethod::ToString, |_, node, ()| {
-            Ok(format!("gr.node #{}", node.0.0))
-        });
-    }
-}
-
-impl UserData for MaterialRef {
-    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
-        methods.add_meta_method(MetaMethod::ToString, |_, m, ()| {
-            Ok(format!("gr.material #{}", m.0.0))
-        });
-    }
-}
-
-impl UserData for LightRef {
-    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
-        methods.add_meta_method(MetaMethod::ToString, |_, l, ()| {
-            Ok(format!("gr.light #{}", l.0.0))
-        });
-    }
-}
-
-const GR_KEY: &str = "caustic.gr";
-
-fn new_lua() -> mlua::Result<Lua> {
-    // SAFETY: `debug` is the only unsafe library; the functions that can corrupt mlua's
-    // userdata or registry invariants are removed before any script runs.
-    let lua = unsafe { Lua::unsafe_new_with(StdLib::ALL, LuaOptions::new()) };
-    let g = lua.globals();
-    let debug: Table = g.get("debug")?;
-    for f in [
-        "setmetatable",
-        "getmetatable",
-        "setuservalue",
-        "getuservalue",
-        "getregistry",
-        "setupvalue",
-        "getupvalue",
-        "upvaluejoin",
-        "upvalueid",
-    ] {
-        debug.raw_set(f, Value::Nil)?;
-    }
-    let table: Table = g.get("table")?;
-    if g.get::<Value>("unpack")?.is_nil() {
-        g.set("unpack", table.get::<Value>("unpack")?)?;
-    }
-    let string: Table = g.get("string")?;
-    string.set("gfind", string.get::<Value>("gmatch")?)?;
-    Ok(lua)
-}
 
 type GrFn = fn(&Lua, &mut State, &Args) -> mlua::Result<Value>;
 
-fn install_gr(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()> {
+/// How a `gr` function is meant to be called.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Call {
+    /// `gr.sphere(...)`: listed when a script names an unknown function.
+    Function,
+    /// `n:translate(...)` (also `gr.translate(n, ...)`): a node method, not listed.
+    Method,
+}
+
+/// Every `gr` function, in the order the unknown-function message lists them.
+const GR: &[(&str, Call, GrFn)] = &[
+    ("node", Call::Function, gr_node),
+    ("joint", Call::Function, gr_joint),
+    ("sphere", Call::Function, |l, s, a| {
+        gr_simple(l, s, a, NodeKind::Sphere)
+    }),
+    ("cube", Call::Function, |l, s, a| {
+        gr_simple(l, s, a, NodeKind::Cube)
+    }),
+    ("cylinder", Call::Function, |l, s, a| {
+        gr_simple(l, s, a, NodeKind::Cylinder)
+    }),
+    ("cone", Call::Function, |l, s, a| {
+        gr_simple(l, s, a, NodeKind::Cone)
+    }),
+    ("nh_sphere", Call::Function, gr_nh_sphere),
+    ("nh_box", Call::Function, gr_nh_box),
+    ("mesh", Call::Function, gr_mesh),
+    ("union", Call::Function, |l, s, a| {
+        gr_csg(l, s, a, CsgOp::Union)
+    }),
+    ("intersection", Call::Function, |l, s, a| {
+        gr_csg(l, s, a, CsgOp::Intersection)
+    }),
+    ("difference", Call::Function, |l, s, a| {
+        gr_csg(l, s, a, CsgOp::Difference)
+    }),
+    ("material", Call::Function, gr_material),
+    ("light", Call::Function, gr_light),
+    ("area_light", Call::Function, gr_area_light),
+    ("sphere_light", Call::Function, gr_sphere_light),
+    ("render", Call::Function, gr_render),
+    ("add_child", Call::Method, gr_add_child),
+    ("set_material", Call::Method, gr_set_material),
+    ("translate", Call::Method, gr_translate),
+    ("scale", Call::Method, gr_scale),
+    ("rotate", Call::Method, gr_rotate),
+];
+
+/// Registry key of the `gr` table, which node values use as their method table.
+const GR_KEY: &str = "caustic.gr";
+
+/// Sets the global `gr` to a table of [`GR`]'s functions, each working on `state`.
+pub(super) fn install(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()> {
     let gr = lua.create_table()?;
-    let functions: &[(&'static str, GrFn)] = &[
-        ("node", gr_node),
-        ("joint", gr_joint),
-        ("sphere", |l, s, a| gr_simple(l, s, a, NodeKind::Sphere)),
-        ("cube", |l, s, a| gr_simple(l, s, a, NodeKind::Cube)),
-        ("cylinder", |l, s, a| gr_simple(l, s, a, NodeKind::Cylinder)),
-        ("cone", |l, s, a| gr_simple(l, s, a, NodeKind::Cone)),
-        ("nh_sphere", gr_nh_sphere),
-        ("nh_box", gr_nh_box),
-        ("mesh", gr_mesh),
-        ("union", |l, s, a| gr_csg(l, s, a, CsgOp::Union)),
-        ("intersection", |l, s, a| {
-            gr_csg(l, s, a, CsgOp::Intersection)
-        }),
-        ("difference", |l, s, a| gr_csg(l, s, a, CsgOp::Difference)),
-        ("material", gr_material),
-        ("light", gr_light),
-        ("area_light", gr_area_light),
-        ("sphere_light", gr_sphere_light),
-        ("render", gr_render),
-        ("add_child", gr_add_child),
-        ("set_material", gr_set_material),
-        ("translate", gr_translate),
-        ("scale", gr_scale),
-        ("rotate", gr_rotate),
-    ];
-    for &(name, f) in functions {
+    for &(name, _, f) in GR {
         let st = Rc::clone(state);
         let func = lua.create_function(move |lua, vals: MultiValue| {
             let args = Args::new(lua, name, vals);
@@ -274,11 +104,17 @@ fn install_gr(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()> {
         "__index",
         lua.create_function(|lua, (_t, key): (Value, Value)| -> mlua::Result<Value> {
             let key = key.to_string().unwrap_or_else(|_| "?".into());
-            Err(lua_err(Error::at(
+            let listed: Vec<&str> = GR
+                .iter()
+                .filter(|(_, call, _)| *call == Call::Function)
+                .map(|(name, _, _)| *name)
+                .collect();
+            Err(lua_err(Error::fault_at(
+                Fault::UnknownFunction,
                 &caller_loc(lua),
                 format!(
                     "unknown function gr.{key} (caustic has gr.{})",
-                    GR_NAMES.join(", gr.")
+                    listed.join(", gr.")
                 ),
             )))
         })?,
@@ -288,26 +124,6 @@ fn install_gr(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()> {
     lua.globals().set("gr", gr)?;
     Ok(())
 }
-
-const GR_NAMES: &[&str] = &[
-    "node",
-    "joint",
-    "sphere",
-    "cube",
-    "cylinder",
-    "cone",
-    "nh_sphere",
-    "nh_box",
-    "mesh",
-    "union",
-    "intersection",
-    "difference",
-    "material",
-    "light",
-    "area_light",
-    "sphere_light",
-    "render",
-];
 
 fn new_node(
     lua: &Lua,
@@ -336,25 +152,17 @@ fn gr_simple(lua: &Lua, s: &mut State, a: &Args, kind: NodeKind) -> mlua::Result
     new_node(lua, s, a, a.string(1)?, kind)
 }
 
-fn positive(a: &Args, i: usize, what: &str) -> mlua::Result<f64> {
-    let v = a.number(i)?;
-    if v <= 0.0 {
-        return Err(a.bad(i, format!("{what} must be positive, got {v}")));
-    }
-    Ok(v)
-}
-
 fn gr_nh_sphere(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let name = a.string(1)?;
     let center = a.dvec3(2)?;
-    let radius = positive(a, 3, "radius")?;
+    let radius = a.positive(3, "radius")?;
     new_node(lua, s, a, name, NodeKind::NhSphere { center, radius })
 }
 
 fn gr_nh_box(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let name = a.string(1)?;
     let corner = a.dvec3(2)?;
-    let size = positive(a, 3, "size")?;
+    let size = a.positive(3, "size")?;
     new_node(lua, s, a, name, NodeKind::NhBox { corner, size })
 }
 
@@ -364,46 +172,35 @@ fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         Some(Value::Table(_)) => inline_mesh(s, a)?,
         _ => mesh_from_file(s, a, &a.string(2)?)?,
     };
-    if s.desc.meshes[id.0 as usize].data.triangles.is_empty() {
-        let src = s.desc.meshes[id.0 as usize]
-            .data
-            .source
-            .display()
-            .to_string();
-        s.warn(
-            &a.loc.clone(),
-            format!("mesh '{name}' ({src}) has no triangles"),
-        );
-    }
     new_node(lua, s, a, name, NodeKind::Mesh(id))
 }
 
+/// Resolves a mesh file and checks its format; the file is read when a scene is built.
 fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> {
     let Some(path) = s.resolve_input(given) else {
-        return Err(a.fail(s.not_found("mesh file", given)));
+        return Err(a.fault(Fault::NotFound, s.not_found("mesh file", given)));
     };
     let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
     if let Some(&id) = s.mesh_cache.get(&key) {
         return Ok(id);
     }
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
-    let cannot = |e: &dyn std::fmt::Display| a.fail(format!("cannot load mesh '{given}': {e}"));
-    let data = match ext.as_str() {
-        "obj" => obj::load_obj(&path).map_err(|e| cannot(&e))?,
-        "gltf" | "glb" => gltf::load_gltf(&path).map_err(|e| cannot(&e))?,
-        _ => {
-            return Err(a.fail(format!(
-                "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj, .gltf and .glb)"
-            )));
-        }
+    let Some(format) = MeshFormat::from_path(&path) else {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        return Err(a.fault(Fault::MeshLoad, format!(
+            "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj, .gltf and .glb)"
+        )));
     };
     let id = MeshId(s.desc.meshes.len() as u32);
     s.desc.meshes.push(MeshDesc {
-        data: Arc::new(data),
+        source: MeshSource::File {
+            given: given.to_string(),
+            path,
+            format,
+        },
         loc: a.loc.clone(),
     });
     s.mesh_cache.insert(key, id);
@@ -415,13 +212,10 @@ fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
     let Some(Value::Table(verts)) = a.get(2) else {
         unreachable!("inline_mesh is only called with a table")
     };
-    let Some(Value::Table(faces)) = a.get(3) else {
+    let Some(Value::Table(face_table)) = a.get(3) else {
         return Err(a.bad(3, "table of faces expected"));
     };
-    let mut data = crate::geometry::mesh::MeshData {
-        source: PathBuf::from(format!("{} (inline mesh)", a.loc)),
-        ..Default::default()
-    };
+    let mut positions = Vec::new();
     for (k, v) in verts.clone().sequence_values::<Value>().enumerate() {
         let p = match v? {
             Value::Table(t) if t.raw_len() == 3 => {
@@ -433,10 +227,11 @@ fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
         if !p.is_finite() {
             return Err(a.bad(2, format!("vertex {} is not finite", k + 1)));
         }
-        data.positions.push(p.as_vec3());
+        positions.push(p);
     }
-    let nv = data.positions.len() as i64;
-    for (k, f) in faces.clone().sequence_values::<Value>().enumerate() {
+    let nv = positions.len() as i64;
+    let mut faces = Vec::new();
+    for (k, f) in face_table.clone().sequence_values::<Value>().enumerate() {
         let Value::Table(f) = f? else {
             return Err(a.bad(3, format!("face {} is not a table", k + 1)));
         };
@@ -454,13 +249,11 @@ fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
         if idx.len() < 3 {
             return Err(a.bad(3, format!("face {} has fewer than 3 vertices", k + 1)));
         }
-        for j in 1..idx.len() - 1 {
-            data.triangles.push([idx[0], idx[j], idx[j + 1]]);
-        }
+        faces.push(idx);
     }
     let id = MeshId(s.desc.meshes.len() as u32);
     s.desc.meshes.push(MeshDesc {
-        data: Arc::new(data),
+        source: MeshSource::Inline { positions, faces },
         loc: a.loc.clone(),
     });
     Ok(id)
@@ -516,13 +309,13 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
                     }
                     Ok(None)
                 }
-                None => Err(a.fail(s.not_found(what, &given))),
+                None => Err(a.fault(Fault::NotFound, s.not_found(what, &given))),
             },
         }
     };
     let texture = image(7, "texture")?;
     let bump = image(8, "bump map")?;
-    let id = crate::scene::desc::MaterialId(s.desc.materials.len() as u32);
+    let id = MaterialId(s.desc.materials.len() as u32);
     s.desc.materials.push(MaterialDesc {
         kd,
         ks,
@@ -556,7 +349,7 @@ fn gr_area_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
 
 /// `gr.sphere_light(pos, rgb, falloff, power, num_photons, radius)`.
 fn gr_sphere_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
-    let radius = positive(a, 6, "radius")? as f32;
+    let radius = a.positive(6, "radius")? as f32;
     new_light(lua, s, a, LightShape::Sphere { radius })
 }
 
@@ -585,7 +378,7 @@ fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Res
     {
         return Err(a.bad(5, format!("photon count must be in [0, 1e12], got {n}")));
     }
-    let id = crate::scene::desc::LightId(s.desc.lights.len() as u32);
+    let id = LightId(s.desc.lights.len() as u32);
     s.desc.lights.push(LightDesc {
         shape,
         position,
@@ -598,23 +391,11 @@ fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Res
     Ok(Value::UserData(lua.create_userdata(LightRef(id))?))
 }
 
-fn image_size(a: &Args, i: usize) -> mlua::Result<u32> {
-    // C++ `int = double` truncates towards zero.
-    let v = a.number(i)?.trunc();
-    if !(1.0..=65535.0).contains(&v) {
-        return Err(a.bad(
-            i,
-            format!("image size must be in [1, 65535] pixels, got {v}"),
-        ));
-    }
-    Ok(v as u32)
-}
-
 fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let root = a.node(1)?;
     let file = a.string(2)?;
-    let width = image_size(a, 3)?;
-    let height = image_size(a, 4)?;
+    let width = a.image_size(3)?;
+    let height = a.image_size(4)?;
     if width as u64 * height as u64 > MAX_PIXELS {
         return Err(a.fail(format!(
             "image {width}x{height} is larger than {MAX_PIXELS} pixels"
@@ -691,19 +472,15 @@ fn pre_multiply(s: &mut State, a: &Args, t: DAffine3) -> mlua::Result<Value> {
     Ok(Value::Nil)
 }
 
-fn three_numbers(a: &Args) -> mlua::Result<DVec3> {
-    Ok(DVec3::new(a.number(2)?, a.number(3)?, a.number(4)?))
-}
-
 fn gr_translate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     a.node(1)?;
-    let t = DAffine3::from_translation(three_numbers(a)?);
+    let t = DAffine3::from_translation(a.dvec3_at(2)?);
     pre_multiply(s, a, t)
 }
 
 fn gr_scale(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     a.node(1)?;
-    let t = DAffine3::from_scale(three_numbers(a)?);
+    let t = DAffine3::from_scale(a.dvec3_at(2)?);
     pre_multiply(s, a, t)
 }
 
@@ -723,17 +500,41 @@ fn gr_rotate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     pre_multiply(s, a, t)
 }
 
-/// Turns an mlua error into ours, unwrapping callback layers down to the original cause.
-fn convert_error(e: mlua::Error) -> Error {
-    match e {
-        mlua::Error::CallbackError { cause, .. } => convert_error((*cause).clone()),
-        mlua::Error::WithContext { cause, .. } => convert_error((*cause).clone()),
-        mlua::Error::ExternalError(inner) => match inner.downcast_ref::<Error>() {
-            Some(e) => e.clone(),
-            None => Error::Lua(inner.to_string()),
-        },
-        mlua::Error::SyntaxError { message, .. } => Error::Lua(message),
-        mlua::Error::RuntimeError(message) => Error::Lua(message),
-        other => Error::Lua(other.to_string()),
+impl UserData for NodeRef {
+    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
+        // Node methods are the `gr` functions themselves, as in the course where `gr` is the
+        // node metatable's `__index`.
+        methods.add_meta_function(MetaMethod::Index, |lua, (_node, key): (Value, Value)| {
+            let gr: Table = lua.named_registry_value(GR_KEY)?;
+            let f: Value = gr.raw_get(key.clone())?;
+            if f.is_nil() {
+                let key = key.to_string().unwrap_or_else(|_| "?".into());
+                return Err(lua_err(Error::fault_at(
+                    Fault::UnknownFunction,
+                    &caller_loc(lua),
+                    format!("gr.node has no method '{key}'"),
+                )));
+            }
+            Ok(f)
+        });
+        methods.add_meta_method(MetaMethod::ToString, |_, node, ()| {
+            Ok(format!("gr.node #{}", node.0.0))
+        });
+    }
+}
+
+impl UserData for MaterialRef {
+    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_meta_method(MetaMethod::ToString, |_, m, ()| {
+            Ok(format!("gr.material #{}", m.0.0))
+        });
+    }
+}
+
+impl UserData for LightRef {
+    fn add_methods<M: mlua::UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_meta_method(MetaMethod::ToString, |_, l, ()| {
+            Ok(format!("gr.light #{}", l.0.0))
+        });
     }
 }

@@ -1,11 +1,18 @@
-//! Argument checking for the `gr` functions, with lauxlib's messages and a script location.
+//! Argument checks for the `gr` functions, with lauxlib's messages and the calling script line.
 //!
 //! The course's C++ reads fixed argument positions with `luaL_check*`, so extra arguments are
 //! ignored and messages read `bad argument #3 to 'nh_sphere' (number expected, got nil)`. We keep
 //! those messages, prefix them with `script:line:`, and additionally reject NaN and infinity.
+//! This module also owns the Lua-side handles of description entries ([`NodeRef`],
+//! [`MaterialRef`], [`LightRef`]) and how a caustic error crosses the Lua boundary.
+//!
+//! ```lua
+//! s = gr.nh_sphere('s', {0, 0, 0})   -- test.lua:1: bad argument #3 to 'nh_sphere' (number expected, got no value)
+//! s:translate(1, 0/0, 0)             -- bad argument #2 to 'translate' (finite number expected, got NaN)
+//! ```
 
-use crate::error::{Error, Loc};
-use crate::scene::desc::{LightId, MaterialId, NodeId};
+use crate::desc::{LightId, MaterialId, NodeId};
+use crate::error::{Error, Fault, Loc};
 use glam::{DVec3, Vec3};
 use mlua::{Lua, MultiValue, Value};
 
@@ -84,7 +91,12 @@ impl<'a> Args<'a> {
 
     /// Returns an error at the caller's line with a free-form message.
     pub fn fail(&self, message: impl Into<String>) -> mlua::Error {
-        lua_err(Error::at(&self.loc, message))
+        self.fault(Fault::Other, message)
+    }
+
+    /// Returns an error of kind `fault` at the caller's line.
+    pub fn fault(&self, fault: Fault, message: impl Into<String>) -> mlua::Error {
+        lua_err(Error::fault_at(fault, &self.loc, message))
     }
 
     /// Returns lauxlib's `bad argument #i to 'f' (msg)` error.
@@ -95,9 +107,15 @@ impl<'a> Args<'a> {
             i as i64
         };
         if shown == 0 {
-            return self.fail(format!("calling '{}' on bad self ({msg})", self.fname));
+            return self.fault(
+                Fault::BadArgument,
+                format!("calling '{}' on bad self ({msg})", self.fname),
+            );
         }
-        self.fail(format!("bad argument #{shown} to '{}' ({msg})", self.fname))
+        self.fault(
+            Fault::BadArgument,
+            format!("bad argument #{shown} to '{}' ({msg})", self.fname),
+        )
     }
 
     fn type_error(&self, i: usize, expected: &str) -> mlua::Error {
@@ -183,6 +201,36 @@ impl<'a> Args<'a> {
             };
         }
         Ok(DVec3::from_array(out))
+    }
+
+    /// Checks a strictly positive number (a radius or a size).
+    pub fn positive(&self, i: usize, what: &str) -> mlua::Result<f64> {
+        let v = self.number(i)?;
+        if v <= 0.0 {
+            return Err(self.bad(i, format!("{what} must be positive, got {v}")));
+        }
+        Ok(v)
+    }
+
+    /// Checks an image dimension in pixels, truncated towards zero as C++ `int = double` does.
+    pub fn image_size(&self, i: usize) -> mlua::Result<u32> {
+        let v = self.number(i)?.trunc();
+        if !(1.0..=65535.0).contains(&v) {
+            return Err(self.bad(
+                i,
+                format!("image size must be in [1, 65535] pixels, got {v}"),
+            ));
+        }
+        Ok(v as u32)
+    }
+
+    /// Checks three number arguments from position `i` on (`n:translate(x, y, z)`).
+    pub fn dvec3_at(&self, i: usize) -> mlua::Result<DVec3> {
+        Ok(DVec3::new(
+            self.number(i)?,
+            self.number(i + 1)?,
+            self.number(i + 2)?,
+        ))
     }
 
     /// Checks a 3-tuple and converts it to single precision.

@@ -1,0 +1,174 @@
+//! The Lua layer: runs a CS488 scene script on an embedded Lua 5.4 and fills a [`SceneDesc`].
+//!
+//! Nothing below this layer knows Lua exists: a script run yields plain data, and `gr.render`
+//! hands the description as it stands to a [`RenderHook`] (the CLI builds and renders the scene
+//! there). The layer has three parts:
+//! - `sandbox.rs`: the Lua state and its standard library;
+//! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
+//! - [`args`]: argument checks with lauxlib's messages and the calling script line.
+//!
+//! This module owns what a run shares: the description being filled, path resolution and
+//! warnings. Paths (meshes, textures, output images) resolve against the working directory
+//! first, as the course does, then against the script's folder, so a corpus scene runs both from
+//! its own folder and by path from anywhere. Files are only resolved here; the scene build reads
+//! them.
+//!
+//! ```lua
+//! m = gr.material({0.7, 0.6, 1.0}, {0.5, 0.4, 0.8}, 25)
+//! s = gr.sphere('s'); s:set_material(m)
+//! root = gr.node('root'); root:add_child(s)
+//! gr.render(root, 'out.png', 256, 256, {0, 0, 5}, {0, 0, -1}, {0, 1, 0}, 50,
+//!           {0.3, 0.3, 0.3}, {gr.light({0, 10, 10}, {1, 1, 1}, {1, 0, 0})})
+//! ```
+
+pub mod args;
+mod gr;
+mod sandbox;
+
+use crate::desc::{MeshId, RenderDesc, SceneDesc};
+use crate::error::{Error, Loc, Result};
+use std::cell::RefCell;
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+/// Called by every `gr.render`: receives the description as it stands and the render call.
+pub type RenderHook = Box<dyn FnMut(&SceneDesc, &RenderDesc) -> Result<()>>;
+
+/// Largest image `gr.render` accepts, in pixels (about 8k × 8k).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// How a script run treats recoverable problems.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ScriptOptions {
+    /// `--missing-textures=warn`: a missing texture or bump image is a warning (once per file) and
+    /// the material renders with `kd` instead, rather than an error.
+    pub missing_textures_warn: bool,
+}
+
+/// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
+pub fn run_script(path: &Path, hook: RenderHook) -> Result<SceneDesc> {
+    run_script_with(path, hook, ScriptOptions::default())
+}
+
+/// Runs the script at `path` with `options`.
+pub fn run_script_with(path: &Path, hook: RenderHook, options: ScriptOptions) -> Result<SceneDesc> {
+    let source = std::fs::read(path).map_err(|e| Error::File {
+        path: path.to_path_buf(),
+        message: format!("cannot read script: {e}"),
+    })?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    run_source_with(&source, &path.display().to_string(), &dir, hook, options)
+}
+
+/// Runs script text named `name` (used in messages), resolving relative paths in the working
+/// directory and then in `script_dir`.
+pub fn run_source(
+    source: &[u8],
+    name: &str,
+    script_dir: &Path,
+    hook: RenderHook,
+) -> Result<SceneDesc> {
+    run_source_with(source, name, script_dir, hook, ScriptOptions::default())
+}
+
+/// Runs script text with `options` (see [`run_source`]).
+pub fn run_source_with(
+    source: &[u8],
+    name: &str,
+    script_dir: &Path,
+    hook: RenderHook,
+    options: ScriptOptions,
+) -> Result<SceneDesc> {
+    let state = Rc::new(RefCell::new(State {
+        desc: SceneDesc {
+            missing_textures_warn: options.missing_textures_warn,
+            ..SceneDesc::default()
+        },
+        warned_images: HashSet::new(),
+        script_dir: script_dir.to_path_buf(),
+        hook,
+        mesh_cache: HashMap::new(),
+    }));
+    let lua = sandbox::new_lua().map_err(convert_error)?;
+    gr::install(&lua, &state).map_err(convert_error)?;
+    lua.load(source)
+        .set_name(format!("@{name}"))
+        .exec()
+        .map_err(convert_error)?;
+    drop(lua);
+    let state = Rc::try_unwrap(state)
+        .map_err(|_| Error::Lua("internal: scene state still borrowed".into()))?
+        .into_inner();
+    Ok(state.desc)
+}
+
+/// What the `gr` functions of one script run share.
+struct State {
+    desc: SceneDesc,
+    script_dir: PathBuf,
+    hook: RenderHook,
+    /// Mesh files named so far, by canonical path.
+    mesh_cache: HashMap<PathBuf, MeshId>,
+    /// Missing images already warned about (`--missing-textures=warn`).
+    warned_images: HashSet<String>,
+}
+
+impl State {
+    /// Returns the readable file `given` names: as given (working directory), else in the script's folder.
+    fn resolve_input(&self, given: &str) -> Option<PathBuf> {
+        let p = Path::new(given);
+        if p.is_file() {
+            return Some(p.to_path_buf());
+        }
+        let q = self.script_dir.join(p);
+        (p.is_relative() && q.is_file()).then_some(q)
+    }
+
+    /// Returns where to write `given`: as given when its folder exists, else in the script's folder.
+    fn resolve_output(&self, given: &str) -> PathBuf {
+        let folder_exists = |q: &Path| match q.parent() {
+            None => true,
+            Some(d) => d.as_os_str().is_empty() || d.is_dir(),
+        };
+        let p = Path::new(given);
+        let q = self.script_dir.join(p);
+        if folder_exists(p) || p.is_absolute() || !folder_exists(&q) {
+            p.to_path_buf()
+        } else {
+            q
+        }
+    }
+
+    /// Prints a warning at `loc` and records it in the description.
+    fn warn(&mut self, loc: &Loc, message: String) {
+        let text = format!("{loc}: warning: {message}");
+        eprintln!("{text}");
+        self.desc.warnings.push(text);
+    }
+
+    /// Returns the message for a file `given` that resolves nowhere.
+    fn not_found(&self, what: &str, given: &str) -> String {
+        let cwd = std::env::current_dir().unwrap_or_default();
+        format!(
+            "{what} '{given}' not found (looked in the working directory {} and in the script's folder {})",
+            cwd.display(),
+            self.script_dir.display()
+        )
+    }
+}
+
+/// Turns an mlua error into ours, unwrapping callback layers down to the original cause.
+fn convert_error(e: mlua::Error) -> Error {
+    match e {
+        mlua::Error::CallbackError { cause, .. } => convert_error((*cause).clone()),
+        mlua::Error::WithContext { cause, .. } => convert_error((*cause).clone()),
+        mlua::Error::ExternalError(inner) => match inner.downcast_ref::<Error>() {
+            Some(e) => e.clone(),
+            None => Error::Lua(inner.to_string()),
+        },
+        mlua::Error::SyntaxError { message, .. } => Error::Lua(message),
+        mlua::Error::RuntimeError(message) => Error::Lua(message),
+        other => Error::Lua(other.to_string()),
+    }
+}

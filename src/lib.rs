@@ -1,16 +1,23 @@
 //! caustic: a photon-mapping ray tracer for scenes written in the CS488 Lua modelling language.
 //!
 //! # Data flow
-//! Each arrow is one function a test can call without Lua:
+//! Each arrow is one function a test can call without Lua (the picture, and where to add a
+//! primitive, a lobe, a light, a flag or an integrator, are in `docs/architecture.md`):
 //!
 //! ```text
-//! Lua script ──lua::run_script──▶ SceneDesc (plain data, every entry tagged with file:line)
-//!            ──scene::build::build_scene──▶ Scene (world-space instances, two-level BVH, materials, lights)
-//!            ──render::render──▶ Film (linear RGB) ──io::image::write_png──▶ PNG on disk
+//! Lua script ──lua::run_script──▶ SceneDesc (desc: plain data, every entry tagged with file:line)
+//!   ──scene::build_scene──▶ Scene (meshes and textures read, world-space instances, two-level BVH)
+//!   ──frame::render──▶ integrator::plan (which integrator, which effects, why)
+//!                    ──▶ the integrator's phases (photon_map: trace photons, build maps,
+//!                        precompute irradiance; then the camera pass, render::camera_pass)
+//!                    ──▶ Film + Stats ──io::image::write_image──▶ PNG or EXR on disk
 //! ```
 //!
-//! `gr.render` calls the last three steps synchronously, as the course's renderer does, so a
-//! script may render several images and keeps running after each.
+//! `gr.render` calls the last steps synchronously, as the course's renderer does, so a script
+//! may render several images and keeps running after each. The command line ([`cli`]), every
+//! test helper and every tool render through [`frame`]; nothing else wires passes together.
+//! Eye rays, final-gather rays and photons scatter through one model ([`material::bsdf`]),
+//! set up once per hit ([`scene::interaction`]).
 //!
 //! # Conventions
 //! - World space is right-handed, y up by the scenes' convention (the camera's `up` decides).
@@ -26,6 +33,9 @@
 //! - *description*: what the script said ([`desc`]); *scene*: what the renderer traces ([`scene::Scene`]).
 //! - *instance*: one placement of a shape in the world, with its transform and material.
 //! - *TLAS/BLAS*: the top-level BVH over instances and the per-mesh BVH over triangles ([`accel`]).
+//! - *integrator*: how a frame computes light transport ([`integrator::Integrator`]); *plan*: the
+//!   decision which one, and which effects, a scene needs ([`integrator::plan`]).
+//! - *BSDF*: what a surface does at one hit ([`material::bsdf::Bsdf`]).
 
 pub mod accel;
 pub mod camera;

@@ -23,7 +23,7 @@
 //! [`Bvh::any`]; see [`Bvh::order`]), and the callback returns the hit's `t`, or infinity on a miss.
 //! Callers that store their primitives in BVH order index them directly.
 //!
-//! Two things obvhs leaves to us (`../shared/docs/obvhs.md` §5): boxes are padded so flat
+//! Two things obvhs leaves to its users: boxes are padded so flat
 //! primitives do not get zero-thickness boxes that non-conservative slab tests can miss, and the
 //! callbacks must reject `t <= tmin` themselves.
 

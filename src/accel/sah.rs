@@ -3,7 +3,7 @@
 //! Why not obvhs's PLOC for meshes: on the 2M-triangle wave mesh PLOC plus its reinsertion and
 //! leaf collapse, then our collapse to 8 wide, took 1.9 s on two threads and left 2.9 triangles
 //! per leaf (a quarter of every 4-wide triangle test wasted), while Embree's binned SAH builder
-//! takes 0.5 s. obvhs has no top-down builder (`../shared/docs/obvhs.md` §1), so this is
+//! takes 0.5 s. obvhs has no top-down SAH builder (it builds by PLOC), so this is
 //! the one in Wald's "On fast Construction of SAH-based Bounding Volume Hierarchies" (2007), shaped
 //! like Embree's BVH8 builder:
 //!

@@ -1,6 +1,7 @@
 //! The `gr` table: every function a script can call, installed from one list of entries.
 //!
-//! The API is the CS488 A4 starter's (see `../shared/docs/cs488_lua_api.md` §1–§5) plus the
+//! The API is the CS488 A4 starter's (the course's `gr` module: nodes, primitives, materials, lights,
+//! transforms, `gr.render`) plus the
 //! extended ray tracer's commands, with every extra argument optional:
 //!
 //! ```lua

@@ -1,5 +1,5 @@
-//! Surface materials as the renderer uses them: one place decides what a surface does, for eye
-//! rays and photons alike.
+//! Surface materials as the renderer uses them; what a material does at one hit, for eye rays,
+//! gather rays and photons alike, is its [`bsdf::Bsdf`].
 //!
 //! `gr.material(kd, ks, p [, t [, ior [, s [, texture [, bump]]]]])` means:
 //! - `kd`: diffuse reflectance, which also multiplies the ambient light; a `texture` replaces it

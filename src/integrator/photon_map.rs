@@ -6,9 +6,14 @@
 //! - caustics: a density estimate of the caustic map at the point;
 //! - indirect diffuse light, in one of two modes ([`Indirect`]):
 //!   - `Gather` (the default; Jensen's final gathering): `rays` cosine-distributed rays from the
-//!     point; where each lands, the global map's radiance estimate (all its photons) is the
-//!     incoming radiance. Points reached after more than [`MAX_GATHER_DEPTH`] specular bounces
-//!     use the direct mode.
+//!     point; where each lands on a diffuse lobe, the global map's radiance estimate (all its
+//!     photons) is the incoming radiance. Where one lands on a mirror or a dielectric it
+//!     continues by the BSDF's roulette over the specular lobes (radiance scaled by
+//!     `(n_from/n_to)²` where it refracts), for up to [`MAX_GATHER_SPECULAR`] bounces: light
+//!     arriving diffuse → specular → diffuse is in neither the caustic map nor the direct term.
+//!     Emitters seen by gather rays count nothing (that light is the direct term or the caustic
+//!     map's). Points reached after more than [`MAX_GATHER_DEPTH`] specular bounces use the
+//!     direct mode.
 //!
 //!     By default that estimate is not made afresh for every gather ray. Following Christensen
 //!     (*Faster photon map global illumination*, JGT 1999), [`Gi::build`] computes the

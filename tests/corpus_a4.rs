@@ -36,6 +36,9 @@ fn check_image(path: &Path, w: u32, h: u32) {
 
 #[test]
 fn every_a4_scene_renders_from_its_own_folder() {
+    if common::skip_without_corpus("every_a4_scene_renders_from_its_own_folder") {
+        return;
+    }
     let out = out_dir("a4-from-folder");
     for (name, w, h) in SCENES {
         let png = out.join(format!("{name}.png"));
@@ -51,6 +54,9 @@ fn every_a4_scene_renders_from_its_own_folder() {
 
 #[test]
 fn every_a4_scene_renders_by_path_from_the_repository_root() {
+    if common::skip_without_corpus("every_a4_scene_renders_by_path_from_the_repository_root") {
+        return;
+    }
     let out = out_dir("a4-by-path");
     for (name, w, h) in SCENES {
         let png = out.join(format!("{name}.png"));
@@ -70,6 +76,11 @@ fn every_a4_scene_renders_by_path_from_the_repository_root() {
 
 #[test]
 fn without_o_the_image_lands_in_the_working_directory_and_meshes_beside_the_script() {
+    if common::skip_without_corpus(
+        "without_o_the_image_lands_in_the_working_directory_and_meshes_beside_the_script",
+    ) {
+        return;
+    }
     let out = out_dir("a4-default-output");
     let scenes = out.join("scenes");
     std::fs::create_dir_all(&scenes).unwrap();
@@ -87,6 +98,9 @@ fn without_o_the_image_lands_in_the_working_directory_and_meshes_beside_the_scri
 
 #[test]
 fn scale_option_resizes_the_image() {
+    if common::skip_without_corpus("scale_option_resizes_the_image") {
+        return;
+    }
     let out = out_dir("a4-scale");
     let png = out.join("n.png");
     run_ok(
@@ -101,6 +115,9 @@ fn scale_option_resizes_the_image() {
 
 #[test]
 fn incompatible_dialect_fails_with_a_located_error() {
+    if common::skip_without_corpus("incompatible_dialect_fails_with_a_located_error") {
+        return;
+    }
     let script = common::corpus("WeiqiangYu0528__cs488/A5/Assets/primitive.lua");
     let out = caustic()
         .arg("render")
@@ -119,6 +136,9 @@ fn incompatible_dialect_fails_with_a_located_error() {
 
 #[test]
 fn info_summarises_nodes_meshes_and_render_calls() {
+    if common::skip_without_corpus("info_summarises_nodes_meshes_and_render_calls") {
+        return;
+    }
     let out = run_ok(
         caustic()
             .current_dir(a4_assets())

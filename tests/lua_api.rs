@@ -31,6 +31,9 @@ fn transforms_pre_multiply_in_call_order() {
 
 #[test]
 fn instancing_places_a_shared_subtree_once_per_parent() {
+    if common::skip_without_corpus("instancing_places_a_shared_subtree_once_per_parent") {
+        return;
+    }
     let dir = common::a4_assets();
     let src = "
         m = gr.material({1, 1, 1}, {0, 0, 0}, 0)

@@ -144,6 +144,9 @@ fn flat_normal_map_changes_nothing_and_tilted_maps_turn_with_their_object() {
 
 #[test]
 fn corpus_textured_scenes_render_with_their_images() {
+    if common::skip_without_corpus("corpus_textured_scenes_render_with_their_images") {
+        return;
+    }
     let project = common::corpus("tengyucai__Computer-Graphics/Project");
     for name in ["texture", "bump", "perlin"] {
         let src = std::fs::read(project.join(format!("Assets/{name}.lua"))).unwrap();

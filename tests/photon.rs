@@ -215,6 +215,9 @@ fn photon_renders_are_identical_for_one_and_two_threads() {
 
 #[test]
 fn the_original_projects_scenes_render_with_photon_maps() {
+    if common::skip_without_corpus("the_original_projects_scenes_render_with_photon_maps") {
+        return;
+    }
     let project = common::corpus("tengyucai__Computer-Graphics/Project");
     let dir = out_dir("photon-corpus");
     for name in [

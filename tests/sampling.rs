@@ -169,6 +169,9 @@ fn render_cli(dir: &std::path::Path, name: &str, extra: &[&str]) -> Vec<u8> {
 
 #[test]
 fn one_and_two_threads_give_the_same_bytes() {
+    if common::skip_without_corpus("one_and_two_threads_give_the_same_bytes") {
+        return;
+    }
     let dir = out_dir("sampling-threads");
     for mode in [&["--spp", "4"][..], &["--adaptive"][..]] {
         let one = render_cli(&dir, "t1.png", &[&["--threads", "1"][..], mode].concat());
@@ -187,6 +190,9 @@ fn one_and_two_threads_give_the_same_bytes() {
 
 #[test]
 fn stitched_tiles_equal_the_full_render_byte_for_byte() {
+    if common::skip_without_corpus("stitched_tiles_equal_the_full_render_byte_for_byte") {
+        return;
+    }
     let dir = out_dir("sampling-stitch");
     let full = render_cli(&dir, "full.png", &["--spp", "2"]);
     let tiles = [

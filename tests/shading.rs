@@ -123,6 +123,11 @@ fn sphere_facing_the_light_head_on_has_radiance_kd_times_intensity() {
 
 #[test]
 fn simple_lua_spheres_are_lit_towards_the_lights_and_dark_away_from_them() {
+    if common::skip_without_corpus(
+        "simple_lua_spheres_are_lit_towards_the_lights_and_dark_away_from_them",
+    ) {
+        return;
+    }
     let films = render_corpus_script(&a4_assets().join("simple.lua"));
     assert_eq!(films.len(), 1);
     let (r, camera, film) = &films[0];

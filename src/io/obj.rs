@@ -409,6 +409,15 @@ tengyucai/untitled.obj 2500 4802 -0.520045 -0.018565 -0.518998 0.520044 0.01964 
 
     #[test]
     fn loads_course_meshes_with_exact_counts() {
+        // A fresh clone has no shared corpus beside it: skip with one line, except under CI.
+        if !Path::new(CORPUS).is_dir() {
+            assert!(
+                std::env::var("CI").map_or(true, |v| v != "true"),
+                "the shared corpus {CORPUS} is missing (CI=true requires it)"
+            );
+            println!("skipped loads_course_meshes_with_exact_counts: no shared corpus at {CORPUS}");
+            return;
+        }
         for row in COURSE.lines() {
             let words: Vec<&str> = row.split(' ').collect();
             let file = words[0]

@@ -14,6 +14,23 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::rc::Rc;
 
+/// Returns true, after printing one line naming the test and the missing folder, when the
+/// shared corpus is not beside the checkout (a fresh clone): the test then skips. Under
+/// `CI=true`, where the corpus is always present, a missing corpus fails the test instead.
+pub fn skip_without_corpus(test: &str) -> bool {
+    let root = corpus("");
+    if root.is_dir() {
+        return false;
+    }
+    assert!(
+        std::env::var("CI").map_or(true, |v| v != "true"),
+        "{test}: the shared corpus {} is missing (CI=true requires it)",
+        root.display()
+    );
+    println!("skipped {test}: no shared corpus at {}", root.display());
+    true
+}
+
 /// Returns a path inside the read-only CS488 corpus beside the checkout.
 pub fn corpus(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -27,7 +27,9 @@ pub fn skip_without_corpus(test: &str) -> bool {
         "{test}: the shared corpus {} is missing (CI=true requires it)",
         root.display()
     );
-    println!("skipped {test}: no shared corpus at {}", root.display());
+    // Straight to stderr: the test harness captures print! but not the stream itself.
+    let line = format!("skipped {test}: no shared corpus at {}\n", root.display());
+    let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
     true
 }
 

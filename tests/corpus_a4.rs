@@ -160,3 +160,48 @@ fn info_summarises_nodes_meshes_and_render_calls() {
         "{text}"
     );
 }
+
+/// The output format follows the extension: `.png` and `.exr` (any case) are written, anything
+/// else is refused before rendering with the path in the message, and nothing is written.
+/// (`-o out.jpg` used to write PNG bytes under a JPEG name.)
+#[test]
+fn output_formats_follow_the_extension_and_unknown_ones_are_refused() {
+    let dir = out_dir("output-formats");
+    std::fs::write(
+        dir.join("s.lua"),
+        "s = gr.sphere('s'); s:set_material(gr.material({1,1,1}, {0,0,0}, 0))
+         gr.render(s, 'x.png', 4, 4, {0,0,5}, {0,0,-1}, {0,1,0}, 50, {0,0,0}, {gr.light({0,0,5}, {1,1,1}, {1,0,0})})",
+    )
+    .unwrap();
+    for name in ["out.jpg", "out.tif", "out"] {
+        let out = caustic()
+            .current_dir(&dir)
+            .args(["render", "s.lua", "-q", "-o", name])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(name), "{name}: {err}");
+        assert!(err.contains(".png and .exr"), "{name}: {err}");
+        assert!(!dir.join(name).exists(), "{name} was written");
+    }
+    common::run_ok(
+        caustic()
+            .current_dir(&dir)
+            .args(["render", "s.lua", "-q", "-o", "ok.EXR"]),
+    );
+    let exr = image::open(dir.join("ok.EXR")).unwrap();
+    assert_eq!((exr.width(), exr.height()), (4, 4));
+    common::run_ok(
+        caustic()
+            .current_dir(&dir)
+            .args(["render", "s.lua", "-q", "-o", "ok.png"]),
+    );
+    let stitched = caustic()
+        .current_dir(&dir)
+        .args(["stitch", "ok.png", "-o", "all.tif"])
+        .output()
+        .unwrap();
+    assert!(
+        !stitched.status.success() && String::from_utf8_lossy(&stitched.stderr).contains("all.tif")
+    );
+}

@@ -291,6 +291,16 @@ fn render_one(
     job: &RenderJob,
     out: &std::path::Path,
 ) -> Result<()> {
+    // Refuse an output the image cannot be written to before spending the render on it.
+    crate::io::image::output_format(out)?;
+    if let Some(map) = &job.aa_map
+        && crate::io::image::output_format(map)? != crate::io::image::Format::Png
+    {
+        return Err(Error::Usage(format!(
+            "--aa-map {} : the ray-count map is written as PNG; name it .png",
+            map.display()
+        )));
+    }
     let start = Instant::now();
     let bar = Bar::new(job.progress, out);
     let frame = frame::render_desc(desc, r, job.scale, job.crop, &job.settings, &bar);

@@ -106,12 +106,39 @@ fn encode_png(
     writer.finish().map_err(|e| e.to_string())
 }
 
-/// Writes `film` at `path`: PNG with `tonemap`, or linear EXR when the path ends in `.exr`.
-/// A film that is a window of a larger image records its place (PNG only).
-pub fn write_image(film: &Film, path: &Path, tonemap: Tonemap) -> Result<()> {
-    let is_exr = path
+/// The image formats caustic writes, chosen by the output's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// `.png`: 8-bit RGB through the tone map.
+    Png,
+    /// `.exr`: linear 32-bit float RGB.
+    Exr,
+}
+
+/// Returns the format `path`'s extension names (case-insensitive), or an error naming the
+/// path: an unknown or missing extension is refused rather than written as PNG under that name.
+pub fn output_format(path: &Path) -> Result<Format> {
+    let ext = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("png") => Ok(Format::Png),
+        Some("exr") => Ok(Format::Exr),
+        other => Err(Error::File {
+            path: path.to_path_buf(),
+            message: match other {
+                Some(e) => format!("unknown output format '.{e}' (caustic writes .png and .exr)"),
+                None => "the output has no extension (caustic writes .png and .exr)".into(),
+            },
+        }),
+    }
+}
+
+/// Writes `film` at `path`: PNG with `tonemap`, or linear EXR when the path ends in `.exr`;
+/// any other extension is an error ([`output_format`]). A film that is a window of a larger
+/// image records its place (PNG only).
+pub fn write_image(film: &Film, path: &Path, tonemap: Tonemap) -> Result<()> {
+    let is_exr = output_format(path)? == Format::Exr;
     if is_exr {
         let data: Vec<f32> = film.pixels.iter().flat_map(|c| c.to_array()).collect();
         let img = image::Rgb32FImage::from_raw(film.width, film.height, data).ok_or_else(|| {
@@ -234,6 +261,12 @@ fn read_tile(path: &Path) -> Result<Tile> {
 /// Assembles tiles written with `--crop` into the full image at `out`; every pixel must be
 /// covered by exactly one tile.
 pub fn stitch(tiles: &[PathBuf], out: &Path) -> Result<()> {
+    if output_format(out)? != Format::Png {
+        return Err(Error::File {
+            path: out.to_path_buf(),
+            message: "stitch writes PNG; name the output .png".into(),
+        });
+    }
     let tiles: Vec<Tile> = tiles.iter().map(|p| read_tile(p)).collect::<Result<_>>()?;
     let Some(first) = tiles.first() else {
         return Err(Error::Usage("stitch needs at least one tile".into()));

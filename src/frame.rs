@@ -21,6 +21,8 @@ use crate::error::{Error, Result};
 use crate::film::{Film, Window};
 use crate::integrator::photon_map::{Gi, GiSettings, GiStats};
 use crate::integrator::{GiMode, Settings, plan};
+use crate::lua::MAX_PIXELS;
+use crate::photon::trace::{MAX_PHOTONS, photon_budget};
 use crate::progress::Progress;
 use crate::scene::{Scene, build_scene};
 
@@ -68,9 +70,36 @@ pub fn render_desc(
 ) -> Result<Frame> {
     let window = window(r, scale, crop)?;
     let scene = build_scene(desc, r)?;
+    check_photon_budget(desc, r, &scene, settings)?;
     let camera = Camera::new(&r.camera, window.full_width, window.full_height);
     let (film, stats) = render(&scene, &camera, window, settings, progress);
     Ok(Frame { scene, film, stats })
+}
+
+/// Returns an error at the light's script line when its photon count (its `num_photons` or its
+/// share of `--photons`, times `--photon-scale`) exceeds [`MAX_PHOTONS`].
+fn check_photon_budget(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scene: &Scene,
+    settings: &Settings,
+) -> Result<()> {
+    let p = &settings.photons;
+    let budget = photon_budget(&scene.lights, p.photons);
+    for (l, n) in budget.iter().enumerate() {
+        let scaled = *n as f64 * p.photon_scale;
+        if scaled > MAX_PHOTONS as f64 {
+            let loc = &desc.lights[r.lights[l].0 as usize].loc;
+            return Err(Error::at(
+                loc,
+                format!(
+                    "this light would emit {scaled:.3e} photons per map (with --photon-scale {}), more than {MAX_PHOTONS}",
+                    p.photon_scale
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Returns the size of `r`'s image at `scale` times the script's.
@@ -83,6 +112,15 @@ pub fn scaled_size(r: &RenderDesc, scale: f64) -> (u32, u32) {
 /// or an error at `r`'s line when it is not inside the image.
 pub fn window(r: &RenderDesc, scale: f64, crop: Option<[u32; 4]>) -> Result<Window> {
     let (w, h) = scaled_size(r, scale);
+    if w as u64 * h as u64 > MAX_PIXELS {
+        return Err(Error::at(
+            &r.loc,
+            format!(
+                "--scale {scale} makes the {}x{} image {w}x{h}, more than {MAX_PIXELS} pixels",
+                r.width, r.height
+            ),
+        ));
+    }
     let Some([x0, y0, x1, y1]) = crop else {
         return Ok(Window::full(w, h));
     };

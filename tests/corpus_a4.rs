@@ -205,3 +205,62 @@ fn output_formats_follow_the_extension_and_unknown_ones_are_refused() {
         !stitched.status.success() && String::from_utf8_lossy(&stitched.stderr).contains("all.tif")
     );
 }
+
+/// Flags and script values that set sizes and counts are bounded, with a usage error or one
+/// located at the script line, never an abort or a run that does not end: `--threads 100000`
+/// started thousands of threads, `--photons 1e12` and `num_photons = 1e12` ran for ever or
+/// aborted, and `--scale 16` on a 4096² image tried to allocate 64 GB.
+#[test]
+fn sizes_and_counts_are_bounded_with_clear_errors() {
+    let dir = out_dir("bounded");
+    let script = |size: u32, photons: &str| {
+        format!(
+            "s = gr.sphere('s'); s:set_material(gr.material({{1,1,1}}, {{0,0,0}}, 0))
+             gr.render(s, 'x.png', {size}, {size}, {{0,0,5}}, {{0,0,-1}}, {{0,1,0}}, 50, {{0,0,0}},
+                       {{gr.light({{0,0,5}}, {{1,1,1}}, {{1,0,0}}, 1, {photons})}})"
+        )
+    };
+    let run = |src: &str, args: &[&str]| {
+        std::fs::write(dir.join("s.lua"), src).unwrap();
+        let out = caustic()
+            .current_dir(&dir)
+            .arg("render")
+            .arg("s.lua")
+            .arg("-q")
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let small = script(4, "nil");
+    for (args, want) in [
+        (
+            &["--threads", "100000"][..],
+            "--threads must be in [1, 1024]",
+        ),
+        (
+            &["--photons", "2000000000"][..],
+            "--photons must be at most 1000000000",
+        ),
+        (
+            &["--photon-scale", "1000", "--photons", "10000000"][..],
+            "s.lua:3:",
+        ),
+    ] {
+        let (ok, err) = run(&small, args);
+        assert!(!ok && err.contains(want), "{args:?}: {err}");
+    }
+    let (ok, err) = run(&script(4, "1e12"), &[]);
+    assert!(
+        !ok && err.contains("s.lua:3:") && err.contains("photon count"),
+        "{err}"
+    );
+    let (ok, err) = run(&script(4096, "nil"), &["--scale", "16"]);
+    assert!(
+        !ok && err.contains("s.lua:2:") && err.contains("65536x65536"),
+        "{err}"
+    );
+}

@@ -22,6 +22,9 @@ use std::path::PathBuf;
 use std::rc::Rc;
 use std::time::Instant;
 
+/// Most worker threads `--threads` accepts.
+pub const MAX_THREADS: usize = 1024;
+
 /// caustic: a photon-mapping ray tracer for CS488 Lua scenes.
 #[derive(Debug, Parser)]
 #[command(name = "caustic", version, about)]
@@ -245,8 +248,10 @@ fn render_command(args: RenderArgs) -> Result<()> {
         )));
     }
     if let Some(n) = args.threads {
-        if n == 0 {
-            return Err(Error::Usage("--threads must be at least 1".into()));
+        if !(1..=MAX_THREADS).contains(&n) {
+            return Err(Error::Usage(format!(
+                "--threads must be in [1, {MAX_THREADS}], got {n}"
+            )));
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -332,6 +337,13 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
     let count = Rc::new(Cell::new(0u32));
     let counter = Rc::clone(&count);
     let output = args.output.clone();
+    if args.photons > crate::photon::trace::MAX_PHOTONS {
+        return Err(Error::Usage(format!(
+            "--photons must be at most {}, got {}",
+            crate::photon::trace::MAX_PHOTONS,
+            args.photons
+        )));
+    }
     let (photons, seed, scale) = (args.photons, args.seed, args.scale);
     let progress = !args.quiet && std::io::stderr().is_terminal();
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
@@ -353,7 +365,8 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
                 r.output.with_file_name(format!("{stem}_photons.png"))
             }
         };
-        let size = frame::scaled_size(r, scale);
+        let win = frame::window(r, scale, None)?;
+        let size = (win.full_width, win.full_height);
         let scene = build_scene(desc, r)?;
         let camera = Camera::new(&r.camera, size.0, size.1);
         let settings = GiSettings {
@@ -393,7 +406,8 @@ fn export_command(args: ExportArgs) -> Result<()> {
         )));
     };
     let scene = build_scene(&desc, r)?;
-    let size = frame::scaled_size(r, args.scale);
+    let win = frame::window(r, args.scale, None)?;
+    let size = (win.full_width, win.full_height);
     crate::io::mitsuba::export(&desc, r, &scene, size, args.spp, &args.output)?;
     eprintln!(
         "wrote {} ({}x{}, {} spp)",

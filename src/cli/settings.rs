@@ -51,6 +51,13 @@ impl RenderJob {
         if !a.exposure.is_finite() {
             return Err(Error::Usage("--exposure must be finite".into()));
         }
+        if a.photons > crate::photon::trace::MAX_PHOTONS {
+            return Err(Error::Usage(format!(
+                "--photons must be at most {}, got {}",
+                crate::photon::trace::MAX_PHOTONS,
+                a.photons
+            )));
+        }
         for (name, value, max) in [
             ("--light-samples", a.light_samples as u64, 4096),
             ("--photon-k", a.photon_k as u64, 10_000),

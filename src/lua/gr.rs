@@ -375,9 +375,15 @@ fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Res
     }
     let photons = a.opt_number(5)?;
     if let Some(n) = photons
-        && !(0.0..=1e12).contains(&n)
+        && !(0.0..=crate::photon::trace::MAX_PHOTONS as f64).contains(&n)
     {
-        return Err(a.bad(5, format!("photon count must be in [0, 1e12], got {n}")));
+        return Err(a.bad(
+            5,
+            format!(
+                "photon count must be in [0, {}], got {n}",
+                crate::photon::trace::MAX_PHOTONS
+            ),
+        ));
     }
     let id = LightId(s.desc.lights.len() as u32);
     s.desc.lights.push(LightDesc {

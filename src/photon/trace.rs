@@ -35,6 +35,9 @@ use std::f32::consts::TAU;
 /// interface crossings count too: a cap of 12 cut off light after three bounces under water,
 /// 5% of the whole image of a water scene (tools/validate).
 pub const MAX_BOUNCES: u32 = 256;
+/// Most photons one light may emit for one map: 10^9 stored photons would need 20 GB, most of
+/// this machine's memory. Script counts, `--photons` and `--photon-scale` are checked against it.
+pub const MAX_PHOTONS: u64 = 1_000_000_000;
 /// Least photons a light gets when the budget is shared, so a dim light over a pool still casts
 /// caustics: this fraction of an equal share.
 const MIN_SHARE: f64 = 0.1;

@@ -22,7 +22,7 @@ use crate::film::{Film, Window};
 use crate::integrator::photon_map::{Gi, GiSettings, GiStats};
 use crate::integrator::{GiMode, Settings, plan};
 use crate::lua::MAX_PIXELS;
-use crate::photon::trace::{MAX_PHOTONS, photon_budget};
+use crate::photon::trace::MAX_PHOTONS;
 use crate::progress::Progress;
 use crate::scene::{Scene, build_scene};
 
@@ -84,17 +84,15 @@ fn check_photon_budget(
     scene: &Scene,
     settings: &Settings,
 ) -> Result<()> {
-    let p = &settings.photons;
-    let budget = photon_budget(&scene.lights, p.photons);
-    for (l, n) in budget.iter().enumerate() {
-        let scaled = *n as f64 * p.photon_scale;
-        if scaled > MAX_PHOTONS as f64 {
+    let budget = settings.photons.budget(&scene.lights);
+    for (l, &n) in budget.iter().enumerate() {
+        if n > MAX_PHOTONS {
             let loc = &desc.lights[r.lights[l].0 as usize].loc;
             return Err(Error::at(
                 loc,
                 format!(
-                    "this light would emit {scaled:.3e} photons per map (with --photon-scale {}), more than {MAX_PHOTONS}",
-                    p.photon_scale
+                    "this light would emit {n:.3e} photons per map (with --photon-scale {}), more than {MAX_PHOTONS}",
+                    settings.photons.photon_scale
                 ),
             ));
         }

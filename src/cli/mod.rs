@@ -241,12 +241,7 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 fn render_command(args: RenderArgs) -> Result<()> {
-    if !(args.scale > 0.0 && args.scale <= 16.0) {
-        return Err(Error::Usage(format!(
-            "--scale must be in (0, 16], got {}",
-            args.scale
-        )));
-    }
+    settings::check_scale(args.scale)?;
     if let Some(n) = args.threads {
         if !(1..=MAX_THREADS).contains(&n) {
             return Err(Error::Usage(format!(
@@ -328,22 +323,11 @@ fn render_one(
 }
 
 fn photons_command(args: PhotonsArgs) -> Result<()> {
-    if !(args.scale > 0.0 && args.scale <= 16.0) {
-        return Err(Error::Usage(format!(
-            "--scale must be in (0, 16], got {}",
-            args.scale
-        )));
-    }
+    settings::check_scale(args.scale)?;
     let count = Rc::new(Cell::new(0u32));
     let counter = Rc::clone(&count);
     let output = args.output.clone();
-    if args.photons > crate::photon::trace::MAX_PHOTONS {
-        return Err(Error::Usage(format!(
-            "--photons must be at most {}, got {}",
-            crate::photon::trace::MAX_PHOTONS,
-            args.photons
-        )));
-    }
+    settings::check_photons(args.photons)?;
     let (photons, seed, scale) = (args.photons, args.seed, args.scale);
     let progress = !args.quiet && std::io::stderr().is_terminal();
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
@@ -393,10 +377,12 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
 }
 
 fn export_command(args: ExportArgs) -> Result<()> {
-    if !(args.scale > 0.0 && args.scale <= 16.0 && (1..=1 << 20).contains(&args.spp)) {
-        return Err(Error::Usage(
-            "--scale must be in (0, 16] and --spp in [1, 1048576]".into(),
-        ));
+    settings::check_scale(args.scale)?;
+    if !(1..=1 << 20).contains(&args.spp) {
+        return Err(Error::Usage(format!(
+            "--spp must be in [1, 1048576], got {}",
+            args.spp
+        )));
     }
     let desc = run_script(&args.scene, Box::new(|_, _| Ok(())))?;
     let Some(r) = desc.renders.first() else {

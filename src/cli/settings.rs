@@ -6,9 +6,32 @@ use crate::error::{Error, Result};
 use crate::integrator::photon_map::{GiSettings, Indirect};
 use crate::integrator::{GiMode, Settings};
 use crate::io::image::Tonemap;
+use crate::photon::trace::MAX_PHOTONS;
 use crate::render::Sampling;
 use std::io::IsTerminal;
 use std::path::PathBuf;
+
+/// Returns a usage error unless `--scale` is in (0, 16].
+pub fn check_scale(scale: f64) -> Result<()> {
+    if scale > 0.0 && scale <= 16.0 {
+        Ok(())
+    } else {
+        Err(Error::Usage(format!(
+            "--scale must be in (0, 16], got {scale}"
+        )))
+    }
+}
+
+/// Returns a usage error unless `--photons` is at most [`MAX_PHOTONS`].
+pub fn check_photons(photons: u64) -> Result<()> {
+    if photons <= MAX_PHOTONS {
+        Ok(())
+    } else {
+        Err(Error::Usage(format!(
+            "--photons must be at most {MAX_PHOTONS}, got {photons}"
+        )))
+    }
+}
 
 /// What `caustic render` does with each image, checked: the frame's settings and what the
 /// command line adds around them.
@@ -51,13 +74,7 @@ impl RenderJob {
         if !a.exposure.is_finite() {
             return Err(Error::Usage("--exposure must be finite".into()));
         }
-        if a.photons > crate::photon::trace::MAX_PHOTONS {
-            return Err(Error::Usage(format!(
-                "--photons must be at most {}, got {}",
-                crate::photon::trace::MAX_PHOTONS,
-                a.photons
-            )));
-        }
+        check_photons(a.photons)?;
         for (name, value, max) in [
             ("--light-samples", a.light_samples as u64, 4096),
             ("--photon-k", a.photon_k as u64, 10_000),

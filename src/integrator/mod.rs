@@ -35,16 +35,6 @@ pub enum Integrator {
     PhotonMap,
 }
 
-impl Integrator {
-    /// Returns the integrator's name, as `--stats` and the plan print it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Integrator::Whitted => "whitted",
-            Integrator::PhotonMap => "photon map",
-        }
-    }
-}
-
 /// What shapes a frame besides the scene, the camera and the window.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
@@ -112,14 +102,22 @@ impl Integrator {
     }
 }
 
-/// Runs the camera pass of a frame with `tracer`, reporting rows to `progress`.
+/// Runs the camera pass of a frame: the eye path with the integrator's `diffuse` term, reporting
+/// rows to `progress`.
 fn camera_pass(
+    scene: &Scene,
     camera: &Camera,
-    tracer: &eye::Tracer,
+    diffuse: eye::DiffuseTerm,
     window: Window,
     settings: &Settings,
     progress: &dyn Progress,
 ) -> (Film, RenderStats) {
+    let tracer = eye::Tracer {
+        scene,
+        camera,
+        light_samples: settings.light_samples,
+        diffuse,
+    };
     let opts = crate::render::PassOptions {
         seed: settings.seed,
         sampling: settings.sampling.clone(),
@@ -127,5 +125,5 @@ fn camera_pass(
         timing: settings.timing,
     };
     progress.start("rendering rows", window.size().1 as u64);
-    crate::render::camera_pass(camera, tracer, &opts, &|| progress.advance(1))
+    crate::render::camera_pass(camera, &tracer, &opts, &|| progress.advance(1))
 }

@@ -35,7 +35,7 @@
 //! normal disagrees with the surface's (light leaking round corners and through thin walls), and
 //! weight them with a [`Filter`] that integrates to one.
 
-use super::eye::{DiffuseTerm, PathState, Tracer};
+use super::eye::{DiffuseTerm, PathState};
 use super::{Plan, Settings, camera_pass};
 use crate::camera::Camera;
 use crate::film::{Film, Window};
@@ -99,6 +99,17 @@ pub struct GiSettings {
     /// Final-gather rays read irradiance precomputed at every [`PRECOMPUTE_STRIDE`]th global
     /// photon (Christensen 1999) instead of making a density estimate where they land.
     pub precompute: bool,
+}
+
+impl GiSettings {
+    /// Returns each light's photon count per map: its `num_photons` or its share of `photons`
+    /// ([`photon_budget`]), times `photon_scale`.
+    pub fn budget(&self, lights: &[crate::light::Light]) -> Vec<u64> {
+        photon_budget(lights, self.photons)
+            .into_iter()
+            .map(|n| (n as f64 * self.photon_scale).round() as u64)
+            .collect()
+    }
 }
 
 impl Default for GiSettings {
@@ -167,13 +178,8 @@ pub fn render(
         ..settings.photons.clone()
     };
     let gi = Gi::build_with(scene, &gi_settings, progress);
-    let tracer = Tracer {
-        scene,
-        camera,
-        light_samples: settings.light_samples,
-        diffuse: DiffuseTerm::Photons(&gi),
-    };
-    let (film, stats) = camera_pass(camera, &tracer, window, settings, progress);
+    let diffuse = DiffuseTerm::Photons(&gi);
+    let (film, stats) = camera_pass(scene, camera, diffuse, window, settings, progress);
     (film, stats, gi.stats)
 }
 
@@ -184,10 +190,7 @@ fn trace_photons(
     settings: &GiSettings,
     progress: &dyn Progress,
 ) -> (TracedMap, Option<TracedMap>) {
-    let budget: Vec<u64> = photon_budget(&scene.lights, settings.photons)
-        .into_iter()
-        .map(|n| (n as f64 * settings.photon_scale).round() as u64)
-        .collect();
+    let budget = settings.budget(&scene.lights);
     let global = trace_map_with(scene, &budget, MapKind::Global, settings.seed, progress);
     let caustic = settings
         .caustics

@@ -4,7 +4,7 @@
 //!
 //! Phases: the camera pass, nothing before it.
 
-use super::eye::{DiffuseTerm, Tracer};
+use super::eye::DiffuseTerm;
 use super::{Settings, camera_pass};
 use crate::camera::Camera;
 use crate::film::{Film, Window};
@@ -20,11 +20,6 @@ pub fn render(
     settings: &Settings,
     progress: &dyn Progress,
 ) -> (Film, RenderStats) {
-    let tracer = Tracer {
-        scene,
-        camera,
-        light_samples: settings.light_samples,
-        diffuse: DiffuseTerm::Ambient(scene.ambient),
-    };
-    camera_pass(camera, &tracer, window, settings, progress)
+    let diffuse = DiffuseTerm::Ambient(scene.ambient);
+    camera_pass(scene, camera, diffuse, window, settings, progress)
 }

@@ -12,12 +12,11 @@ to docs/validation.md and the pictures (reference | caustic | difference) to doc
 With --equal-time, Mitsuba also renders at caustic's CPU time and both errors are compared.
 
 Regions come from the scene's `-- region NAME x0 y0 x1 y1` comments (fractions of the image).
-Metrics per region, over all three channels:
-- mean ratio: caustic's mean over the reference's;
-- RMSE and relative RMSE (RMSE over the reference's mean);
-- block bias: the RMS over the 8x8-pixel blocks inside the region of (caustic's block mean -
-  the reference's block mean), over the reference's mean. Noise averages out in a block's mean
-  and bias does not, so this separates the two.
+Metrics per region, over all three channels, against the truth as estimated from the two
+references (see cross_rms: the references' noise drops out): the mean ratio, RMSE, relative
+RMSE, the block error (the same over the region's 8x8-pixel block means) and, with --seeds 2,
+the bias (the block error between two caustic seeds and the two references: caustic's own
+noise drops out too).
 CI does not run this (it needs Mitsuba); the committed references let anyone rerun the caustic
 side without rendering them again.
 """
@@ -72,21 +71,57 @@ def render_mitsuba(xml, spp, seed, out):
     return time.process_time() - start, time.time() - wall
 
 
-def metrics(c, r, box):
-    h, w, _ = r.shape
+def crop(img, box):
+    h, w, _ = img.shape
     x0, y0, x1, y1 = (int(round(box[0] * w)), int(round(box[1] * h)),
                       int(round(box[2] * w)), int(round(box[3] * h)))
-    cr, rr = c[y0:y1, x0:x1], r[y0:y1, x0:x1]
-    mean = rr.mean()
-    rmse = float(np.sqrt(((cr - rr) ** 2).mean()))
-    blocks = []
+    return x0, y0, x1, y1
+
+
+def block_means(img, box):
+    """The means of the 8x8-pixel blocks (aligned to the image) that lie inside the region."""
+    x0, y0, x1, y1 = crop(img, box)
+    out = []
     for by in range(y0 - y0 % 8, y1, 8):
         for bx in range(x0 - x0 % 8, x1, 8):
             if by >= y0 and bx >= x0 and by + 8 <= y1 and bx + 8 <= x1:
-                blocks.append(c[by:by + 8, bx:bx + 8].mean() - r[by:by + 8, bx:bx + 8].mean())
-    bias = float(np.sqrt(np.mean(np.square(blocks)))) / mean if blocks else float("nan")
-    return {"mean_ratio": float(cr.mean() / mean), "rmse": rmse, "rel_rmse": rmse / mean,
-            "block_bias": bias, "ref_mean": float(mean)}
+                out.append(img[by:by + 8, bx:bx + 8].mean())
+    return np.array(out)
+
+
+def cross_rms(a1, b1, a2, b2):
+    """sqrt(max(0, mean((a1 - b1) * (a2 - b2)))): with the pairs' errors independent, the
+    expected product is the squared difference of their expectations, so the noise of whichever
+    side is doubled (two references, or two seeds) drops out instead of adding to the error."""
+    return float(np.sqrt(max(0.0, float(np.mean((a1 - b1) * (a2 - b2))))))
+
+
+def metrics(c, r1, r2, box, c2=None):
+    """The metrics of caustic's image c against the truth, estimated from two independent
+    references r1 and r2 (see cross_rms), over the region box; with c2 (a render with another
+    seed) also the seed-pair block bias, from which caustic's own noise drops out too."""
+    x0, y0, x1, y1 = crop(r1, box)
+    cr, a, b = (img[y0:y1, x0:x1] for img in (c, r1, r2))
+    mean = 0.5 * (a.mean() + b.mean())
+    rmse = cross_rms(cr, a, cr, b)
+    cb, ab, bb = (block_means(img, box) for img in (c, r1, r2))
+    bias = cross_rms(cb, ab, cb, bb) / mean if len(cb) else float("nan")
+    out = {"mean_ratio": float(cr.mean() / mean), "rmse": rmse, "rel_rmse": rmse / mean,
+           "block_bias": bias, "ref_mean": float(mean)}
+    if c2 is not None:
+        out["seed_bias"] = cross_rms(cb, ab, block_means(c2, box), bb) / mean if len(cb) else float("nan")
+    return out
+
+
+def ref_noise(r1, r2, box):
+    """One reference's own relative RMSE and block error: the two references' distance over sqrt 2."""
+    x0, y0, x1, y1 = crop(r1, box)
+    a, b = r1[y0:y1, x0:x1], r2[y0:y1, x0:x1]
+    mean = 0.5 * (a.mean() + b.mean())
+    ab, bb = block_means(r1, box), block_means(r2, box)
+    rel = float(np.sqrt(np.mean((a - b) ** 2) / 2)) / mean
+    blk = float(np.sqrt(np.mean((ab - bb) ** 2) / 2)) / mean if len(ab) else float("nan")
+    return {"rel_rmse": rel, "block_bias": blk}
 
 
 def tonemap(x, scale):
@@ -126,6 +161,8 @@ def main():
     ap.add_argument("--equal-time", action="store_true", help="also compare at equal CPU time")
     ap.add_argument("--caustic-args", default="", help="extra caustic render arguments")
     ap.add_argument("--label", default="caustic defaults")
+    ap.add_argument("--seeds", type=int, default=2, choices=(1, 2),
+                    help="2: also render with --seed 1 for the seed-pair bias column")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "validation.md"))
     a = ap.parse_args()
     variant = choose_variant()
@@ -147,28 +184,28 @@ def main():
             json.dump({"spp": a.ref_spp, "variant": variant, "cpu_s": cpu, "wall_s": wall},
                       open(side, "w"), indent=1)
         info = json.load(open(side))
-        # The noise floor: the same metrics between the two independent references.
-        info["noise"] = {reg: metrics(load(second), load(ref), box) for reg, box in
-                         [("image", (0, 0, 1, 1))] + regions(scene)}
-        r = load(ref)
+        r1, r2 = load(ref), load(second)
+        regs = [("image", (0, 0, 1, 1))] + regions(scene)
         out = os.path.join(tmp, name + ".exr")
-        cpu, wall = caustic_render(a.render_with or a.caustic, scene, out, a.caustic_args.split())
+        args = a.caustic_args.split()
+        cpu, wall = caustic_render(a.render_with or a.caustic, scene, out, args)
         c = load(out)
-        picture(c, r, os.path.join(PICS, name + ".png"))
-        for reg, box in [("image", (0, 0, 1, 1))] + regions(scene):
-            m = metrics(c, r, box)
-            # The second reference is independent of the first: their distance is sqrt(2) times
-            # one reference's own error.
-            floor = info["noise"].get(reg, {})
-            rows.append((name, reg, m, floor))
+        c2 = None
+        if a.seeds > 1:
+            out2 = os.path.join(tmp, name + ".seed.exr")
+            caustic_render(a.render_with or a.caustic, scene, out2, args + ["--seed", "1"])
+            c2 = load(out2)
+        picture(c, 0.5 * (r1 + r2), os.path.join(PICS, name + ".png"))
+        for reg, box in regs:
+            rows.append((name, reg, metrics(c, r1, r2, box, c2), ref_noise(r1, r2, box)))
         if a.equal_time:
             spp = max(1, int(round(info["spp"] * cpu / max(info["cpu_s"], 1e-9))))
             eq = os.path.join(tmp, name + "_eq.exr")
             mcpu, _ = render_mitsuba(xml, spp, 7, eq)
-            regs = [("image", (0, 0, 1, 1))] + regions(scene)
+            m = load(eq)
             for reg, box in regs:
-                mc = metrics(c, r, box)["rel_rmse"]
-                mm = metrics(load(eq), r, box)["rel_rmse"]
+                mc = metrics(c, r1, r2, box)["rel_rmse"]
+                mm = metrics(m, r1, r2, box)["rel_rmse"]
                 timing.append((name, reg, cpu, wall, spp, mcpu, mc, mm))
         print(f"{name}: caustic {wall:.1f} s wall, {cpu:.1f} s CPU", file=sys.stderr)
     write_md(a, variant, rows, timing)
@@ -187,29 +224,38 @@ def write_md(a, variant, rows, timing):
         "```",
         "",
         f"Rendered: {a.label} (`caustic render SCENE.lua {a.caustic_args}`). Metrics are over all three "
-        "channels of each region (`-- region` comments in the scene): the mean ratio (caustic / "
-        "reference), RMSE, relative RMSE (over the reference's mean), and the block bias: the RMS "
-        "of the 8x8-block mean differences over the reference's mean, which noise averages away "
-        "and bias does not. *Noise floor* is the same metric between two independent references "
-        "(divide by sqrt 2 for one reference's own). The bar (issue 13): mean within 2% and block "
-        "bias at most 3% in every region. The `image` row includes the visible light, whose edges "
-        "caustic's one centre ray per pixel aliases (a box-filtered Mitsuba pixel averages them): "
-        "it is reported, not part of the bar.",
+        "channels of each region (`-- region` comments in the scene), against the truth as "
+        "estimated from two independent references r1 and r2: where a plain metric would square "
+        "(c - r), these multiply (c - r1)(c - r2), whose expectation is the squared error against "
+        "the truth, so the references' own noise drops out instead of adding to caustic's error. "
+        "*Mean ratio* is caustic's mean over the references'; *RMSE* and *relative RMSE* (over the "
+        "reference mean) are per pixel; *block error* is the same over the means of the 8x8-pixel "
+        "blocks in the region, in which pixel noise averages out but the photon map's noise, "
+        "correlated over a kernel's radius, partly survives; *bias* is the block error between "
+        "two caustic renders of different seeds and the two references, from which caustic's own "
+        "noise drops out as well: what more samples and photons at the same settings would not "
+        "remove. *Reference noise* is one reference's own relative RMSE and block error (the two "
+        "references' distance over sqrt 2). The bar (issue 13): mean within 2% and block error at "
+        "most 3% in every region. The `image` row includes the visible light, whose edges one "
+        "centre ray per pixel aliases (a box-filtered Mitsuba pixel averages them): it is "
+        "reported, not part of the bar.",
         "",
-        "| scene | region | mean ratio | RMSE | rel. RMSE | block bias | noise floor (rel. RMSE / block bias) |",
-        "|---|---|---|---|---|---|---|",
+        "| scene | region | mean ratio | RMSE | rel. RMSE | block error | bias | reference noise (rel. RMSE / block) |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for name, reg, m, f in rows:
-        fl = (f"{f['rel_rmse']:.3f} / {f['block_bias']:.3f}" if f else "n/a")
+        fl = f"{f['rel_rmse']:.3f} / {f['block_bias']:.3f}"
+        sb = f"{m['seed_bias']:.3f}" if "seed_bias" in m else "n/a"
         lines.append(f"| {name} | {reg} | {m['mean_ratio']:.4f} | {m['rmse']:.4f} | "
-                     f"{m['rel_rmse']:.3f} | {m['block_bias']:.3f} | {fl} |")
+                     f"{m['rel_rmse']:.3f} | {m['block_bias']:.3f} | {sb} | {fl} |")
     lines += ["", "Pictures (reference | caustic | difference: red brighter, blue darker, 4x):", ""]
     for name in sorted({r[0] for r in rows}):
         lines.append(f"- `{name}`: ![{name}](validation/{name}.png)")
     if timing:
         lines += ["", "## Equal time", "",
                   "Mitsuba's path tracer given caustic's CPU time (sample count scaled from the "
-                  "reference's samples per CPU second), both against the reference:", "",
+                  "reference's samples per CPU second); both relative RMSEs are against the truth "
+                  "as estimated from the two references, as above:", "",
                   "| scene | region | caustic CPU s | Mitsuba spp | Mitsuba CPU s | caustic rel. RMSE | Mitsuba rel. RMSE | ratio |",
                   "|---|---|---|---|---|---|---|---|"]
         for name, reg, cpu, wall, spp, mcpu, mc, mm in timing:

@@ -63,9 +63,18 @@ pub const MAX_GATHER_DEPTH: u32 = 3;
 /// glass ball under water is four interfaces deep).
 pub const MAX_GATHER_SPECULAR: u32 = 8;
 
-/// One global photon in this many carries a precomputed irradiance estimate (see
-/// [`GiSettings::precompute`]).
+/// About one global photon in this many carries a precomputed irradiance estimate (see
+/// [`GiSettings::precompute`] and [`is_precompute_point`]).
 pub const PRECOMPUTE_STRIDE: usize = 4;
+
+/// Returns whether global photon `id` is a precomputation point: a pseudo-random choice of one
+/// in [`PRECOMPUTE_STRIDE`], independent of where the photon is (ids follow the kd-tree's
+/// spatial order, so a stride over ids would pick points that are spread like the photons
+/// near them, correlated with the estimate; see `Gi::precompute_irradiance`).
+pub fn is_precompute_point(id: PhotonId) -> bool {
+    crate::sampling::mix64(u64::from(id.0) ^ 0x9e37_79b9_7f4a_7c15)
+        .is_multiple_of(PRECOMPUTE_STRIDE as u64)
+}
 
 /// Smallest cosine between a precomputed point's normal and the surface's for the point to be used.
 const PRECOMPUTED_MIN_COS: f32 = 0.9;
@@ -251,24 +260,47 @@ impl Gi {
         gi
     }
 
-    /// Phase 3: returns a map of every [`PRECOMPUTE_STRIDE`]th global photon (in kd-tree order, so spread as
-    /// the photons are) carrying the global map's irradiance estimate at it as its power.
+    /// Phase 3: returns a map of the precomputation points ([`is_precompute_point`]: about one
+    /// global photon in [`PRECOMPUTE_STRIDE`]), each carrying as its power the irradiance
+    /// estimated there from the *other* photons only.
+    ///
+    /// Why the others only: a final-gather ray reads the point nearest to where it lands, and
+    /// the nearest of a set of points is most often one with a large empty cell around it, that
+    /// is, one where photons happen to be sparse. An estimate that counted the points themselves
+    /// would be low exactly where it is read (and one that counted the point it is made at,
+    /// which sits where the kernel is largest, high by about 2/(k−1)): the two biases measured
+    /// −2.7% and +4% on a Cornell box's ceiling against Mitsuba. The points are an independent
+    /// random thinning of the photons, so the points and the other photons are independent
+    /// samples of the same density: which point a ray reads says nothing about that point's
+    /// estimate, and the others' estimate, scaled by `STRIDE/(STRIDE−1)` for the thinning, is
+    /// unbiased.
     fn precompute_irradiance(&self, progress: &dyn Progress) -> PhotonMap {
         use rayon::prelude::*;
-        let n = self.global.len().div_ceil(PRECOMPUTE_STRIDE);
+        let ids: Vec<PhotonId> = (0..self.global.len() as u32)
+            .map(PhotonId)
+            .filter(|&id| is_precompute_point(id))
+            .collect();
+        let n = ids.len();
         progress.start("precomputing irradiance", n as u64);
-        let points: Vec<Photon> = (0..n)
-            .into_par_iter()
+        let others = |id: PhotonId| !is_precompute_point(id);
+        let thinning = PRECOMPUTE_STRIDE as f32 / (PRECOMPUTE_STRIDE - 1) as f32;
+        let (map, k, r2) = (&self.global, self.settings.k, self.global_r2);
+        let points: Vec<Photon> = ids
+            .par_iter()
+            .enumerate()
             .with_min_len(1024)
-            .map(|j| {
-                let i = j * PRECOMPUTE_STRIDE;
+            .map(|(j, &id)| {
                 if j % 1024 == 1023 || j == n - 1 {
                     progress.advance(j as u64 % 1024 + 1);
                 }
-                let ph = self.global.get(PhotonId(i as u32));
+                let ph = map.get(id);
+                let e = FOUND.with_borrow_mut(|found| {
+                    let d2 = map.knn_where(ph.position, k, r2, others, found);
+                    self.kernel_sum(map, found, d2, ph.normal, false)
+                });
                 Photon {
                     position: ph.position,
-                    power: self.global_irradiance(ph.position, ph.normal),
+                    power: e * thinning,
                     dir: ph.normal,
                     normal: ph.normal,
                     direct: false,
@@ -294,20 +326,33 @@ impl Gi {
             let r2 = map.knn(p, self.settings.k, max_d2, found);
             counts.lookups += 1;
             counts.photons_used += found.len() as u64;
-            if found.is_empty() || r2 <= 0.0 {
-                return Vec3A::ZERO;
-            }
-            let mut e = Vec3A::ZERO;
-            for &(d2, id) in found.iter() {
-                let ph = map.get(id);
-                // Photons from another surface (round a corner, behind a thin wall) do not count.
-                if ph.normal.dot(n) < 0.7 || ph.dir.dot(n) <= 0.0 || (indirect_only && ph.direct) {
-                    continue;
-                }
-                e += ph.power * self.settings.filter.weight(d2, r2);
-            }
-            e
+            self.kernel_sum(map, found, r2, n, indirect_only)
         })
+    }
+
+    /// Returns the kernel-weighted power of the `found` photons of `map` within radius² `r2`,
+    /// as seen by a surface with normal `n`.
+    fn kernel_sum(
+        &self,
+        map: &PhotonMap,
+        found: &[(f32, PhotonId)],
+        r2: f32,
+        n: Vec3A,
+        indirect_only: bool,
+    ) -> Vec3A {
+        if found.is_empty() || r2 <= 0.0 {
+            return Vec3A::ZERO;
+        }
+        let mut e = Vec3A::ZERO;
+        for &(d2, id) in found {
+            let ph = map.get(id);
+            // Photons from another surface (round a corner, behind a thin wall) do not count.
+            if ph.normal.dot(n) < 0.7 || ph.dir.dot(n) <= 0.0 || (indirect_only && ph.direct) {
+                continue;
+            }
+            e += ph.power * self.settings.filter.weight(d2, r2);
+        }
+        e
     }
 
     /// Returns the global map's irradiance estimate at `p` (all photons).

@@ -278,6 +278,28 @@ impl PhotonMap {
         out.first().map_or(0.0, |e| e.0)
     }
 
+    /// [`PhotonMap::knn`] among the photons for which `accept` holds (asked of every photon
+    /// within the current bound, so it should be cheap). Slower than `knn`: no seeding.
+    pub fn knn_where(
+        &self,
+        p: Vec3A,
+        k: usize,
+        max_d2: f32,
+        accept: impl Fn(PhotonId) -> bool,
+        out: &mut Vec<(f32, PhotonId)>,
+    ) -> f32 {
+        out.clear();
+        if k == 0 || self.is_empty() || max_d2.is_nan() || max_d2 < 0.0 {
+            return 0.0;
+        }
+        let mut sink = Where {
+            heap: Heap::new(out, k, max_d2),
+            accept,
+        };
+        self.search(self.root(), p.to_array(), Vec3A::ZERO, NO_SKIP, &mut sink);
+        out.first().map_or(0.0, |e| e.0)
+    }
+
     /// Returns the subtree holding `q`'s leaf that has between `2k` and `4k` photons (or the
     /// leaf, or the whole map if smaller).
     fn seed_node(&self, q: [f32; 3], k: usize) -> Node {
@@ -543,6 +565,25 @@ impl<F: FnMut(PhotonId) -> bool> Sink for Nearest<'_, F> {
         let better = d2 < self.best.0 || self.best.1.is_none_or(|b| id < b);
         if better && (self.accept)(id) {
             self.best = (d2, Some(id));
+        }
+    }
+}
+
+/// The k nearest photons `accept` takes ([`PhotonMap::knn_where`]).
+struct Where<'a, F> {
+    heap: Heap<'a>,
+    accept: F,
+}
+
+impl<F: Fn(PhotonId) -> bool> Sink for Where<'_, F> {
+    #[inline(always)]
+    fn bound(&self) -> f32 {
+        self.heap.bound
+    }
+    #[inline(always)]
+    fn offer(&mut self, d2: f32, i: usize) {
+        if (self.accept)(PhotonId(i as u32)) {
+            self.heap.push(d2, i as u32);
         }
     }
 }

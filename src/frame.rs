@@ -22,7 +22,7 @@ use crate::film::{Film, Window};
 use crate::integrator::photon_map::{Gi, GiSettings, GiStats};
 use crate::integrator::{GiMode, Settings, plan};
 use crate::lua::MAX_PIXELS;
-use crate::photon::trace::MAX_PHOTONS;
+use crate::photon::trace::{MAX_PHOTONS, MapKind};
 use crate::progress::Progress;
 use crate::scene::{Scene, build_scene};
 
@@ -77,21 +77,24 @@ pub fn render_desc(
 }
 
 /// Returns an error at the light's script line when its photon count (its `num_photons` or its
-/// share of `--photons`, times `--photon-scale`) exceeds [`MAX_PHOTONS`].
+/// share of `--photons` or `--caustic-photons`, times `--photon-scale`) exceeds [`MAX_PHOTONS`].
 fn check_photon_budget(
     desc: &SceneDesc,
     r: &RenderDesc,
     scene: &Scene,
     settings: &Settings,
 ) -> Result<()> {
-    let budget = settings.photons.budget(&scene.lights);
-    for (l, &n) in budget.iter().enumerate() {
-        if n > MAX_PHOTONS {
+    let kinds = [MapKind::Global, MapKind::Caustic];
+    for budget in kinds.map(|kind| settings.photons.budget(&scene.lights, kind)) {
+        for (l, &n) in budget.iter().enumerate() {
+            if n <= MAX_PHOTONS {
+                continue;
+            }
             let loc = &desc.lights[r.lights[l].0 as usize].loc;
             return Err(Error::at(
                 loc,
                 format!(
-                    "this light would emit {n:.3e} photons per map (with --photon-scale {}), more than {MAX_PHOTONS}",
+                    "this light would emit {n:.3e} photons for a map (with --photon-scale {}), more than {MAX_PHOTONS}",
                     settings.photons.photon_scale
                 ),
             ));

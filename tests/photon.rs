@@ -364,6 +364,11 @@ fn out_of_range_photon_options_are_usage_errors() {
             "0",
             "--light-samples must be in [1, 4096], got 0",
         ),
+        (
+            "--caustic-photons",
+            "2000000000",
+            "--caustic-photons must be at most 1000000000, got 2000000000",
+        ),
     ] {
         let out = caustic()
             .arg("render")
@@ -442,4 +447,33 @@ fn precomputed_irradiance_is_unbiased_in_a_closed_sphere() {
             "k {k}: mean precomputed irradiance {mean}, closed form {expected} ({n} points)"
         );
     }
+}
+
+#[test]
+fn each_map_has_its_own_photon_budget() {
+    // --photons sets the global map's count and --caustic-photons the caustic map's, for lights
+    // without num_photons (the validation scenes' light has none).
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/validate/cornell_glass.lua");
+    let dir = out_dir("budgets");
+    let out = caustic()
+        .arg("render")
+        .arg(&scene)
+        .args(["-q", "--stats", "--scale", "0.25", "--photons", "3000"])
+        .args(["--caustic-photons", "7000", "--gather-rays", "1", "-o"])
+        .arg(dir.join("b.png"))
+        .output()
+        .unwrap();
+    let (stats, err) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{err}");
+    assert!(
+        stats.contains("global map: 3000 photons emitted"),
+        "{stats}"
+    );
+    assert!(
+        stats.contains("caustic map: 7000 photons emitted"),
+        "{stats}"
+    );
 }

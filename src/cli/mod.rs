@@ -9,7 +9,7 @@ use crate::camera::Camera;
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::frame;
-use crate::integrator::photon_map::GiSettings;
+use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
 use crate::lua::{ScriptOptions, run_script, run_script_with};
 use crate::scene::build::build_scene;
@@ -70,9 +70,12 @@ pub struct PhotonsArgs {
     /// The picture to write (default: the script's image name with `_photons` added).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
-    /// Photons per map.
-    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    /// Photons for the global map.
+    #[arg(long, value_name = "N", default_value_t = GLOBAL_PHOTONS)]
     pub photons: u64,
+    /// Photons for the caustic map.
+    #[arg(long, value_name = "N", default_value_t = CAUSTIC_PHOTONS)]
+    pub caustic_photons: u64,
     /// Seed of the photon streams.
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,
@@ -137,9 +140,14 @@ pub struct RenderArgs {
     /// Photon mapping: auto (when a light has power or num_photons), on, or off (ambient term).
     #[arg(long, value_enum, default_value_t = GiArg::Auto)]
     pub gi: GiArg,
-    /// Photons per map, shared by lights without num_photons in proportion to their power.
-    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    /// Photons for the global map, shared by lights without num_photons in proportion to their
+    /// power.
+    #[arg(long, value_name = "N", default_value_t = GLOBAL_PHOTONS)]
     pub photons: u64,
+    /// Photons for the caustic map, shared the same way (more than the global map's: caustics are
+    /// seen directly, not through final gathering).
+    #[arg(long, value_name = "N", default_value_t = CAUSTIC_PHOTONS)]
+    pub caustic_photons: u64,
     /// Indirect diffuse light: gather (final gathering, accurate) or direct (the global map seen
     /// directly, fast and blotchy).
     #[arg(long, value_enum, default_value_t = IndirectArg::Gather)]
@@ -148,7 +156,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 64)]
     pub gather_rays: u32,
     /// What a final-gather ray reads where it lands: precomputed (irradiance computed beforehand
-    /// at one global photon in four, Christensen's method, fast) or estimate (a density estimate
+    /// at about one global photon in four, Christensen's method, fast) or estimate (a density estimate
     /// at the hit, slower and sharper).
     #[arg(long, value_enum, default_value_t = GatherLookup::Precomputed)]
     pub gather_lookup: GatherLookup,
@@ -327,8 +335,10 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
     let count = Rc::new(Cell::new(0u32));
     let counter = Rc::clone(&count);
     let output = args.output.clone();
-    settings::check_photons(args.photons)?;
-    let (photons, seed, scale) = (args.photons, args.seed, args.scale);
+    settings::check_photons("--photons", args.photons)?;
+    settings::check_photons("--caustic-photons", args.caustic_photons)?;
+    let (photons, caustic_photons) = (args.photons, args.caustic_photons);
+    let (seed, scale) = (args.seed, args.scale);
     let progress = !args.quiet && std::io::stderr().is_terminal();
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
         counter.set(counter.get() + 1);
@@ -356,6 +366,7 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         let settings = GiSettings {
             seed,
             photons,
+            caustic_photons,
             ..GiSettings::default()
         };
         let bar = Bar::new(progress, &out);

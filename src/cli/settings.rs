@@ -22,13 +22,13 @@ pub fn check_scale(scale: f64) -> Result<()> {
     }
 }
 
-/// Returns a usage error unless `--photons` is at most [`MAX_PHOTONS`].
-pub fn check_photons(photons: u64) -> Result<()> {
+/// Returns a usage error unless the photon count of flag `flag` is at most [`MAX_PHOTONS`].
+pub fn check_photons(flag: &str, photons: u64) -> Result<()> {
     if photons <= MAX_PHOTONS {
         Ok(())
     } else {
         Err(Error::Usage(format!(
-            "--photons must be at most {MAX_PHOTONS}, got {photons}"
+            "{flag} must be at most {MAX_PHOTONS}, got {photons}"
         )))
     }
 }
@@ -74,7 +74,8 @@ impl RenderJob {
         if !a.exposure.is_finite() {
             return Err(Error::Usage("--exposure must be finite".into()));
         }
-        check_photons(a.photons)?;
+        check_photons("--photons", a.photons)?;
+        check_photons("--caustic-photons", a.caustic_photons)?;
         for (name, value, max) in [
             ("--light-samples", a.light_samples as u64, 4096),
             ("--photon-k", a.photon_k as u64, 10_000),
@@ -113,6 +114,7 @@ impl RenderJob {
             photons: GiSettings {
                 seed: a.seed,
                 photons: a.photons,
+                caustic_photons: a.caustic_photons,
                 photon_scale: a.photon_scale,
                 k: a.photon_k,
                 indirect: match a.indirect {

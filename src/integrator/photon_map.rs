@@ -63,6 +63,18 @@ pub const MAX_GATHER_DEPTH: u32 = 3;
 /// glass ball under water is four interfaces deep).
 pub const MAX_GATHER_SPECULAR: u32 = 8;
 
+/// Photons emitted for the global map by default. It is seen only through final gathering,
+/// which averages many lookups, so its noise is averaged away before it reaches a pixel.
+pub const GLOBAL_PHOTONS: u64 = 200_000;
+
+/// Photons emitted for the caustic map by default. The caustic map is seen directly, one density
+/// estimate per pixel, and under water it carries all the direct light: its noise and the blur
+/// of its k-nearest kernel at shadow edges (which shrinks as the square root of the count) reach
+/// the image unaveraged. Caustic photons stop at their first diffuse hit and are aimed at the
+/// specular objects, so they cost a fraction of global ones. See `docs/validation.md` for the
+/// measurement that set this count.
+pub const CAUSTIC_PHOTONS: u64 = 2_000_000;
+
 /// About one global photon in this many carries a precomputed irradiance estimate (see
 /// [`GiSettings::precompute`] and [`is_precompute_point`]).
 pub const PRECOMPUTE_STRIDE: usize = 4;
@@ -92,8 +104,10 @@ pub enum Indirect {
 #[derive(Clone, Debug, PartialEq)]
 pub struct GiSettings {
     pub seed: u64,
-    /// Photons emitted for each map, shared by lights without `num_photons`.
+    /// Photons emitted for the global map, shared by lights without `num_photons`.
     pub photons: u64,
+    /// Photons emitted for the caustic map, shared the same way (see [`CAUSTIC_PHOTONS`]).
+    pub caustic_photons: u64,
     /// Multiplies every light's photon count, `num_photons` included (previews, tests).
     pub photon_scale: f64,
     /// Nearest photons per estimate.
@@ -111,10 +125,14 @@ pub struct GiSettings {
 }
 
 impl GiSettings {
-    /// Returns each light's photon count per map: its `num_photons` or its share of `photons`
-    /// ([`photon_budget`]), times `photon_scale`.
-    pub fn budget(&self, lights: &[crate::light::Light]) -> Vec<u64> {
-        photon_budget(lights, self.photons)
+    /// Returns each light's photon count for the `kind` map: its `num_photons` or its share of
+    /// `photons` (global) or `caustic_photons` ([`photon_budget`]), times `photon_scale`.
+    pub fn budget(&self, lights: &[crate::light::Light], kind: MapKind) -> Vec<u64> {
+        let total = match kind {
+            MapKind::Global => self.photons,
+            MapKind::Caustic => self.caustic_photons,
+        };
+        photon_budget(lights, total)
             .into_iter()
             .map(|n| (n as f64 * self.photon_scale).round() as u64)
             .collect()
@@ -125,7 +143,8 @@ impl Default for GiSettings {
     fn default() -> GiSettings {
         GiSettings {
             seed: 0,
-            photons: 200_000,
+            photons: GLOBAL_PHOTONS,
+            caustic_photons: CAUSTIC_PHOTONS,
             photon_scale: 1.0,
             k: 50,
             max_radius: 0.05,
@@ -199,11 +218,12 @@ fn trace_photons(
     settings: &GiSettings,
     progress: &dyn Progress,
 ) -> (TracedMap, Option<TracedMap>) {
-    let budget = settings.budget(&scene.lights);
-    let global = trace_map_with(scene, &budget, MapKind::Global, settings.seed, progress);
-    let caustic = settings
-        .caustics
-        .then(|| trace_map_with(scene, &budget, MapKind::Caustic, settings.seed, progress));
+    let trace = |kind| {
+        let budget = settings.budget(&scene.lights, kind);
+        trace_map_with(scene, &budget, kind, settings.seed, progress)
+    };
+    let global = trace(MapKind::Global);
+    let caustic = settings.caustics.then(|| trace(MapKind::Caustic));
     (global, caustic)
 }
 

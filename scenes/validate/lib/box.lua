@@ -28,4 +28,4 @@ wall('right', green, 0.1, 2.4, 2.4, 1.0, -1.2, -1.2)
 black = gr.material({0, 0, 0}, {0, 0, 0}, 0)
 fixture = gr.cube('fixture'); fixture:scale(0.52, 0.005, 0.52); fixture:translate(-0.26, 0.994, -0.26)
 fixture:set_material(black); root:add_child(fixture)
-light = gr.area_light({0, 0.99, 0}, {1, 1, 1}, {0, 0, 1}, nil, 200000, {0.5, 0, 0}, {0, 0, 0.5})  -- u × v = -y: emits downwards
+light = gr.area_light({0, 0.99, 0}, {1, 1, 1}, {0, 0, 1}, 1, nil, {0.5, 0, 0}, {0, 0, 0.5})  -- u × v = -y: emits downwards

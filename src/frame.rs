@@ -3,14 +3,15 @@
 //! tool render through here; nothing else wires passes together.
 //!
 //! ```
-//! use caustic::{frame, integrator::Settings, progress::NoProgress};
+//! use caustic::{frame, integrator::Settings, progress::NoProgress, render::Sampling};
 //! let src = b"s = gr.sphere('s') s:set_material(gr.material({1,1,1}, {0,0,0}, 0))
 //!     gr.render(s, 'x.png', 9, 9, {0,0,5}, {0,0,-1}, {0,1,0}, 50, {0,0,0},
 //!               {gr.light({0,0,5}, {1,1,1}, {1,0,0})})";
 //! let no_render = Box::new(|_: &_, _: &_| Ok(()));
 //! let desc = caustic::lua::run_source(src, "doc.lua", ".".as_ref(), no_render).unwrap();
-//! let f = frame::render_desc(&desc, &desc.renders[0], 1.0, None, &Settings::default(), &NoProgress)
-//!     .unwrap();
+//! // One ray through each pixel's centre (the default, 4 stratified rays, averages the pixel).
+//! let settings = Settings { sampling: Sampling::Stratified { spp: 1 }, ..Settings::default() };
+//! let f = frame::render_desc(&desc, &desc.renders[0], 1.0, None, &settings, &NoProgress).unwrap();
 //! // The sphere faces the light head-on at the centre: kd · I · cos 0 / att(4) = 1.
 //! assert!((f.film.get(4, 4).x - 1.0).abs() < 0.01);
 //! ```

@@ -7,6 +7,7 @@ mod common;
 use caustic::film::Film;
 use caustic::integrator::photon_map::{GiSettings, Indirect};
 use caustic::integrator::{GiMode, Settings};
+use caustic::render::Sampling;
 
 use std::path::Path;
 
@@ -63,6 +64,7 @@ fn final_gathering_through_a_mirror_agrees_with_the_global_map_seen_directly() {
         gr.render(root, 'x.png', 24, 24, {0, 0, 1.95}, {0, 0, -1}, {0, 1, 0}, 90, {0, 0, 0}, lights)";
     let settings = |indirect| Settings {
         gi: GiMode::On,
+        sampling: Sampling::Stratified { spp: 1 },
         light_samples: 4,
         photons: GiSettings {
             photons: 1_000_000,
@@ -107,8 +109,11 @@ fn final_gathering_through_a_mirror_agrees_with_the_global_map_seen_directly() {
         let pixels = region(plane);
         assert!(pixels.len() > 20, "{name}: {} pixels", pixels.len());
         let (g, d) = (mean(&gather, &pixels), mean(&direct, &pixels));
+        // Both means carry photon and gathering noise: over seeds 0-2 and 1 or 4 samples per
+        // pixel their ratio spread 0.995-1.040 (σ about 1.7%). Without gathering through the
+        // mirror the floor and ceiling were 10-25% dark.
         assert!(
-            (g / d - 1.0).abs() < 0.03,
+            (g / d - 1.0).abs() < 0.06,
             "{name}: gathering {g} vs the global map seen directly {d}"
         );
     }

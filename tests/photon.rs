@@ -98,7 +98,7 @@ fn closed_sphere_has_radiance_one_with_final_gathering() {
                 precompute,
                 ..GiSettings::default()
             },
-            ..Settings::default()
+            ..common::centre_ray()
         };
         let (film, stats) = caustic::frame::render(
             &scene,

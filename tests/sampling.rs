@@ -239,3 +239,54 @@ fn stitched_tiles_equal_the_full_render_byte_for_byte() {
         .unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("--crop"));
 }
+
+/// The default pixel is an area, not its centre: a white wall whose edge crosses a column of
+/// pixels a quarter of the way in covers a quarter of each, which one centre ray per pixel
+/// (the course's sampling, and caustic's default before issue 13) renders as no wall at all.
+/// The default's 4 samples are n-rooks stratified (one in each quarter of the pixel's width), so
+/// exactly one falls on the wall in every pixel: the share is 0.25 up to rounding at the edge.
+/// (The wall is 0.001 thick so that its side face, which the camera sees, adds nothing.)
+#[test]
+fn default_pixels_average_their_area() {
+    let (w, h, col) = (8u32, 24u32, 3u32);
+    // Where the ray through x = col + 0.25 meets the plane z = 0 (the camera looks down -z from
+    // z = 10 with a 30° field of view).
+    let probe = format!(
+        "gr.render(gr.node('r'), 'x.png', {w}, {h}, {{0,0,10}}, {{0,0,-1}}, {{0,1,0}}, 30, {{0,0,0}}, {{gr.light({{0,0,50}}, {{0,0,0}}, {{1,0,0}})}})"
+    );
+    let d = run_lua(&probe).unwrap();
+    let camera = Camera::new(&d.renders[0].camera, w, h);
+    let ray = camera.ray(col as f32 + 0.25, h as f32 / 2.0);
+    let edge = ray.origin.x + ray.dir.x * (-ray.origin.z / ray.dir.z);
+    let src = format!(
+        "m = gr.material({{1, 1, 1}}, {{0, 0, 0}}, 0)\n\
+         wall = gr.cube('wall'); wall:set_material(m); wall:scale(10, 100, 0.001)\n\
+         wall:translate({} - 10, -50, -0.001)\n\
+         gr.render(wall, 'x.png', {w}, {h}, {{0,0,10}}, {{0,0,-1}}, {{0,1,0}}, 30, {{1,1,1}}, {{gr.light({{0,0,50}}, {{0,0,0}}, {{1,0,0}})}})",
+        edge
+    );
+    let d = run_lua(&src).unwrap();
+    let r = &d.renders[0];
+    let scene = build_scene(&d, r).unwrap();
+    let share = |settings: &Settings| {
+        let film = common::render_scene(&scene, &camera, w, h, settings);
+        let mut sum = 0.0;
+        for y in 0..h {
+            // The wall's share: 1 where the pixel is all wall (its left neighbour), 0 all sky.
+            let sky = caustic::integrator::eye::background(
+                &camera,
+                camera.ray(col as f32 + 0.5, y as f32 + 0.5).dir,
+            );
+            let (v, wall) = (film.get(col, y), film.get(col - 1, y));
+            sum += ((v - sky) / (wall - sky)).x;
+        }
+        sum / h as f32
+    };
+    let default = share(&Settings::default());
+    assert!(
+        (default - 0.25).abs() < 0.01,
+        "default sampling: wall share {default}"
+    );
+    let centre = share(&common::centre_ray());
+    assert!(centre.abs() < 0.02, "one centre ray: wall share {centre}");
+}

@@ -10,6 +10,7 @@ use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::frame;
 use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings};
+use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES, DEFAULT_SPP};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
 use crate::lua::{ScriptOptions, run_script, run_script_with};
 use crate::scene::build::build_scene;
@@ -106,8 +107,9 @@ pub struct RenderArgs {
     /// Render at this multiple of the script's image size (0.25 for a quick preview).
     #[arg(long, value_name = "F", default_value_t = 1.0)]
     pub scale: f64,
-    /// Stratified samples per pixel (1 = one ray through the pixel centre, as the course).
-    #[arg(long, value_name = "N", default_value_t = 1)]
+    /// Stratified samples per pixel (1 = one ray through the pixel centre, as the course; the
+    /// default anti-aliases).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_SPP)]
     pub spp: u32,
     /// Adaptive anti-aliasing: trace pixel corners and refine where they differ (replaces --spp).
     #[arg(long)]
@@ -135,7 +137,7 @@ pub struct RenderArgs {
     #[arg(long, short)]
     pub quiet: bool,
     /// Shadow-ray samples per area or sphere light at each shaded point (soft shadows).
-    #[arg(long, value_name = "N", default_value_t = 16)]
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_LIGHT_SAMPLES)]
     pub light_samples: u32,
     /// Photon mapping: auto (when a light has power or num_photons), on, or off (ambient term).
     #[arg(long, value_enum, default_value_t = GiArg::Auto)]
@@ -152,8 +154,8 @@ pub struct RenderArgs {
     /// directly, fast and blotchy).
     #[arg(long, value_enum, default_value_t = IndirectArg::Gather)]
     pub indirect: IndirectArg,
-    /// Final-gather rays per shaded point.
-    #[arg(long, value_name = "N", default_value_t = 64)]
+    /// Final-gather rays per shaded point (per camera sample).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_GATHER_RAYS)]
     pub gather_rays: u32,
     /// What a final-gather ray reads where it lands: precomputed (irradiance computed beforehand
     /// at about one global photon in four, Christensen's method, fast) or estimate (a density estimate

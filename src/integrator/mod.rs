@@ -52,13 +52,28 @@ pub struct Settings {
     pub timing: bool,
 }
 
+/// Camera samples per pixel by default. A pixel is an area: one centre ray (the course's, and
+/// `--spp 1`) aliases every edge, which against a box-filtered reference is a bias no photon
+/// count removes (a mirror ball's reflected light: 4.7% block bias at one ray, 0.9% at four).
+/// The per-sample counts below are a quarter of what one ray per pixel used to take, so a
+/// photon-mapped pixel costs about the same: final gathering dominates and its rays per pixel
+/// are unchanged.
+pub const DEFAULT_SPP: u32 = 4;
+
+/// Shadow rays per area or sphere light per camera sample (16 per pixel at [`DEFAULT_SPP`]).
+pub const DEFAULT_LIGHT_SAMPLES: u32 = 4;
+
+/// Final-gather rays per camera sample (64 per pixel at [`DEFAULT_SPP`]).
+pub const DEFAULT_GATHER_RAYS: u32 = 16;
+
 impl Default for Settings {
-    /// Returns the course's defaults: one centre ray per pixel, photon maps when a light asks.
+    /// Returns the defaults: [`DEFAULT_SPP`] stratified samples per pixel, photon maps when a
+    /// light asks.
     fn default() -> Settings {
         Settings {
             seed: 0,
-            sampling: crate::render::Sampling::Stratified { spp: 1 },
-            light_samples: 16,
+            sampling: crate::render::Sampling::Stratified { spp: DEFAULT_SPP },
+            light_samples: DEFAULT_LIGHT_SAMPLES,
             gi: GiMode::Auto,
             photons: photon_map::GiSettings::default(),
             timing: false,

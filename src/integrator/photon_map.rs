@@ -149,7 +149,9 @@ impl Default for GiSettings {
             k: 50,
             max_radius: 0.05,
             filter: Filter::Epanechnikov,
-            indirect: Indirect::Gather { rays: 64 },
+            indirect: Indirect::Gather {
+                rays: super::DEFAULT_GATHER_RAYS,
+            },
             caustics: true,
             precompute: true,
         }

@@ -85,7 +85,28 @@ pub fn render_films(
     name: &str,
     dir: &Path,
 ) -> Result<Vec<(RenderDesc, Camera, Film)>, caustic::Error> {
-    render_films_with(src, name, dir, &Settings::default())
+    render_films_with(src, name, dir, &centre_ray())
+}
+
+/// The settings the closed-form tests are written for: one ray through each pixel's centre (the
+/// course's sampling, so a pixel is the value along one known ray), with the per-pixel light and
+/// gather counts of the library defaults.
+pub fn centre_ray() -> Settings {
+    let d = Settings::default();
+    let spp = match d.sampling {
+        caustic::render::Sampling::Stratified { spp } => spp,
+        caustic::render::Sampling::Adaptive { .. } => 1,
+    };
+    let mut photons = d.photons.clone();
+    if let caustic::integrator::photon_map::Indirect::Gather { rays } = &mut photons.indirect {
+        *rays *= spp;
+    }
+    Settings {
+        sampling: caustic::render::Sampling::Stratified { spp: 1 },
+        light_samples: d.light_samples * spp,
+        photons,
+        ..d
+    }
 }
 
 /// [`render_films`] with `settings`.
@@ -117,7 +138,7 @@ pub fn render_films_with(
 pub fn whitted() -> Settings {
     Settings {
         gi: GiMode::Off,
-        ..Settings::default()
+        ..centre_ray()
     }
 }
 

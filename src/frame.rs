@@ -34,6 +34,9 @@ pub struct Frame {
     pub scene: Scene,
     pub film: Film,
     pub stats: Stats,
+    /// Why the photon counts differ from the script's and the settings' (see
+    /// [`GiSettings::follow_image`]), when they do.
+    pub photon_note: Option<String>,
 }
 
 /// Renders `window` of the image of `scene` through `camera`: plans the frame, then runs the
@@ -71,10 +74,32 @@ pub fn render_desc(
 ) -> Result<Frame> {
     let window = window(r, scale, crop)?;
     let scene = build_scene(desc, r)?;
-    check_photon_budget(desc, r, &scene, settings)?;
+    let pixels = |w: u32, h: u32| w as f64 * h as f64;
+    let factor = pixels(window.full_width, window.full_height) / pixels(r.width, r.height);
+    let mut settings = settings.clone();
+    let follow = settings.photons.follow_image && factor != 1.0;
+    if follow {
+        settings.photons.photon_scale *= factor;
+    }
+    check_photon_budget(desc, r, &scene, &settings)?;
     let camera = Camera::new(&r.camera, window.full_width, window.full_height);
-    let (film, stats) = render(&scene, &camera, window, settings, progress);
-    Ok(Frame { scene, film, stats })
+    let (film, mut stats) = render(&scene, &camera, window, &settings, progress);
+    let photon_note = (follow && stats.photons.is_some()).then(|| {
+        format!(
+            "photons: x{factor:.4} with the image ({}x{} of the script's {}x{}); --photons, \
+             --caustic-photons or --photon-scale fixes the count",
+            window.full_width, window.full_height, r.width, r.height
+        )
+    });
+    if let Some(note) = &photon_note {
+        stats.plan.reasons.push(note.clone());
+    }
+    Ok(Frame {
+        scene,
+        film,
+        stats,
+        photon_note,
+    })
 }
 
 /// Returns an error at the light's script line when its photon count (its `num_photons` or its

@@ -477,3 +477,49 @@ fn each_map_has_its_own_photon_budget() {
         "{stats}"
     );
 }
+
+#[test]
+fn photon_counts_follow_the_image_unless_the_command_line_fixes_them() {
+    // A --scale 0.25 preview has a sixteenth of the pixels and traces a sixteenth of the photons
+    // (issue 14: a 128x128 preview of perlin.lua traced 10M photons for 16k pixels); any count
+    // on the command line is taken as given.
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/validate/cornell_glass.lua");
+    let dir = out_dir("follow_image");
+    let run = |extra: &[&str]| {
+        let out = caustic()
+            .arg("render")
+            .arg(&scene)
+            .args(["-q", "--stats", "--scale", "0.25", "--gather-rays", "1"])
+            .args(extra)
+            .arg("-o")
+            .arg(dir.join("f.png"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{err}");
+        (String::from_utf8_lossy(&out.stdout).into_owned(), err)
+    };
+    let (stats, err) = run(&[]);
+    assert!(
+        stats.contains("global map: 12500 photons emitted"),
+        "{stats}"
+    );
+    assert!(
+        stats.contains("caustic map: 125000 photons emitted"),
+        "{stats}"
+    );
+    assert!(
+        err.contains("photons: x0.0625 with the image (24x24"),
+        "{err}"
+    );
+    let (stats, err) = run(&["--photon-scale", "0.01"]);
+    assert!(
+        stats.contains("global map: 2000 photons emitted"),
+        "{stats}"
+    );
+    assert!(
+        stats.contains("caustic map: 20000 photons emitted"),
+        "{stats}"
+    );
+    assert!(!err.contains("with the image"), "{err}");
+}

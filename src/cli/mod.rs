@@ -143,13 +143,14 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = GiArg::Auto)]
     pub gi: GiArg,
     /// Photons for the global map, shared by lights without num_photons in proportion to their
-    /// power.
-    #[arg(long, value_name = "N", default_value_t = GLOBAL_PHOTONS)]
-    pub photons: u64,
+    /// power [default: 200000]. Setting it (or --caustic-photons, or --photon-scale) stops the
+    /// counts from following --scale.
+    #[arg(long, value_name = "N")]
+    pub photons: Option<u64>,
     /// Photons for the caustic map, shared the same way (more than the global map's: caustics are
-    /// seen directly, not through final gathering).
-    #[arg(long, value_name = "N", default_value_t = CAUSTIC_PHOTONS)]
-    pub caustic_photons: u64,
+    /// seen directly, not through final gathering) [default: 2000000].
+    #[arg(long, value_name = "N")]
+    pub caustic_photons: Option<u64>,
     /// Indirect diffuse light: gather (final gathering, accurate) or direct (the global map seen
     /// directly, fast and blotchy).
     #[arg(long, value_enum, default_value_t = IndirectArg::Gather)]
@@ -165,9 +166,10 @@ pub struct RenderArgs {
     /// Nearest photons per density estimate.
     #[arg(long, value_name = "K", default_value_t = 50)]
     pub photon_k: usize,
-    /// Multiply every light's photon count by F, the scene's num_photons included (previews).
-    #[arg(long, value_name = "F", default_value_t = 1.0)]
-    pub photon_scale: f64,
+    /// Multiply every light's photon count by F, the scene's num_photons included [default: 1,
+    /// times the image's pixels over the script's: a --scale 0.25 preview traces a sixteenth].
+    #[arg(long, value_name = "F")]
+    pub photon_scale: Option<f64>,
     /// What a missing or unreadable texture is: an error (default), or a warning (once per file)
     /// with the material rendered in its kd colour.
     #[arg(long, value_enum, default_value_t = MissingTextures::Error)]
@@ -316,6 +318,9 @@ fn render_one(
     let frame = frame::render_desc(desc, r, job.scale, job.crop, &job.settings, &bar);
     bar.finish();
     let frame = frame?;
+    if let Some(note) = &frame.photon_note {
+        eprintln!("{note}");
+    }
     write_image(&frame.film, out, job.tonemap)?;
     if let Some(map) = &job.aa_map {
         write_sample_map(&frame.film, map)?;

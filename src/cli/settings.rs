@@ -3,7 +3,7 @@
 
 use super::{GatherLookup, GiArg, IndirectArg, RenderArgs, TonemapArg};
 use crate::error::{Error, Result};
-use crate::integrator::photon_map::{GiSettings, Indirect};
+use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings, Indirect};
 use crate::integrator::{GiMode, Settings};
 use crate::io::image::Tonemap;
 use crate::photon::trace::MAX_PHOTONS;
@@ -65,17 +65,19 @@ impl RenderJob {
                 "--aa-threshold must be >= 0 and --aa-depth at most 8".into(),
             ));
         }
-        if !(a.photon_scale >= 0.0 && a.photon_scale <= 1e3) {
+        let photon_scale = a.photon_scale.unwrap_or(1.0);
+        if !(0.0..=1e3).contains(&photon_scale) {
             return Err(Error::Usage(format!(
-                "--photon-scale must be in [0, 1000], got {}",
-                a.photon_scale
+                "--photon-scale must be in [0, 1000], got {photon_scale}"
             )));
         }
+        let photons = a.photons.unwrap_or(GLOBAL_PHOTONS);
+        let caustic_photons = a.caustic_photons.unwrap_or(CAUSTIC_PHOTONS);
         if !a.exposure.is_finite() {
             return Err(Error::Usage("--exposure must be finite".into()));
         }
-        check_photons("--photons", a.photons)?;
-        check_photons("--caustic-photons", a.caustic_photons)?;
+        check_photons("--photons", photons)?;
+        check_photons("--caustic-photons", caustic_photons)?;
         for (name, value, max) in [
             ("--light-samples", a.light_samples as u64, 4096),
             ("--photon-k", a.photon_k as u64, 10_000),
@@ -113,9 +115,12 @@ impl RenderJob {
             },
             photons: GiSettings {
                 seed: a.seed,
-                photons: a.photons,
-                caustic_photons: a.caustic_photons,
-                photon_scale: a.photon_scale,
+                photons,
+                caustic_photons,
+                photon_scale,
+                follow_image: a.photons.is_none()
+                    && a.caustic_photons.is_none()
+                    && a.photon_scale.is_none(),
                 k: a.photon_k,
                 indirect: match a.indirect {
                     IndirectArg::Gather => Indirect::Gather {

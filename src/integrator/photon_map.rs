@@ -110,6 +110,12 @@ pub struct GiSettings {
     pub caustic_photons: u64,
     /// Multiplies every light's photon count, `num_photons` included (previews, tests).
     pub photon_scale: f64,
+    /// Whether [`crate::frame::render_desc`] scales the photon counts with the image: by the
+    /// rendered image's pixels over the script's, so a `--scale 0.25` preview traces about a
+    /// sixteenth of the photons (the density estimates then span about as many pixels as at
+    /// full size). The command line turns it off when `--photons`, `--caustic-photons` or
+    /// `--photon-scale` fixes the count.
+    pub follow_image: bool,
     /// Nearest photons per estimate.
     pub k: usize,
     /// Largest search radius of the global map as a fraction of the scene's diagonal (the caustic
@@ -146,6 +152,7 @@ impl Default for GiSettings {
             photons: GLOBAL_PHOTONS,
             caustic_photons: CAUSTIC_PHOTONS,
             photon_scale: 1.0,
+            follow_image: true,
             k: 50,
             max_radius: 0.05,
             filter: Filter::Epanechnikov,

@@ -10,6 +10,9 @@
 //!   or a dielectric): without one no photon path light → specular → diffuse exists.
 //! - soft shadows only for area and sphere lights; refraction only where `t > 0`; and so on, by
 //!   construction of the shading code.
+//! - photon counts that follow the image ([`crate::frame::render_desc`], see
+//!   `GiSettings::follow_image`): a preview at a quarter of the script's size traces a sixteenth
+//!   of its photons, unless the command line fixes a count; the reason joins the plan's.
 
 use super::Integrator;
 use crate::photon::trace::specular_targets;

@@ -20,7 +20,8 @@ use crate::camera::Camera;
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::film::{Film, Window};
-use crate::integrator::photon_map::{Gi, GiSettings, GiStats};
+use crate::integrator::photon_map::{Gi, GiSettings, GiStats, Indirect};
+use crate::integrator::plan::plan_with;
 use crate::integrator::{GiMode, Settings, plan};
 use crate::lua::MAX_PIXELS;
 use crate::photon::trace::{MAX_PHOTONS, MapKind};
@@ -48,7 +49,8 @@ pub fn render(
     settings: &Settings,
     progress: &dyn Progress,
 ) -> (Film, Stats) {
-    let plan = plan(scene, settings.gi);
+    let gather = matches!(settings.photons.indirect, Indirect::Gather { .. });
+    let plan = plan_with(scene, settings.gi, &settings.overrides, gather);
     let (film, render, photons) = plan
         .integrator
         .render(scene, camera, window, settings, &plan, progress);
@@ -92,7 +94,7 @@ pub fn render_desc(
         )
     });
     if let Some(note) = &photon_note {
-        stats.plan.reasons.push(note.clone());
+        stats.plan.notes.push(note.clone());
     }
     Ok(Frame {
         scene,

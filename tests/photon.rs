@@ -263,7 +263,7 @@ fn the_original_projects_scenes_render_with_photon_maps() {
             "{name}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
-        assert!(stdout.contains("photon maps: on"), "{name}: {stdout}");
+        assert!(stdout.contains("photon-maps: on"), "{name}: {stdout}");
     }
 }
 

@@ -10,6 +10,7 @@ use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::frame;
 use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings};
+use crate::integrator::plan::Effect;
 use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES, DEFAULT_SPP};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
 use crate::lua::{ScriptOptions, run_script, run_script_with};
@@ -142,6 +143,13 @@ pub struct RenderArgs {
     /// Photon mapping: auto (when a light has power or num_photons), on, or off (ambient term).
     #[arg(long, value_enum, default_value_t = GiArg::Auto)]
     pub gi: GiArg,
+    /// Simulate EFFECT whatever the plan decides: photon-maps, caustics or final-gathering
+    /// (repeatable; `caustic info` and --stats print the plan and its reasons).
+    #[arg(long, value_name = "EFFECT", value_parser = parse_effect)]
+    pub force: Vec<Effect>,
+    /// Do not simulate EFFECT: photon-maps, caustics or final-gathering (repeatable).
+    #[arg(long, value_name = "EFFECT", value_parser = parse_effect)]
+    pub disable: Vec<Effect>,
     /// Photons for the global map, shared by lights without num_photons in proportion to their
     /// power [default: 200000]. Setting it (or --caustic-photons, or --photon-scale) stops the
     /// counts from following --scale.
@@ -174,6 +182,17 @@ pub struct RenderArgs {
     /// with the material rendered in its kd colour.
     #[arg(long, value_enum, default_value_t = MissingTextures::Error)]
     pub missing_textures: MissingTextures,
+}
+
+/// Parses an effect name of `--force` and `--disable`.
+fn parse_effect(name: &str) -> std::result::Result<Effect, String> {
+    Effect::parse(name).ok_or_else(|| {
+        let names: Vec<&str> = Effect::OVERRIDABLE.iter().map(|e| e.name()).collect();
+        format!(
+            "unknown effect '{name}'; the effects are {}",
+            names.join(", ")
+        )
+    })
 }
 
 /// The `--missing-textures` choices.
@@ -321,6 +340,11 @@ fn render_one(
     if let Some(note) = &frame.photon_note {
         eprintln!("{note}");
     }
+    for d in &frame.stats.plan.decisions {
+        if matches!(d.why, crate::integrator::plan::Why::ForcedInVain(_)) {
+            eprintln!("warning: {d}");
+        }
+    }
     write_image(&frame.film, out, job.tonemap)?;
     if let Some(map) = &job.aa_map {
         write_sample_map(&frame.film, map)?;
@@ -429,5 +453,28 @@ fn info_command(args: InfoArgs) -> Result<()> {
         "{}",
         report::describe(&args.scene.display().to_string(), &desc)?
     );
+    // The plan each render would follow at the default settings, with the photon budgets.
+    let settings = crate::integrator::Settings::default();
+    for (i, r) in desc.renders.iter().enumerate() {
+        let scene = build_scene(&desc, r)?;
+        let plan = crate::integrator::plan(&scene, settings.gi);
+        println!("  plan of render {} (default settings):", i + 1);
+        for line in plan.lines() {
+            println!("    {line}");
+        }
+        if plan.integrator == crate::integrator::Integrator::PhotonMap {
+            use crate::photon::trace::MapKind;
+            for (name, kind, on) in [
+                ("global", MapKind::Global, true),
+                ("caustic", MapKind::Caustic, plan.caustics),
+            ] {
+                if on {
+                    let budget = settings.photons.budget(&scene.lights, kind);
+                    let total: u64 = budget.iter().sum();
+                    println!("    {name} photons: {total} (per light: {budget:?})");
+                }
+            }
+        }
+    }
     Ok(())
 }

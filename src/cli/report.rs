@@ -108,7 +108,7 @@ pub fn print_stats(frame: &Frame, r: &RenderDesc, out: &Path) {
         rstats.material_time.as_secs_f64(),
         100.0 * rstats.material_time.as_secs_f64() / busy.max(1e-9)
     );
-    println!("  effects: {}", frame.stats.plan.reasons.join("; "));
+    println!("  plan: {}", frame.stats.plan.lines().join("; "));
     if let Some(photons) = &frame.stats.photons {
         print_photon_stats(photons, rstats);
     }

@@ -4,6 +4,7 @@
 use super::{GatherLookup, GiArg, IndirectArg, RenderArgs, TonemapArg};
 use crate::error::{Error, Result};
 use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings, Indirect};
+use crate::integrator::plan::Overrides;
 use crate::integrator::{GiMode, Settings};
 use crate::io::image::Tonemap;
 use crate::photon::trace::MAX_PHOTONS;
@@ -76,6 +77,12 @@ impl RenderJob {
         if !a.exposure.is_finite() {
             return Err(Error::Usage("--exposure must be finite".into()));
         }
+        if let Some(e) = a.force.iter().find(|e| a.disable.contains(e)) {
+            return Err(Error::Usage(format!(
+                "--force {0} and --disable {0} contradict each other",
+                e.name()
+            )));
+        }
         check_photons("--photons", photons)?;
         check_photons("--caustic-photons", caustic_photons)?;
         for (name, value, max) in [
@@ -112,6 +119,10 @@ impl RenderJob {
                 GiArg::Auto => GiMode::Auto,
                 GiArg::On => GiMode::On,
                 GiArg::Off => GiMode::Off,
+            },
+            overrides: Overrides {
+                force: a.force.clone(),
+                disable: a.disable.clone(),
             },
             photons: GiSettings {
                 seed: a.seed,

@@ -46,6 +46,8 @@ pub struct Settings {
     pub light_samples: u32,
     /// Whether to simulate global illumination (`--gi`).
     pub gi: GiMode,
+    /// `--force` and `--disable` (see [`plan`]).
+    pub overrides: plan::Overrides,
     /// The photon passes and estimates (photon-mapping integrator).
     pub photons: photon_map::GiSettings,
     /// Time material evaluation for `--stats`.
@@ -75,6 +77,7 @@ impl Default for Settings {
             sampling: crate::render::Sampling::Stratified { spp: DEFAULT_SPP },
             light_samples: DEFAULT_LIGHT_SAMPLES,
             gi: GiMode::Auto,
+            overrides: plan::Overrides::default(),
             photons: photon_map::GiSettings::default(),
             timing: false,
         }

@@ -210,8 +210,16 @@ pub fn render(
     plan: &Plan,
     progress: &dyn Progress,
 ) -> (Film, RenderStats, GiStats) {
+    let indirect = match settings.photons.indirect {
+        Indirect::Gather { .. } if !plan.final_gathering => Indirect::Direct,
+        Indirect::Direct if plan.final_gathering => Indirect::Gather {
+            rays: super::DEFAULT_GATHER_RAYS,
+        },
+        i => i,
+    };
     let gi_settings = GiSettings {
         caustics: plan.caustics,
+        indirect,
         ..settings.photons.clone()
     };
     let gi = Gi::build_with(scene, &gi_settings, progress);

@@ -1,22 +1,33 @@
 //! The effect plan: which integrator a frame uses and which parts of light transport it
-//! simulates, decided from its scene before any pass runs.
+//! simulates, decided from its scene and settings before any pass runs. The passes read the
+//! plan; `caustic info` prints it and `--stats` prints it with the phases' times.
 //!
 //! A render simulates only what its scene calls for:
-//! - **photon maps** (global illumination) when the command line asks (`--gi on`) or, with
-//!   `--gi auto` (the default), when any of the render's lights was given the extended project's
-//!   `power` or `num_photons` (scenes written for a photon mapper). Otherwise the course's ambient
-//!   term stands in for indirect light, so the A4 scenes keep their look.
+//! - **photon maps** (global illumination) when, with `--gi auto` (the default), any of the
+//!   render's lights was given the extended project's `power` or `num_photons` (scenes written for
+//!   a photon mapper). Otherwise the course's ambient term stands in for indirect light, so the A4
+//!   scenes keep their look.
 //! - a **caustic map** only when photon maps are on and some placed surface is specular (a mirror
 //!   or a dielectric): without one no photon path light → specular → diffuse exists.
-//! - soft shadows only for area and sphere lights; refraction only where `t > 0`; and so on, by
-//!   construction of the shading code.
+//! - **final gathering** when photon maps are on and `--indirect gather` (the default); with
+//!   `--indirect direct` the global map is seen directly.
+//! - soft shadows only for area and sphere lights (reported; the lights decide it).
 //! - photon counts that follow the image ([`crate::frame::render_desc`], see
 //!   `GiSettings::follow_image`): a preview at a quarter of the script's size traces a sixteenth
-//!   of its photons, unless the command line fixes a count; the reason joins the plan's.
+//!   of its photons, unless the command line fixes a count; the reason joins the plan's notes.
+//!
+//! `--force EFFECT` and `--disable EFFECT` overrule the decisions for the effects in
+//! [`Effect::OVERRIDABLE`]; `--gi on|off` is `--force`/`--disable photon-maps`. A forced effect
+//! the scene cannot have is planned on and says why it will do nothing (a caustic map without a
+//! specular surface stays empty).
+//!
+//! Each decision is data ([`Decision`]: the effect, on or off, and a typed [`Why`]) rendered as
+//! text by `Display`, so tests and tools read the plan without parsing sentences.
 
 use super::Integrator;
 use crate::photon::trace::specular_targets;
 use crate::scene::Scene;
+use std::fmt;
 
 /// What `--gi` asks for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -26,46 +37,210 @@ pub enum GiMode {
     Off,
 }
 
-/// The effects one render simulates, with the reasons, for `--stats`.
+/// A part of light transport the plan decides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Effect {
+    PhotonMaps,
+    Caustics,
+    FinalGathering,
+    SoftShadows,
+}
+
+impl Effect {
+    /// The effects `--force` and `--disable` take.
+    pub const OVERRIDABLE: [Effect; 3] =
+        [Effect::PhotonMaps, Effect::Caustics, Effect::FinalGathering];
+
+    /// The effect's name on the command line and in the plan.
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::PhotonMaps => "photon-maps",
+            Effect::Caustics => "caustics",
+            Effect::FinalGathering => "final-gathering",
+            Effect::SoftShadows => "soft-shadows",
+        }
+    }
+
+    /// Returns the overridable effect called `name`.
+    pub fn parse(name: &str) -> Option<Effect> {
+        Effect::OVERRIDABLE.into_iter().find(|e| e.name() == name)
+    }
+}
+
+/// The user's overrides of the plan (`--force`, `--disable`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Overrides {
+    pub force: Vec<Effect>,
+    pub disable: Vec<Effect>,
+}
+
+impl Overrides {
+    fn get(&self, e: Effect) -> Option<bool> {
+        if self.disable.contains(&e) {
+            Some(false)
+        } else if self.force.contains(&e) {
+            Some(true)
+        } else {
+            None
+        }
+    }
+}
+
+/// Why an effect is on or off.
 #[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Why {
+    /// `--force` (or `--gi on`).
+    Forced,
+    /// `--disable` (or `--gi off`).
+    Disabled,
+    /// Forced, but the scene cannot have it: the reason it will do nothing.
+    ForcedInVain(&'static str),
+    /// A light has `power` or `num_photons`.
+    LightAsks,
+    /// No light has `power` or `num_photons`.
+    NoLightAsks,
+    /// This many placed objects are specular or refractive.
+    Specular(usize),
+    NoSpecular,
+    /// It needs photon maps, which are off.
+    NoPhotonMaps,
+    /// `--indirect gather`.
+    Gather,
+    /// `--indirect direct`.
+    DirectVisualisation,
+    /// This many area or sphere lights.
+    AreaLights(usize),
+    PointLightsOnly,
+}
+
+/// One decision of the plan.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Decision {
+    pub effect: Effect,
+    pub on: bool,
+    pub why: Why,
+}
+
+impl fmt::Display for Decision {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let state = if self.on { "on" } else { "off" };
+        let why = match &self.why {
+            Why::Forced => "--force".to_string(),
+            Why::Disabled => "--disable".to_string(),
+            Why::ForcedInVain(what) => format!("--force, but {what}"),
+            Why::LightAsks => "a light has power or num_photons".to_string(),
+            Why::NoLightAsks => {
+                "no light has power or num_photons; ambient term instead".to_string()
+            }
+            Why::Specular(n) => format!("{n} specular or refractive objects"),
+            Why::NoSpecular => "no specular or refractive surface".to_string(),
+            Why::NoPhotonMaps => "photon maps are off".to_string(),
+            Why::Gather => "--indirect gather".to_string(),
+            Why::DirectVisualisation => "--indirect direct: the global map seen directly".into(),
+            Why::AreaLights(n) => format!("{n} area or sphere lights"),
+            Why::PointLightsOnly => "point lights only".to_string(),
+        };
+        write!(f, "{}: {state} ({why})", self.effect.name())
+    }
+}
+
+/// The effects one render simulates, with the reasons.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
     /// The light-transport method: photon mapping when global illumination is on.
     pub integrator: Integrator,
     /// Whether the photon-mapping integrator traces a caustic map.
     pub caustics: bool,
-    pub reasons: Vec<String>,
+    /// Whether the photon-mapping integrator gathers (else it shows the global map directly).
+    pub final_gathering: bool,
+    pub decisions: Vec<Decision>,
+    /// What else the frame changed and why (photon counts following the image).
+    pub notes: Vec<String>,
 }
 
-/// Returns the effect plan for `scene` under `mode`.
+impl Plan {
+    /// Returns the decisions and notes as text, one per item.
+    pub fn lines(&self) -> Vec<String> {
+        let decisions = self.decisions.iter().map(ToString::to_string);
+        decisions.chain(self.notes.iter().cloned()).collect()
+    }
+}
+
+/// Returns the effect plan for `scene` under `mode` with no overrides, gathering.
 pub fn plan(scene: &Scene, mode: GiMode) -> Plan {
+    plan_with(scene, mode, &Overrides::default(), true)
+}
+
+/// Returns the effect plan for `scene` under `mode` and `overrides`; `gather` is whether the
+/// settings ask for final gathering (`--indirect gather`).
+pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: bool) -> Plan {
+    let decide = |effect, auto: (bool, Why)| match overrides.get(effect) {
+        Some(true) => (true, Why::Forced),
+        Some(false) => (false, Why::Disabled),
+        None => auto,
+    };
+    let mut decisions = Vec::new();
     let extended = scene
         .lights
         .iter()
         .any(|l| l.power.is_some() || l.photons.is_some());
-    let (photon_maps, why) = match mode {
-        GiMode::On => (true, "photon maps: on (--gi on)".to_string()),
-        GiMode::Off => (false, "photon maps: off (--gi off); ambient term instead".to_string()),
-        GiMode::Auto if extended => (true, "photon maps: on (a light has power or num_photons)".to_string()),
-        GiMode::Auto => (
-            false,
-            "photon maps: off (no light has power or num_photons; --gi on forces them); ambient term instead".to_string(),
-        ),
+    let auto = match mode {
+        GiMode::On => (true, Why::Forced),
+        GiMode::Off => (false, Why::Disabled),
+        GiMode::Auto if extended => (true, Why::LightAsks),
+        GiMode::Auto => (false, Why::NoLightAsks),
     };
-    let mut reasons = vec![why];
+    let (photon_maps, why) = decide(Effect::PhotonMaps, auto);
+    decisions.push(Decision {
+        effect: Effect::PhotonMaps,
+        on: photon_maps,
+        why,
+    });
     let specular = specular_targets(scene).len();
-    let caustics = photon_maps && specular > 0;
-    if photon_maps {
-        reasons.push(if caustics {
-            format!("caustic map: on ({specular} specular or refractive objects)")
-        } else {
-            "caustic map: off (no specular or refractive surface)".to_string()
-        });
+    let auto = match (photon_maps, specular) {
+        (false, _) => (false, Why::NoPhotonMaps),
+        (true, 0) => (false, Why::NoSpecular),
+        (true, n) => (true, Why::Specular(n)),
+    };
+    let (caustics, mut why) = decide(Effect::Caustics, auto);
+    if caustics && why == Why::Forced {
+        if !photon_maps {
+            why = Why::ForcedInVain("photon maps are off: no caustic map is traced");
+        } else if specular == 0 {
+            why = Why::ForcedInVain("no surface is specular or refractive: the map stays empty");
+        }
     }
+    decisions.push(Decision {
+        effect: Effect::Caustics,
+        on: caustics && photon_maps,
+        why,
+    });
+    let auto = match (photon_maps, gather) {
+        (false, _) => (false, Why::NoPhotonMaps),
+        (true, true) => (true, Why::Gather),
+        (true, false) => (false, Why::DirectVisualisation),
+    };
+    let (mut final_gathering, mut why) = decide(Effect::FinalGathering, auto);
+    if final_gathering && !photon_maps {
+        (final_gathering, why) = (
+            false,
+            Why::ForcedInVain("photon maps are off: there is nothing to gather"),
+        );
+    }
+    decisions.push(Decision {
+        effect: Effect::FinalGathering,
+        on: final_gathering,
+        why,
+    });
     let area = scene.lights.iter().filter(|l| l.is_area()).count();
-    reasons.push(if area > 0 {
-        format!("soft shadows: {area} area or sphere lights")
-    } else {
-        "soft shadows: off (point lights only)".to_string()
+    decisions.push(Decision {
+        effect: Effect::SoftShadows,
+        on: area > 0,
+        why: if area > 0 {
+            Why::AreaLights(area)
+        } else {
+            Why::PointLightsOnly
+        },
     });
     Plan {
         integrator: if photon_maps {
@@ -73,7 +248,9 @@ pub fn plan(scene: &Scene, mode: GiMode) -> Plan {
         } else {
             Integrator::Whitted
         },
-        caustics,
-        reasons,
+        caustics: caustics && photon_maps,
+        final_gathering,
+        decisions,
+        notes: Vec::new(),
     }
 }

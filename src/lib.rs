@@ -51,6 +51,7 @@ pub mod light;
 pub mod lua;
 pub mod material;
 pub mod mem;
+pub mod metrics;
 pub mod photon;
 pub mod progress;
 pub mod render;

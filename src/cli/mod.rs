@@ -48,6 +48,30 @@ pub enum Command {
     /// Write a scene as a Mitsuba 3 XML scene (spheres, cubes, meshes; diffuse, mirror and
     /// dielectric materials; point, area and sphere lights), for validation.
     ExportMitsuba(ExportArgs),
+    /// Compare an image with a reference: mean ratio, mean error, RMSE, relative RMSE and 8x8
+    /// block bias, over the image or a region.
+    Diff(DiffArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct DiffArgs {
+    /// The image to judge (EXR for linear values; PNG and JPEG compare their 8-bit codes).
+    pub image: PathBuf,
+    /// The reference.
+    pub reference: PathBuf,
+    /// A second, independent reference: the metrics are then against the truth as estimated
+    /// from both, and the references' own noise drops out.
+    #[arg(long, value_name = "REF2")]
+    pub second: Option<PathBuf>,
+    /// Only the window x0,y0,x1,y1 (pixels, end exclusive).
+    #[arg(long, value_name = "x0,y0,x1,y1", value_delimiter = ',')]
+    pub region: Option<Vec<u32>>,
+    /// Write a false-colour difference picture (red brighter, blue darker) as PNG.
+    #[arg(short, long, value_name = "OUT.png")]
+    pub output: Option<PathBuf>,
+    /// Contrast of the difference picture, relative to the reference's 99th percentile.
+    #[arg(long, value_name = "G", default_value_t = 4.0)]
+    pub gain: f32,
 }
 
 #[derive(Debug, Args)]
@@ -267,6 +291,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info(args) => info_command(args),
         Command::Stitch(args) => crate::io::image::stitch(&args.tiles, &args.output),
         Command::Photons(args) => photons_command(args),
+        Command::Diff(args) => diff_command(args),
         Command::ExportMitsuba(args) => export_command(args),
     }
 }
@@ -444,6 +469,61 @@ fn export_command(args: ExportArgs) -> Result<()> {
         size.1,
         args.spp
     );
+    Ok(())
+}
+
+fn diff_command(args: DiffArgs) -> Result<()> {
+    use crate::metrics::{Metrics, Region, difference_image};
+    let a = crate::io::image::read_rgb(&args.image)?;
+    let r1 = crate::io::image::read_rgb(&args.reference)?;
+    let r2 = match &args.second {
+        Some(p) => crate::io::image::read_rgb(p)?,
+        None => r1.clone(),
+    };
+    for (img, path) in [(&r1, &args.reference), (&r2, &args.reference)] {
+        if (img.width, img.height) != (a.width, a.height) {
+            return Err(Error::Usage(format!(
+                "{} is {}x{} but {} is {}x{}",
+                args.image.display(),
+                a.width,
+                a.height,
+                path.display(),
+                img.width,
+                img.height
+            )));
+        }
+    }
+    let region = match args.region.as_deref() {
+        None => Region::full(a.width, a.height),
+        Some(&[x0, y0, x1, y1]) if x0 < x1 && y0 < y1 && x1 <= a.width && y1 <= a.height => {
+            Region { x0, y0, x1, y1 }
+        }
+        Some(v) => {
+            return Err(Error::Usage(format!(
+                "--region {v:?} is not a non-empty window inside the {}x{} image",
+                a.width, a.height
+            )));
+        }
+    };
+    let m = Metrics::against_two(&a, &r1, &r2, region);
+    println!("mean ratio {:.5}", m.mean_ratio);
+    println!("mean error {:+.5}", m.mean_error);
+    println!("RMSE {:.6}", m.rmse);
+    println!("relative RMSE {:.5}", m.rel_rmse);
+    println!("block bias {:.5}", m.block_bias);
+    if let Some(out) = &args.output {
+        if !(args.gain.is_finite() && args.gain > 0.0) {
+            return Err(Error::Usage("--gain must be positive".into()));
+        }
+        crate::io::image::output_format(out)?;
+        let rgb = difference_image(&a, &r1, args.gain);
+        image::save_buffer(out, &rgb, a.width, a.height, image::ExtendedColorType::Rgb8).map_err(
+            |e| Error::File {
+                path: out.clone(),
+                message: format!("cannot write the difference picture: {e}"),
+            },
+        )?;
+    }
     Ok(())
 }
 

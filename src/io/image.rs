@@ -319,3 +319,30 @@ pub fn stitch(tiles: &[PathBuf], out: &Path) -> Result<()> {
         w.flush().map_err(|e| e.to_string())
     })
 }
+
+/// Reads the PNG, JPEG or EXR image at `path` as linear RGB for [`crate::metrics`]: EXR as
+/// stored, 8-bit formats as their codes over 255 (not sRGB-decoded, so two PNGs compare as they
+/// are written). The image crate's default limits bound the decoded size.
+pub fn read_rgb(path: &Path) -> Result<crate::metrics::Image> {
+    let fail = |message: String| Error::File {
+        path: path.to_path_buf(),
+        message,
+    };
+    let img = image::ImageReader::open(path)
+        .map_err(|e| fail(format!("cannot read image: {e}")))?
+        .with_guessed_format()
+        .map_err(|e| fail(format!("cannot read image: {e}")))?
+        .decode()
+        .map_err(|e| fail(format!("not a readable PNG, JPEG or EXR image: {e}")))?
+        .to_rgb32f();
+    let (width, height) = img.dimensions();
+    let pixels = img
+        .pixels()
+        .map(|p| glam::Vec3A::new(p[0], p[1], p[2]))
+        .collect();
+    Ok(crate::metrics::Image {
+        width,
+        height,
+        pixels,
+    })
+}

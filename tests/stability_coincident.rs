@@ -6,8 +6,59 @@ mod common;
 
 use caustic::camera::Camera;
 use caustic::scene::build::build_scene;
-use common::run_lua;
+use common::{render_films_with, run_lua, whitted};
 use glam::Vec3A;
+use std::path::Path;
+
+/// A floor slab and a water box (index 1.33, bottom face at y = 0) standing on it, seen from
+/// above at a slant; the floor's top face is at `floor_top`.
+fn water_scene(floor_top: f64, size: u32) -> String {
+    format!(
+        "white = gr.material({{0.7, 0.7, 0.7}}, {{0, 0, 0}}, 0)\n\
+         water_m = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 1.33)\n\
+         root = gr.node('root')\n\
+         floor = gr.cube('floor'); floor:scale(8, 1, 8); floor:translate(-4, {floor_top} - 1, -4)\n\
+         floor:set_material(white); root:add_child(floor)\n\
+         water = gr.cube('water'); water:scale(6, 0.5, 6); water:translate(-3, 0, -3)\n\
+         water:set_material(water_m); root:add_child(water)\n\
+         gr.render(root, 'w.png', {size}, {size}, {{0, 1.5, 0.8}}, {{0, -1.5, -0.5}}, {{0, 1, 0}}, 50,\n\
+                   {{0.3, 0.3, 0.3}}, {{gr.light({{0.5, 3, 0.5}}, {{1, 1, 1}}, {{1, 0, 0}})}})\n"
+    )
+}
+
+/// Returns the `size²` pixels of the first image the script renders (the course's renderer).
+fn pixels(src: &str) -> (u32, Vec<Vec3A>) {
+    let films = render_films_with(src.as_bytes(), "w.lua", Path::new("."), &whitted()).unwrap();
+    let (r, _, film) = films.into_iter().next().unwrap();
+    let px = (0..r.height)
+        .flat_map(|y| (0..r.width).map(move |x| (x, y)))
+        .map(|(x, y)| film.get(x, y))
+        .collect();
+    (r.width, px)
+}
+
+/// The floor seen through water standing exactly on it looks like a floor raised 1e-3 into the
+/// water (no tie): every pixel within 0.02 (the coincident faces tie at the same `t`, and
+/// whichever won by rounding gave black or white speckle). 48² pixels, one ray each.
+#[test]
+fn water_on_the_floor_matches_a_floor_just_inside_the_water() {
+    let (size, touching) = pixels(&water_scene(0.0, 48));
+    let (_, lifted) = pixels(&water_scene(1e-3, 48));
+    let bad: Vec<(usize, Vec3A, Vec3A)> = touching
+        .iter()
+        .zip(&lifted)
+        .enumerate()
+        .filter(|(_, (a, b))| (**a - **b).abs().max_element() > 0.02)
+        .map(|(i, (a, b))| (i, *a, *b))
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "{} of {} pixels differ by more than 0.02, e.g. (index, touching, lifted) {:?}",
+        bad.len(),
+        size * size,
+        &bad[..bad.len().min(5)]
+    );
+}
 
 /// Every camera ray of a 256² image from inside a room of thin wall slabs that touch only along
 /// their edges hits a wall (rays aimed at a shared edge fell between the two slabs by rounding:

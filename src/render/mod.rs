@@ -101,6 +101,7 @@ pub fn camera_pass(
         material_time: Duration::from_nanos(t.material_nanos),
         lookups: t.lookups,
         photons_used: t.photons_used,
+        depth_capped: t.depth_capped,
         time: start.elapsed(),
     };
     let film = Film {

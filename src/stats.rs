@@ -17,6 +17,8 @@ pub struct RenderStats {
     pub photons_used: u64,
     /// Eye paths stopped at the hard depth cap ([`crate::integrator::eye::MAX_PATH_DEPTH`]).
     pub depth_capped: u64,
+    /// Camera samples and pixels whose radiance was NaN or infinite, dropped (counted as black).
+    pub nonfinite_samples: u64,
 }
 
 /// Per-thread ray counts, summed into [`RenderStats`] once per row.
@@ -35,6 +37,8 @@ pub struct RayCounts {
     pub photons_used: u64,
     /// Eye paths stopped at the hard depth cap ([`crate::integrator::eye::MAX_PATH_DEPTH`]).
     pub depth_capped: u64,
+    /// Camera samples whose radiance was NaN or infinite, dropped (counted as black).
+    pub nonfinite: u64,
 }
 
 impl RayCounts {
@@ -47,5 +51,6 @@ impl RayCounts {
         self.lookups += o.lookups;
         self.photons_used += o.photons_used;
         self.depth_capped += o.depth_capped;
+        self.nonfinite += o.nonfinite;
     }
 }

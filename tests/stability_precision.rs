@@ -6,7 +6,7 @@ mod common;
 
 use caustic::frame::{Frame, render_desc};
 use caustic::progress::NoProgress;
-use common::{lua_error, run_lua, whitted};
+use common::{caustic, lua_error, out_dir, run_lua, run_ok, whitted};
 
 /// A scene: `{material}` and `{sphere}` replace the material and the sphere's construction,
 /// `{view}` the view direction of the 5×5 render.
@@ -101,4 +101,39 @@ fn huge_view_vectors_are_normalised_in_double_precision() {
     let want = render(&scene(MATTE, SPHERE, VIEW)).film.pixels;
     let got = render(&scene(MATTE, SPHERE, "{0, 0, -1e30}")).film.pixels;
     assert_eq!(got, want);
+}
+
+/// Radiance past the largest `f32` (a colour of 3e38 lit by a light of 3e38) never reaches the
+/// image: all 25 pixels are finite, and each sample on the sphere that overflowed (5 of 25) is
+/// counted as dropped, black, and printed by `--stats` (they were written as Inf).
+#[test]
+fn infinite_radiance_is_dropped_and_counted() {
+    let src = scene(
+        "gr.material({3e38, 3e38, 3e38}, {0, 0, 0}, 0)",
+        SPHERE,
+        VIEW,
+    )
+    .replace("{1, 1, 1}, {1, 0, 0}", "{3e38, 3e38, 3e38}, {1, 0, 0}");
+    let frame = render(&src);
+    let pixels = &frame.film.pixels;
+    assert!(pixels.iter().all(|p| p.is_finite()), "{pixels:?}");
+    let dropped = frame.stats.render.nonfinite_samples;
+    let black = pixels.iter().filter(|p| **p == glam::Vec3A::ZERO).count() as u64;
+    assert!(
+        dropped > 0 && dropped == black,
+        "{dropped} dropped, {black} black pixels"
+    );
+
+    let dir = out_dir("stability_precision_stats");
+    let script = dir.join("p.lua");
+    std::fs::write(&script, &src).unwrap();
+    let out = run_ok(
+        caustic()
+            .args(["render", "-q", "--gi", "off", "--stats", "-o"])
+            .arg(dir.join("p.exr"))
+            .arg(&script),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = format!("NaN or infinite samples dropped: {dropped}");
+    assert!(stdout.contains(&line), "no '{line}' in:\n{stdout}");
 }

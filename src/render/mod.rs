@@ -102,6 +102,7 @@ pub fn camera_pass(
         lookups: t.lookups,
         photons_used: t.photons_used,
         depth_capped: t.depth_capped,
+        nonfinite_samples: t.nonfinite,
         time: start.elapsed(),
     };
     let film = Film {

@@ -15,7 +15,7 @@
 //! image, which is byte-identical to the PNG of a full render.
 
 use crate::error::{Error, Result};
-use crate::film::{Film, Window};
+use crate::film::{Film, MAX_PIXELS, Window};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -236,6 +236,13 @@ fn read_tile(path: &Path) -> Result<Tile> {
         },
         _ => return Err(fail(format!("malformed '{WINDOW_KEY}' record '{text}'"))),
     };
+    let full_pixels = window.full_width as u64 * window.full_height as u64;
+    if full_pixels > MAX_PIXELS {
+        return Err(fail(format!(
+            "its window record '{text}' describes a {}x{} image, larger than {MAX_PIXELS} pixels",
+            window.full_width, window.full_height
+        )));
+    }
     if !window.is_valid() || window.size() != (width, height) {
         return Err(fail(format!(
             "its window '{text}' does not match its {width}x{height} pixels"

@@ -36,7 +36,7 @@ use std::rc::Rc;
 pub type RenderHook = Box<dyn FnMut(&SceneDesc, &RenderDesc) -> Result<()>>;
 
 /// Largest image `gr.render` accepts, in pixels (about 8k × 8k).
-pub const MAX_PIXELS: u64 = 1 << 26;
+pub use crate::film::MAX_PIXELS;
 
 /// How a script run treats recoverable problems.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

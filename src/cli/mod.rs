@@ -273,6 +273,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     });
     let options = ScriptOptions {
         missing_textures_warn: args.missing_textures == MissingTextures::Warn,
+        ..ScriptOptions::default()
     };
     run_script_with(&args.scene, hook, options)?;
     if rendered.get() == 0 {

@@ -55,7 +55,7 @@ pub fn run_script(path: &Path, hook: RenderHook) -> Result<SceneDesc> {
 
 /// Runs the script at `path` with `options`.
 pub fn run_script_with(path: &Path, hook: RenderHook, options: ScriptOptions) -> Result<SceneDesc> {
-    let source = std::fs::read(path).map_err(|e| Error::File {
+    let source = crate::files::read_regular(path).map_err(|e| Error::File {
         path: path.to_path_buf(),
         message: format!("cannot read script: {e}"),
     })?;

@@ -42,6 +42,7 @@ pub mod camera;
 pub mod cli;
 pub mod desc;
 pub mod error;
+pub mod files;
 pub mod film;
 pub mod frame;
 pub mod geometry;

@@ -15,6 +15,10 @@ pub struct RenderStats {
     /// Photon-map estimates made while rendering, and the photons they found.
     pub lookups: u64,
     pub photons_used: u64,
+    /// Eye paths stopped at the hard depth cap ([`crate::integrator::eye::MAX_PATH_DEPTH`]).
+    pub depth_capped: u64,
+    /// Camera samples and pixels whose radiance was NaN or infinite, dropped (counted as black).
+    pub nonfinite_samples: u64,
 }
 
 /// Per-thread ray counts, summed into [`RenderStats`] once per row.
@@ -31,6 +35,10 @@ pub struct RayCounts {
     /// Photon-map lookups and the photons they found.
     pub lookups: u64,
     pub photons_used: u64,
+    /// Eye paths stopped at the hard depth cap ([`crate::integrator::eye::MAX_PATH_DEPTH`]).
+    pub depth_capped: u64,
+    /// Camera samples whose radiance was NaN or infinite, dropped (counted as black).
+    pub nonfinite: u64,
 }
 
 impl RayCounts {
@@ -42,5 +50,7 @@ impl RayCounts {
         self.material_nanos += o.material_nanos;
         self.lookups += o.lookups;
         self.photons_used += o.photons_used;
+        self.depth_capped += o.depth_capped;
+        self.nonfinite += o.nonfinite;
     }
 }

@@ -373,7 +373,16 @@ fn degenerate_and_extreme_transforms_are_skipped_or_rejected_not_traced() {
     );
     // A placement that overflows single precision is an error naming the node's line.
     let e =
-        build("\ns = gr.sphere('s'); s:set_material(m); s:translate(1e39, 0, 0); r:add_child(s)")
+        build("\ns = gr.sphere('s'); s:set_material(m); s:translate(3e38, 0, 0); s:translate(3e38, 0, 0); r:add_child(s)")
+            .unwrap_err()
+            .to_string();
+    assert!(
+        e.starts_with("test.lua:4: node 's' is transformed beyond single precision"),
+        "{e}"
+    );
+    // A placement whose bounds overflow (a sphere of radius 3e38 centred at 3e38) names it too.
+    let e =
+        build("\ns = gr.sphere('s'); s:set_material(m); s:scale(3e38, 3e38, 3e38); s:translate(3e38, 0, 0); r:add_child(s)")
             .unwrap_err()
             .to_string();
     assert!(

@@ -329,6 +329,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     });
     let options = ScriptOptions {
         missing_textures_warn: args.missing_textures == MissingTextures::Warn,
+        ..ScriptOptions::default()
     };
     run_script_with(&args.scene, hook, options)?;
     if rendered.get() == 0 {
@@ -349,6 +350,10 @@ fn render_one(
 ) -> Result<()> {
     // Refuse an output the image cannot be written to before spending the render on it.
     crate::io::image::output_format(out)?;
+    crate::files::check_output(out).map_err(|message| Error::File {
+        path: out.to_path_buf(),
+        message,
+    })?;
     if let Some(map) = &job.aa_map
         && crate::io::image::output_format(map)? != crate::io::image::Format::Png
     {

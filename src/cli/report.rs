@@ -101,6 +101,12 @@ pub fn print_stats(frame: &Frame, r: &RenderDesc, out: &Path) {
         rays as f64 / secs.max(1e-9) / 1e6,
         rayon::current_num_threads()
     );
+    println!(
+        "  eye paths stopped at the {}-bounce cap: {}; NaN or infinite samples dropped: {}",
+        crate::integrator::eye::MAX_PATH_DEPTH,
+        rstats.depth_capped,
+        rstats.nonfinite_samples
+    );
     // Thread time summed over workers, against wall time times the workers.
     let busy = secs * rayon::current_num_threads() as f64;
     println!(

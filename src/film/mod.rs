@@ -25,6 +25,9 @@ impl Film {
     }
 }
 
+/// Largest image caustic renders or stitches, in pixels (about 8k × 8k).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
 /// A rectangle `[x0, x1) × [y0, y1)` of an image `full_width × full_height` pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Window {

@@ -3,16 +3,25 @@
 //! Faces are numbered `2·axis + (0 for the low side, 1 for the high side)`.
 
 use super::{Crossing, Interval};
-use glam::Vec3A;
+use glam::{DVec3, Vec3A};
+
+/// Relative error of a ray moved into object space in single precision, in units of the size of
+/// its origin's coordinates: a few ulps of `f32`.
+const OBJECT_RAY_ERROR: f64 = 8.0 * f32::EPSILON as f64;
 
 /// Returns where the full line `o + t·d` enters and leaves the unit cube (slab test in double precision).
+///
+/// A line that passes within the rounding error of the object-space ray (a few `f32` ulps of
+/// `o`'s size) of an edge counts as touching it: two boxes meeting only along an edge then leave
+/// no crack between them (each box alone would put such a ray just outside itself by rounding).
 pub fn interval(o: Vec3A, d: Vec3A) -> Option<Interval> {
     let (o, d) = (o.as_dvec3(), d.as_dvec3());
+    let slack = OBJECT_RAY_ERROR * (1.0 + o.abs().max_element());
     let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
     let (mut face0, mut face1) = (u8::MAX, u8::MAX);
     for axis in 0..3 {
         if d[axis] == 0.0 {
-            if !(0.0..=1.0).contains(&o[axis]) {
+            if !(-slack..=1.0 + slack).contains(&o[axis]) {
                 return None;
             }
             continue;
@@ -33,8 +42,16 @@ pub fn interval(o: Vec3A, d: Vec3A) -> Option<Interval> {
             face1 = fhi;
         }
     }
-    if t0 > t1 || face0 == u8::MAX || face1 == u8::MAX {
+    if face0 == u8::MAX || face1 == u8::MAX {
         return None;
+    }
+    if t0 > t1 {
+        // Outside, unless the entry point lies within the slack of every slab: an edge grazed.
+        let p = o + d * t0;
+        if p.cmplt(DVec3::splat(-slack)).any() || p.cmpgt(DVec3::splat(1.0 + slack)).any() {
+            return None;
+        }
+        t1 = t0;
     }
     Some(Interval {
         enter: Crossing {

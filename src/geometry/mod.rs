@@ -21,7 +21,7 @@ pub mod triangle;
 pub mod uv;
 pub mod water;
 
-pub use ray::{Ray, offset_ray_origin};
+pub use ray::{Ray, offset_ray_origin, spawn_offset};
 
 use glam::Vec3A;
 

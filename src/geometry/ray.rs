@@ -38,12 +38,18 @@ const OFFSET_REL: f32 = 1.0 / (1 << 17) as f32;
 /// Smallest spawn offset, for hit points at the origin.
 const OFFSET_ABS: f32 = 1e-9;
 
+/// Returns the distance a spawned ray's origin is moved off a surface at a point whose largest
+/// coordinate has magnitude `size`.
+pub fn spawn_offset(size: f32) -> f32 {
+    size * OFFSET_REL + OFFSET_ABS
+}
+
 /// Returns a ray origin moved off the surface at `p` (geometric normal `ng`) to the side `w` points to.
 ///
 /// The offset scales with the magnitude of `p`'s coordinates, because the error of a computed hit
 /// point does too (pbrt-v4's `OffsetRayOrigin`, with a constant bound in place of tracked errors).
 pub fn offset_ray_origin(p: Vec3A, ng: Vec3A, w: Vec3A) -> Vec3A {
-    let eps = p.abs().max_element() * OFFSET_REL + OFFSET_ABS;
+    let eps = spawn_offset(p.abs().max_element());
     let n = if ng.dot(w) < 0.0 { -ng } else { ng };
     p + n * eps
 }

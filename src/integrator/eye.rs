@@ -17,13 +17,18 @@
 //!
 //! Rays carry a [`MediumStack`], so nested and touching dielectrics refract with the ratio of the
 //! two media at each interface, and the boundary of a solid inside a denser one (a water surface
-//! inside a glass ball) is passed through untouched. Paths stop at [`MAX_DEPTH`] bounces or when
-//! their weight falls below [`MIN_WEIGHT`].
+//! inside a glass ball) is passed through untouched. Paths split deterministically for
+//! [`MAX_DEPTH`] bounces, and stop sooner when their weight falls below [`MIN_WEIGHT`]. Deeper,
+//! a path goes on by Russian roulette (pbrt-v4's path tracer): one lobe, chosen in proportion
+//! to its weight, which survives with probability `q = min(1, weight)` and is then divided by
+//! `q`, so the estimate stays unbiased (nested glass shells, a ray bouncing between mirrors).
+//! [`MAX_PATH_DEPTH`] is a hard safety cap; paths stopped there are counted
+//! ([`RayCounts::depth_capped`]) and reported by `--stats`.
 
 use super::photon_map::Gi;
 use crate::camera::Camera;
 use crate::geometry::{Ray, offset_ray_origin};
-use crate::material::bsdf::Bsdf;
+use crate::material::bsdf::{Bsdf, Split};
 use crate::material::medium::{Crossing, MediumStack};
 use crate::render::Radiance;
 use crate::sampling::{Rng, stratified_2d};
@@ -32,8 +37,12 @@ use crate::scene::interaction::{Interaction, Needs};
 use crate::stats::RayCounts;
 use glam::Vec3A;
 
-/// Deepest chain of reflections and refractions followed.
+/// Deepest chain of reflections and refractions followed by deterministic splitting; deeper
+/// paths go on by Russian roulette.
 pub const MAX_DEPTH: u32 = 12;
+/// Deepest chain followed at all, even under roulette (a closed box of perfect mirrors never
+/// loses weight).
+pub const MAX_PATH_DEPTH: u32 = 1024;
 /// Paths whose weight falls below this are not traced further.
 pub const MIN_WEIGHT: f32 = 1e-3;
 
@@ -59,6 +68,23 @@ impl PathState {
             media: MediumStack::air(),
             sees_emitters: true,
         }
+    }
+
+    /// Returns whether the path still splits deterministically over lobes (else: roulette).
+    fn splits(&self) -> bool {
+        self.depth < MAX_DEPTH
+    }
+
+    /// Decides by Russian roulette whether a path beyond [`MAX_DEPTH`] goes on into a child of
+    /// relative weight `weight`: returns the survival probability `q` (the child's radiance is
+    /// divided by it), or `None` when the path ends here.
+    fn roulette(&self, weight: f32, rng: &mut Rng, counts: &mut RayCounts) -> Option<f32> {
+        if self.depth >= MAX_PATH_DEPTH {
+            counts.depth_capped += 1;
+            return None;
+        }
+        let q = (self.weight * weight).min(1.0);
+        (q > 0.0 && rng.next_f32() < q).then_some(q)
     }
 
     fn child(&self, weight: f32, media: MediumStack) -> PathState {
@@ -126,38 +152,48 @@ impl Tracer<'_> {
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Vec3A {
-        let hit = self.scene.intersect(ray);
-        if state.sees_emitters {
-            let tmax = hit.map_or(ray.tmax, |h| h.t);
-            if let Some(radiance) = emitter_seen(self.scene, ray, tmax) {
-                return radiance;
-            }
-        }
-        let Some(hit) = hit else {
-            return background(self.camera, ray.dir);
-        };
-        let clock = counts.timing.then_some(&mut counts.material_nanos);
-        let it = self.scene.interaction(ray, &hit, Needs::Full, clock);
-        let t = it.bsdf.material.transparency;
-        let mut out = Vec3A::ZERO;
-        if let Some(crossing) = it.bsdf.crossing(&state.media) {
-            if crossing.is_false() {
-                // The boundary of a solid inside a denser one: no surface here, go straight on.
-                if state.depth >= MAX_DEPTH {
-                    return Vec3A::ZERO;
+        let (mut ray, mut state, mut scale) = (*ray, state, 1.0);
+        // A loop, not recursion, across false interfaces: a hundred nested shells of index 1
+        // must not take a hundred stack frames.
+        loop {
+            let hit = self.scene.intersect(&ray);
+            if state.sees_emitters {
+                let tmax = hit.map_or(ray.tmax, |h| h.t);
+                if let Some(radiance) = emitter_seen(self.scene, &ray, tmax) {
+                    return scale * radiance;
                 }
-                let next = Ray::new(offset_ray_origin(it.surf.p, it.surf.ng, ray.dir), ray.dir);
-                counts.secondary += 1;
-                return self.radiance(&next, state.child(1.0, crossing.after), rng, counts);
             }
-            if state.depth < MAX_DEPTH {
+            let Some(hit) = hit else {
+                return scale * background(self.camera, ray.dir);
+            };
+            let clock = counts.timing.then_some(&mut counts.material_nanos);
+            let it = self.scene.interaction(&ray, &hit, Needs::Full, clock);
+            let t = it.bsdf.material.transparency;
+            let mut out = Vec3A::ZERO;
+            if let Some(crossing) = it.bsdf.crossing(&state.media) {
+                if crossing.is_false() {
+                    // The boundary of a solid inside a denser one: no surface here, go straight on.
+                    let q = if state.splits() {
+                        1.0
+                    } else {
+                        match state.roulette(1.0, rng, counts) {
+                            Some(q) => q,
+                            None => return Vec3A::ZERO,
+                        }
+                    };
+                    ray = Ray::new(offset_ray_origin(it.surf.p, it.surf.ng, ray.dir), ray.dir);
+                    counts.secondary += 1;
+                    state = state.child(1.0 / q, crossing.after);
+                    scale /= q;
+                    continue;
+                }
                 out += t * self.dielectric(&it, &crossing, state, rng, counts);
             }
+            if t < 1.0 {
+                out += (1.0 - t) * self.opaque(&it, state, rng, counts);
+            }
+            return scale * out;
         }
-        if t < 1.0 {
-            out += (1.0 - t) * self.opaque(&it, state, rng, counts);
-        }
-        out
     }
 
     /// Returns the direct light from every light at the surface of `bsdf` (at `p`) towards its
@@ -216,14 +252,22 @@ impl Tracer<'_> {
             }
         }
         let weight = mat.ks.max_element();
-        if mat.is_reflective() && state.depth < MAX_DEPTH && state.weight * weight > MIN_WEIGHT {
+        if !mat.is_reflective() {
+            return colour;
+        }
+        let q = if state.splits() {
+            (state.weight * weight > MIN_WEIGHT).then_some(1.0)
+        } else {
+            state.roulette(weight, rng, counts)
+        };
+        if let Some(q) = q {
             let wr = bsdf.reflected();
             let ray = Ray::new(offset_ray_origin(p, bsdf.ng, wr), wr);
             counts.secondary += 1;
-            let mut child = state.child(weight, state.media);
+            let mut child = state.child(weight / q, state.media);
             // A Phong highlight already reflects the lights; the mirror image would count them twice.
             child.sees_emitters &= mat.shininess <= 0.0;
-            colour += mat.ks * self.radiance(&ray, child, rng, counts);
+            colour += mat.ks / q * self.radiance(&ray, child, rng, counts);
         }
         colour
     }
@@ -241,6 +285,9 @@ impl Tracer<'_> {
         let (p, ng) = (it.surf.p, it.bsdf.ng);
         let split = it.bsdf.dielectric(crossing);
         let f = split.f;
+        if !state.splits() {
+            return self.dielectric_lobe(it, crossing, &split, state, rng, counts);
+        }
         let mut out = Vec3A::ZERO;
         if f > 0.0 && state.weight * f > MIN_WEIGHT {
             let wr = split.reflected;
@@ -258,5 +305,39 @@ impl Tracer<'_> {
             out += (1.0 - f) * split.radiance_scale * radiance;
         }
         out
+    }
+
+    /// Returns [`Tracer::dielectric`]'s estimate beyond [`MAX_DEPTH`]: one lobe, reflection
+    /// with probability `F` (always when nothing refracts), then Russian roulette.
+    fn dielectric_lobe(
+        &self,
+        it: &Interaction,
+        crossing: &Crossing,
+        split: &Split,
+        state: PathState,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
+        let p_reflect = if split.refracted.is_some() {
+            split.f
+        } else {
+            1.0
+        };
+        let (dir, weight, media, radiance_scale) = match split.refracted {
+            Some(wt) if rng.next_f32() >= p_reflect => (
+                wt,
+                (1.0 - split.f) / (1.0 - p_reflect),
+                crossing.after,
+                split.radiance_scale,
+            ),
+            _ => (split.reflected, split.f / p_reflect, state.media, 1.0),
+        };
+        let Some(q) = state.roulette(weight, rng, counts) else {
+            return Vec3A::ZERO;
+        };
+        let ray = Ray::new(offset_ray_origin(it.surf.p, it.bsdf.ng, dir), dir);
+        counts.secondary += 1;
+        let radiance = self.radiance(&ray, state.child(weight / q, media), rng, counts);
+        weight * radiance_scale / q * radiance
     }
 }

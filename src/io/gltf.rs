@@ -71,7 +71,7 @@ pub enum GltfError {
 
 /// Reads a `.gltf` or `.glb` file into one mesh (see the module doc for what is read).
 pub fn load_gltf(path: &Path) -> Result<MeshData, GltfError> {
-    let bytes = std::fs::read(path).map_err(|error| GltfError::Read {
+    let bytes = crate::files::read_regular(path).map_err(|error| GltfError::Read {
         path: path.to_owned(),
         error,
     })?;

@@ -8,14 +8,14 @@
 //! PNGs are 8-bit RGB, row 0 at the top. An output path ending in `.exr` gets linear 32-bit float
 //! RGB instead (no tone mapping). Every file is written to a temporary name beside the target and
 //! renamed over it, so a failed or interrupted render never leaves a truncated image where a good
-//! one was.
+//! one was ([`crate::files::write_replacing`]).
 //!
 //! **Tiles.** A PNG of a window of an image (`--crop`) carries a `tEXt` chunk `caustic-window`
 //! with `x0 y0 x1 y1 full_width full_height`; [`stitch`] reads tiles back and assembles the full
 //! image, which is byte-identical to the PNG of a full render.
 
 use crate::error::{Error, Result};
-use crate::film::{Film, Window};
+use crate::film::{Film, MAX_PIXELS, Window};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -57,27 +57,15 @@ pub fn to_rgb8(film: &Film, tonemap: Tonemap) -> Vec<u8> {
         .collect()
 }
 
-/// Writes `write` to a temporary file beside `path`, then renames it over `path`.
+/// Writes `write` to a temporary file beside `path`'s target, then renames it over the target
+/// ([`crate::files::write_replacing`]: symlinks followed, permissions kept, special files refused).
 fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> std::result::Result<(), String>,
 ) -> Result<()> {
-    let fail = |message: String| Error::File {
+    crate::files::write_replacing(path, write).map_err(|e| Error::File {
         path: path.to_path_buf(),
-        message,
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| fail("output path names no file".into()))?;
-    let tmp = path.with_file_name(format!(
-        ".{}.tmp{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let result = write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(format!("cannot write image: {e}"))
+        message: format!("cannot write image: {e}"),
     })
 }
 
@@ -201,7 +189,9 @@ fn read_tile(path: &Path) -> Result<Tile> {
         path: path.to_path_buf(),
         message,
     };
-    let file = std::fs::File::open(path).map_err(|e| fail(format!("cannot read tile: {e}")))?;
+    let file = crate::files::check_regular(path)
+        .and_then(|()| std::fs::File::open(path))
+        .map_err(|e| fail(format!("cannot read tile: {e}")))?;
     let decoder = png::Decoder::new(std::io::BufReader::new(file));
     let mut reader = decoder
         .read_info()
@@ -236,6 +226,13 @@ fn read_tile(path: &Path) -> Result<Tile> {
         },
         _ => return Err(fail(format!("malformed '{WINDOW_KEY}' record '{text}'"))),
     };
+    let full_pixels = window.full_width as u64 * window.full_height as u64;
+    if full_pixels > MAX_PIXELS {
+        return Err(fail(format!(
+            "its window record '{text}' describes a {}x{} image, larger than {MAX_PIXELS} pixels",
+            window.full_width, window.full_height
+        )));
+    }
     if !window.is_valid() || window.size() != (width, height) {
         return Err(fail(format!(
             "its window '{text}' does not match its {width}x{height} pixels"

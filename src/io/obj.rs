@@ -56,7 +56,7 @@ pub enum ObjError {
 /// Bytes that are not valid UTF-8 are replaced (they can only matter in names
 /// and comments).
 pub fn load_obj(path: &Path) -> Result<MeshData, ObjError> {
-    let bytes = std::fs::read(path).map_err(|error| ObjError::Read {
+    let bytes = crate::files::read_regular(path).map_err(|error| ObjError::Read {
         path: path.to_owned(),
         error,
     })?;

@@ -2,13 +2,15 @@
 //!
 //! The course's C++ reads fixed argument positions with `luaL_check*`, so extra arguments are
 //! ignored and messages read `bad argument #3 to 'nh_sphere' (number expected, got nil)`. We keep
-//! those messages, prefix them with `script:line:`, and additionally reject NaN and infinity.
+//! those messages, prefix them with `script:line:`, and additionally reject NaN, infinity and
+//! numbers beyond single precision (the renderer's `f32`: `|x| > 3.4e38` would become infinite).
 //! This module also owns the Lua-side handles of description entries ([`NodeRef`],
 //! [`MaterialRef`], [`LightRef`]) and how a caustic error crosses the Lua boundary.
 //!
 //! ```lua
 //! s = gr.nh_sphere('s', {0, 0, 0})   -- test.lua:1: bad argument #3 to 'nh_sphere' (number expected, got no value)
 //! s:translate(1, 0/0, 0)             -- bad argument #2 to 'translate' (finite number expected, got NaN)
+//! s:translate(1e300, 0, 0)           -- bad argument #1 to 'translate' (number within single precision (|x| <= 3.4e38) expected, got 1e300)
 //! ```
 
 use crate::desc::{LightId, MaterialId, NodeId};
@@ -155,8 +157,7 @@ impl<'a> Args<'a> {
             _ => None,
         };
         match n {
-            Some(n) if n.is_finite() => Ok(n),
-            Some(n) => Err(self.bad(i, format!("finite number expected, got {n}"))),
+            Some(n) => single(n).map_err(|e| self.bad(i, e)),
             None => Err(self.type_error(i, "number")),
         }
     }
@@ -187,13 +188,7 @@ impl<'a> Args<'a> {
                 _ => None,
             };
             *slot = match n {
-                Some(n) if n.is_finite() => n,
-                Some(n) => {
-                    return Err(self.bad(
-                        i,
-                        format!("entry {}: finite number expected, got {n}", k + 1),
-                    ));
-                }
+                Some(n) => single(n).map_err(|e| self.bad(i, format!("entry {}: {e}", k + 1)))?,
                 None => {
                     let got = type_name(&v);
                     return Err(self.bad(i, format!("entry {}: number expected, got {got}", k + 1)));
@@ -297,6 +292,20 @@ impl<'a> Args<'a> {
             }
         }
         Ok(out)
+    }
+}
+
+/// Returns `n` when it is finite in single precision, or the message for an argument that is not.
+fn single(n: f64) -> Result<f64, String> {
+    if !n.is_finite() {
+        Err(format!("finite number expected, got {n}"))
+    } else if n.abs() > f32::MAX as f64 {
+        Err(format!(
+            "number within single precision (|x| <= {:.1e}) expected, got {n:e}",
+            f32::MAX
+        ))
+    } else {
+        Ok(n)
     }
 }
 

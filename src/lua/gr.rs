@@ -409,8 +409,9 @@ fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         )));
     }
     let eye = a.vec3(5)?;
-    let view = a.vec3(6)?;
-    let up = a.vec3(7)?;
+    // Directions are normalised in double precision: {0, 0, -1e30} squared overflows f32.
+    let view = a.dvec3(6)?.normalize_or_zero().as_vec3();
+    let up = a.dvec3(7)?.normalize_or_zero().as_vec3();
     let fov_deg = a.number(8)?;
     let ambient = a.colour(9)?;
     let lights = a.lights(10)?;

@@ -36,7 +36,7 @@ use std::rc::Rc;
 pub type RenderHook = Box<dyn FnMut(&SceneDesc, &RenderDesc) -> Result<()>>;
 
 /// Largest image `gr.render` accepts, in pixels (about 8k × 8k).
-pub const MAX_PIXELS: u64 = 1 << 26;
+pub use crate::film::MAX_PIXELS;
 
 /// How a script run treats recoverable problems.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -44,6 +44,8 @@ pub struct ScriptOptions {
     /// `--missing-textures=warn`: a missing texture or bump image is a warning (once per file) and
     /// the material renders with `kd` instead, rather than an error.
     pub missing_textures_warn: bool,
+    /// Most bytes the script's Lua state may hold; `None` for [`sandbox::MAX_LUA_MEMORY`].
+    pub memory_limit: Option<usize>,
 }
 
 /// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
@@ -53,7 +55,7 @@ pub fn run_script(path: &Path, hook: RenderHook) -> Result<SceneDesc> {
 
 /// Runs the script at `path` with `options`.
 pub fn run_script_with(path: &Path, hook: RenderHook, options: ScriptOptions) -> Result<SceneDesc> {
-    let source = std::fs::read(path).map_err(|e| Error::File {
+    let source = crate::files::read_regular(path).map_err(|e| Error::File {
         path: path.to_path_buf(),
         message: format!("cannot read script: {e}"),
     })?;
@@ -90,12 +92,25 @@ pub fn run_source_with(
         hook,
         mesh_cache: HashMap::new(),
     }));
-    let lua = sandbox::new_lua().map_err(convert_error)?;
+    let limit = options.memory_limit.unwrap_or(sandbox::MAX_LUA_MEMORY);
+    let (lua, lines) = sandbox::new_lua(limit).map_err(convert_error)?;
     gr::install(&lua, &state).map_err(convert_error)?;
     lua.load(source)
         .set_name(format!("@{name}"))
         .exec()
-        .map_err(convert_error)?;
+        .map_err(|e| match memory_error(&e) {
+            Some(message) => {
+                let loc = lines.last().unwrap_or_else(|| Loc {
+                    file: name.into(),
+                    line: 0,
+                });
+                Error::at(
+                    &loc,
+                    format!("{message}: the script's Lua state reached its limit of {limit} bytes"),
+                )
+            }
+            None => convert_error(e),
+        })?;
     drop(lua);
     let state = Rc::try_unwrap(state)
         .map_err(|_| Error::Lua("internal: scene state still borrowed".into()))?
@@ -155,6 +170,17 @@ impl State {
             cwd.display(),
             self.script_dir.display()
         )
+    }
+}
+
+/// Returns the message of a Lua memory error, under any callback layers.
+fn memory_error(e: &mlua::Error) -> Option<String> {
+    match e {
+        mlua::Error::MemoryError(message) => Some(message.clone()),
+        mlua::Error::CallbackError { cause, .. } | mlua::Error::WithContext { cause, .. } => {
+            memory_error(cause)
+        }
+        _ => None,
     }
 }
 

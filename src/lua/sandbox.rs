@@ -9,15 +9,70 @@
 //! local a, b = unpack({1, 2})             -- table.unpack
 //! for w in string.gfind(s, '%a+') do end  -- string.gmatch
 //! ```
+//!
+//! The state may hold at most [`MAX_LUA_MEMORY`] (or the script options' limit): an allocation
+//! past it fails as a Lua memory error, reported at the line the script was running
+//! ([`LineTracker`]), instead of the process aborting when the system runs out.
+//!
+//! ```lua
+//! t = {} for i = 1, math.huge do t[i] = i end  -- test.lua:1: not enough memory: ...
+//! ```
 
-use mlua::{Lua, LuaOptions, StdLib, Table, Value};
+use crate::error::Loc;
+use mlua::{HookTriggers, Lua, LuaOptions, StdLib, Table, Value, VmState};
+use std::cell::RefCell;
+use std::rc::Rc;
 
-/// Returns a fresh Lua state with the standard library, the unsafe `debug` functions removed and
-/// the legacy aliases set.
-pub(super) fn new_lua() -> mlua::Result<Lua> {
+/// Most memory one script's Lua state may hold: 4 GiB, far more than any scene description
+/// needs, and less than the machines caustic runs on can give before the system kills it.
+pub const MAX_LUA_MEMORY: usize = 4 << 30;
+
+/// VM instructions between two samples of the running script line.
+const LINE_SAMPLE: u32 = 1000;
+
+/// The script line a Lua state was last seen running, sampled every [`LINE_SAMPLE`]
+/// instructions: a memory error unwinds the Lua stack without a position, so this is where it
+/// is reported.
+#[derive(Clone, Default)]
+pub(super) struct LineTracker(Rc<RefCell<Option<Loc>>>);
+
+impl LineTracker {
+    /// Returns the last sampled location, if the script ran long enough to be sampled.
+    pub(super) fn last(&self) -> Option<Loc> {
+        self.0.borrow().clone()
+    }
+}
+
+/// Returns a fresh Lua state with the standard library, the unsafe `debug` functions removed,
+/// the legacy aliases set and at most `memory_limit` bytes of memory, with the tracker of its
+/// running line.
+pub(super) fn new_lua(memory_limit: usize) -> mlua::Result<(Lua, LineTracker)> {
     // SAFETY: `debug` is the only unsafe library; the functions that can corrupt mlua's
     // userdata or registry invariants are removed before any script runs.
     let lua = unsafe { Lua::unsafe_new_with(StdLib::ALL, LuaOptions::new()) };
+    lua.set_memory_limit(memory_limit)?;
+    let tracker = LineTracker::default();
+    let seen = Rc::clone(&tracker.0);
+    lua.set_hook(
+        HookTriggers::new().every_nth_instruction(LINE_SAMPLE),
+        move |_, debug| {
+            let (Some(line), Some(source)) = (debug.current_line(), debug.source().source) else {
+                return Ok(VmState::Continue);
+            };
+            let file = source.strip_prefix('@').unwrap_or(&source);
+            let mut seen = seen.borrow_mut();
+            match seen.as_mut() {
+                Some(loc) if &*loc.file == file => loc.line = line as u32,
+                _ => {
+                    *seen = Some(Loc {
+                        file: file.into(),
+                        line: line as u32,
+                    })
+                }
+            }
+            Ok(VmState::Continue)
+        },
+    )?;
     let g = lua.globals();
     let debug: Table = g.get("debug")?;
     for f in [
@@ -39,5 +94,5 @@ pub(super) fn new_lua() -> mlua::Result<Lua> {
     }
     let string: Table = g.get("string")?;
     string.set("gfind", string.get::<Value>("gmatch")?)?;
-    Ok(lua)
+    Ok((lua, tracker))
 }

@@ -45,7 +45,8 @@ const HEIGHT_SLOPE: f32 = 8.0;
 impl Texture {
     /// Loads a PNG or JPEG image; errors name the file and the script line at `loc`.
     pub fn load(path: &Path, loc: &Loc) -> Result<Texture> {
-        let img = image::ImageReader::open(path)
+        let img = crate::files::check_regular(path)
+            .and_then(|()| image::ImageReader::open(path))
             .and_then(|r| r.with_guessed_format())
             .map_err(|e| Error::at(loc, format!("cannot read texture {}: {e}", path.display())))?
             .decode()

@@ -93,7 +93,7 @@ impl<'a> PixelSampler<'a> {
     fn trace(&self, x: f32, y: f32, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
         counts.primary += 1;
         let ray = self.camera.ray(x, y);
-        self.integrator.radiance(&ray, rng, counts)
+        finite_or_dropped(self.integrator.radiance(&ray, rng, counts), counts)
     }
 
     /// Returns the radiance through `(x, y)` with the random stream of that image-plane point, so
@@ -103,8 +103,14 @@ impl<'a> PixelSampler<'a> {
         self.trace(x, y, &mut rng, counts)
     }
 
-    /// Returns the value of pixel `(x, y)` (full-image coordinates).
+    /// Returns the value of pixel `(x, y)` (full-image coordinates), never NaN or infinite.
     pub fn pixel(&self, x: u32, y: u32, counts: &mut RayCounts) -> Vec3A {
+        let value = self.pixel_mean(x, y, counts);
+        // Finite samples can still sum past the largest float.
+        finite_or_dropped(value, counts)
+    }
+
+    fn pixel_mean(&self, x: u32, y: u32, counts: &mut RayCounts) -> Vec3A {
         match self.opts.sampling {
             Sampling::Stratified { spp } => {
                 let win = self.opts.window;
@@ -192,6 +198,17 @@ impl<'a> PixelSampler<'a> {
                 counts,
             ))
             * 0.25
+    }
+}
+
+/// Returns `radiance`, or black when it is NaN or infinite in any channel, counting it in
+/// [`RayCounts::nonfinite`]: no such value may reach the image.
+fn finite_or_dropped(radiance: Vec3A, counts: &mut RayCounts) -> Vec3A {
+    if radiance.is_finite() {
+        radiance
+    } else {
+        counts.nonfinite += 1;
+        Vec3A::ZERO
     }
 }
 

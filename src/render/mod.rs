@@ -101,6 +101,8 @@ pub fn camera_pass(
         material_time: Duration::from_nanos(t.material_nanos),
         lookups: t.lookups,
         photons_used: t.photons_used,
+        depth_capped: t.depth_capped,
+        nonfinite_samples: t.nonfinite,
         time: start.elapsed(),
     };
     let film = Film {

@@ -17,7 +17,7 @@
 
 use crate::accel::mesh::MeshGeom;
 use crate::accel::{Bounds, Bvh};
-use crate::desc::{MeshId, NodeId, NodeKind, RenderDesc, SceneDesc};
+use crate::desc::{MeshId, NodeDesc, NodeId, NodeKind, RenderDesc, SceneDesc};
 use crate::error::{Error, Fault, Loc, Result};
 use crate::geometry::Analytic;
 use crate::geometry::csg::{CsgNode, CsgTree};
@@ -264,6 +264,24 @@ fn transform_bounds(m: &DAffine3, b: Bounds) -> Bounds {
     out
 }
 
+/// Returns an error at `node`'s script line when its transform `m` (linear part or translation)
+/// does not fit single precision: each number fits alone (the script's arguments are checked),
+/// but scales and translations compose into products and sums that may not.
+fn check_fits_f32(node: &NodeDesc, m: &DAffine3) -> Result<()> {
+    let fits = m.to_cols_array().iter().all(|x| x.abs() < f32::MAX as f64);
+    if fits {
+        return Ok(());
+    }
+    Err(Error::at(
+        &node.loc,
+        format!(
+            "node '{}' is transformed beyond single precision (its scales or translations compose past {:.1e})",
+            node.name,
+            f32::MAX
+        ),
+    ))
+}
+
 /// Returns true when the linear part of `m` and its inverse both fit single precision and `m`
 /// does not flatten space (a zero or vanishing scale).
 fn is_invertible(m: &DAffine3) -> bool {
@@ -300,6 +318,7 @@ impl Builder<'_> {
     fn place(&mut self, p: &Placement) -> Result<()> {
         let node = self.desc.node(p.node);
         let world = p.world * local_transform(&node.kind);
+        check_fits_f32(node, &world)?;
         if !is_invertible(&world) {
             eprintln!(
                 "{}: warning: node '{}' has a singular transform (a zero scale?); it is not drawn",
@@ -475,6 +494,7 @@ impl Builder<'_> {
             ));
         };
         let m = m * local_transform(kind);
+        check_fits_f32(node, &m)?;
         if !is_invertible(&m) {
             return Err(Error::at(
                 &node.loc,

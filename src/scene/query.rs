@@ -9,22 +9,34 @@ use crate::geometry::csg::CsgNode;
 use crate::geometry::hit::{Hit, SurfaceHit};
 use crate::geometry::triangle;
 use crate::geometry::uv::{analytic_dpdu, analytic_uv};
-use crate::geometry::{Analytic, Interval, Ray};
+use crate::geometry::{Analytic, Interval, Ray, spawn_offset};
 use crate::scene::types::{Instance, Scene, Shape};
 use glam::{Vec2, Vec3A};
 
 impl Scene {
     /// Returns the closest hit with `t` in the ray's `(tmin, tmax)`.
+    ///
+    /// Where an opaque surface and a transparent one coincide within rounding (water resting on
+    /// a floor, glass against a wall), the opaque one wins: the ray meets the floor through the
+    /// water, instead of leaving the water through its bottom face into the floor's interior, or
+    /// one or the other by the rounding of each pixel (speckle). A transparent surface's hit is
+    /// ranked as if it were [`tie_slack`] further away.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let mut best = None;
-        self.tlas
-            .closest(ray, |r, i| match self.hit_instance(i, r) {
-                Some(h) => {
-                    best = Some(h);
-                    h.t
-                }
-                None => f32::INFINITY,
-            });
+        let slack = tie_slack(ray);
+        self.tlas.closest(ray, |r, i| {
+            let Some(h) = self.hit_instance(i, r) else {
+                return f32::INFINITY;
+            };
+            let transparent = self.materials[h.material as usize].transparency > 0.0;
+            let rank = if transparent { h.t + slack(h.t) } else { h.t };
+            if rank < r.tmax {
+                best = Some(h);
+                rank
+            } else {
+                f32::INFINITY
+            }
+        });
         best
     }
 
@@ -189,6 +201,15 @@ impl Scene {
             material: hit.material,
         }
     }
+}
+
+/// Returns, as a function of `t`, how far apart in `t` two surfaces along `ray` may be and still
+/// count as one place: twice the spawn offset ([`spawn_offset`]) at the hit point, which bounds
+/// the rounding of a computed hit.
+fn tie_slack(ray: &Ray) -> impl Fn(f32) -> f32 {
+    let (origin, len) = (ray.origin.abs().max_element(), ray.dir.length());
+    let reach = ray.dir.abs().max_element();
+    move |t| 2.0 * spawn_offset(origin + t * reach) / len
 }
 
 fn object_ray(inst: &Instance, r: &Ray) -> Ray {

@@ -112,7 +112,7 @@ pub fn load_buffers(
                 Some(data) => decode_data_uri(data).map_err(|e| format!("buffer {i}: {e}"))?,
                 None => {
                     let file = dir.join(percent_decode(uri));
-                    std::fs::read(&file)
+                    crate::files::read_regular(&file)
                         .map_err(|e| format!("buffer {i}: cannot read {}: {e}", file.display()))?
                 }
             },

@@ -3,7 +3,8 @@
 //! the material its `usemtl` named.
 //!
 //! A library that cannot be opened is skipped, as a missing `.mtl` always was (the faces then
-//! carry no material). A library that opens but is malformed is an error naming the `.mtl` file
+//! carry no material); one that names a device, FIFO or socket (`mtllib /dev/zero`) is an
+//! error naming it, never read. A library that opens but is malformed is an error naming the `.mtl` file
 //! and line: tobj would panic on a colour with fewer than three numbers, so each line is checked
 //! the way tobj reads it before tobj sees the text.
 //!
@@ -38,6 +39,15 @@ impl<'a> MtlLoader<'a> {
     /// Loads one library for tobj; texture names come back resolved to full paths.
     pub fn load(&self, name: &Path) -> tobj::MTLLoadResult {
         let file = self.dir.join(name);
+        if file.exists()
+            && !file.is_dir()
+            && let Err(error) = crate::files::check_regular(&file)
+        {
+            self.fault
+                .borrow_mut()
+                .get_or_insert(ObjError::Read { path: file, error });
+            return Err(tobj::LoadError::OpenFileFailed);
+        }
         let Ok(bytes) = std::fs::read(&file) else {
             return Err(tobj::LoadError::OpenFileFailed);
         };

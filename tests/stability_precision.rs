@@ -129,7 +129,7 @@ fn infinite_radiance_is_dropped_and_counted() {
     std::fs::write(&script, &src).unwrap();
     let out = run_ok(
         caustic()
-            .args(["render", "-q", "--gi", "off", "--stats", "-o"])
+            .args(["render", "-q", "--gi", "off", "--spp", "1", "--stats", "-o"])
             .arg(dir.join("p.exr"))
             .arg(&script),
     );

@@ -141,12 +141,21 @@ impl<'a> Args<'a> {
         }
     }
 
-    /// Checks an optional string argument: absent or nil gives `None`.
-    pub fn opt_string(&self, i: usize) -> mlua::Result<Option<String>> {
+    /// Checks optional argument `i` with `check`: absent or nil gives `None`.
+    fn opt<T>(
+        &self,
+        i: usize,
+        check: impl FnOnce(&Self, usize) -> mlua::Result<T>,
+    ) -> mlua::Result<Option<T>> {
         match self.get(i) {
             None | Some(Value::Nil) => Ok(None),
-            Some(_) => self.string(i).map(Some),
+            Some(_) => check(self, i).map(Some),
         }
+    }
+
+    /// Checks an optional string argument: absent or nil gives `None`.
+    pub fn opt_string(&self, i: usize) -> mlua::Result<Option<String>> {
+        self.opt(i, Self::string)
     }
 
     /// Checks a finite number argument (numeric strings are converted, as `luaL_checknumber` does).
@@ -164,10 +173,7 @@ impl<'a> Args<'a> {
 
     /// Checks an optional number: absent or nil gives `None`.
     pub fn opt_number(&self, i: usize) -> mlua::Result<Option<f64>> {
-        match self.get(i) {
-            None | Some(Value::Nil) => Ok(None),
-            Some(_) => self.number(i).map(Some),
-        }
+        self.opt(i, Self::number)
     }
 
     /// Checks a 3-tuple of finite numbers: a table whose raw length is exactly 3.

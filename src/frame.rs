@@ -35,9 +35,6 @@ pub struct Frame {
     pub scene: Scene,
     pub film: Film,
     pub stats: Stats,
-    /// Why the photon counts differ from the script's and the settings' (see
-    /// [`GiSettings::follow_image`]), when they do.
-    pub photon_note: Option<String>,
 }
 
 /// Renders `window` of the image of `scene` through `camera`: plans the frame, then runs the
@@ -86,22 +83,16 @@ pub fn render_desc(
     check_photon_budget(desc, r, &scene, &settings)?;
     let camera = Camera::new(&r.camera, window.full_width, window.full_height);
     let (film, mut stats) = render(&scene, &camera, window, &settings, progress);
-    let photon_note = (follow && stats.photons.is_some()).then(|| {
-        format!(
+    // Why the photon counts differ from the script's and the settings' (see
+    // `GiSettings::follow_image`), among the plan's notes.
+    if follow && stats.photons.is_some() {
+        stats.plan.notes.push(format!(
             "photons: x{factor:.4} with the image ({}x{} of the script's {}x{}); --photons, \
              --caustic-photons or --photon-scale fixes the count",
             window.full_width, window.full_height, r.width, r.height
-        )
-    });
-    if let Some(note) = &photon_note {
-        stats.plan.notes.push(note.clone());
+        ));
     }
-    Ok(Frame {
-        scene,
-        film,
-        stats,
-        photon_note,
-    })
+    Ok(Frame { scene, film, stats })
 }
 
 /// Returns an error at the light's script line when its photon count (its `num_photons` or its

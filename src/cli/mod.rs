@@ -367,7 +367,7 @@ fn render_one(
     let frame = frame::render_desc(desc, r, job.scale, job.crop, &job.settings, &bar);
     bar.finish();
     let frame = frame?;
-    if let Some(note) = &frame.photon_note {
+    for note in &frame.stats.plan.notes {
         eprintln!("{note}");
     }
     for d in &frame.stats.plan.decisions {

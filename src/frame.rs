@@ -20,8 +20,8 @@ use crate::camera::Camera;
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::film::{Film, Window};
-use crate::integrator::photon_map::{Gi, GiSettings, GiStats, Indirect};
-use crate::integrator::plan::plan_with;
+use crate::integrator::photon_map::{Gi, GiSettings, GiStats};
+use crate::integrator::plan::plan_for;
 use crate::integrator::{GiMode, Settings, plan};
 use crate::lua::MAX_PIXELS;
 use crate::photon::trace::{MAX_PHOTONS, MapKind};
@@ -46,19 +46,9 @@ pub fn render(
     settings: &Settings,
     progress: &dyn Progress,
 ) -> (Film, Stats) {
-    let gather = matches!(settings.photons.indirect, Indirect::Gather { .. });
-    let plan = plan_with(scene, settings.gi, &settings.overrides, gather);
-    let (film, render, photons) = plan
-        .integrator
-        .render(scene, camera, window, settings, &plan, progress);
-    (
-        film,
-        Stats {
-            plan,
-            render,
-            photons,
-        },
-    )
+    let plan = plan_for(scene, settings);
+    plan.integrator
+        .render(scene, camera, window, settings, plan, progress)
 }
 
 /// Builds the scene of the `gr.render` call `r` and renders it at `scale` times its size, or the

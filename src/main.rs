@@ -4,6 +4,7 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    caustic::mem::return_big_blocks();
     let cli = caustic::cli::Cli::parse();
     match caustic::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,

@@ -21,6 +21,21 @@ pub struct RenderStats {
     pub nonfinite_samples: u64,
 }
 
+impl RenderStats {
+    /// Adds `o`'s counts and time to these (the passes of a progressive render).
+    pub fn add(&mut self, o: &RenderStats) {
+        self.primary_rays += o.primary_rays;
+        self.shadow_rays += o.shadow_rays;
+        self.secondary_rays += o.secondary_rays;
+        self.time += o.time;
+        self.material_time += o.material_time;
+        self.lookups += o.lookups;
+        self.photons_used += o.photons_used;
+        self.depth_capped += o.depth_capped;
+        self.nonfinite_samples += o.nonfinite_samples;
+    }
+}
+
 /// Per-thread ray counts, summed into [`RenderStats`] once per row.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct RayCounts {

@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::frame;
 use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings};
 use crate::integrator::plan::Effect;
-use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES, DEFAULT_SPP};
+use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
 use crate::lua::{ScriptOptions, run_script, run_script_with};
 use crate::scene::build::build_scene;
@@ -133,9 +133,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "F", default_value_t = 1.0)]
     pub scale: f64,
     /// Stratified samples per pixel (1 = one ray through the pixel centre, as the course; the
-    /// default anti-aliases).
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_SPP)]
-    pub spp: u32,
+    /// default anti-aliases) [default: 4; per pass with --integrator progressive: 1, jittered].
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
     /// Adaptive anti-aliasing: trace pixel corners and refine where they differ (replaces --spp).
     #[arg(long)]
     pub adaptive: bool,
@@ -167,6 +167,33 @@ pub struct RenderArgs {
     /// Photon mapping: auto (when a light has power or num_photons), on, or off (ambient term).
     #[arg(long, value_enum, default_value_t = GiArg::Auto)]
     pub gi: GiArg,
+    /// The integrator: auto (the plan's: photon mapping or the course's ray tracer) or
+    /// progressive (alias sppm; progressive photon mapping, the consistent reference: passes with
+    /// shrinking radii, averaged; photon counts and --spp are then per pass).
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Auto)]
+    pub integrator: IntegratorArg,
+    /// Progressive: passes to run [default: 64; with --target-error or --time-budget, at most
+    /// 1048576].
+    #[arg(long, value_name = "N")]
+    pub passes: Option<u32>,
+    /// Progressive: radius reduction alpha in (0, 1) (r² shrinks by (i + alpha)/(i + 1) after
+    /// pass i).
+    #[arg(long, value_name = "A", default_value_t = crate::integrator::progressive::DEFAULT_ALPHA)]
+    pub alpha: f32,
+    /// Progressive: the first pass's global-map radius as a fraction of the scene's diagonal
+    /// (the caustic map's is half) [default: from the photon density, about k photons].
+    #[arg(long, value_name = "F")]
+    pub radius: Option<f32>,
+    /// Progressive: stop once the relative RMSE estimated from the even and odd passes is at
+    /// most E (noise only; see docs/accuracy.md).
+    #[arg(long, value_name = "E")]
+    pub target_error: Option<f64>,
+    /// Progressive: stop before a pass that would end after S seconds.
+    #[arg(long, value_name = "S")]
+    pub time_budget: Option<f64>,
+    /// Progressive: write the running image to the output every K passes.
+    #[arg(long, value_name = "K")]
+    pub write_every: Option<u32>,
     /// Simulate EFFECT whatever the plan decides: photon-maps, caustics or final-gathering
     /// (repeatable; `caustic info` and --stats print the plan and its reasons).
     #[arg(long, value_name = "EFFECT", value_parser = parse_effect)]
@@ -232,6 +259,14 @@ pub enum GiArg {
     Auto,
     On,
     Off,
+}
+
+/// The `--integrator` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum IntegratorArg {
+    Auto,
+    #[value(alias = "sppm")]
+    Progressive,
 }
 
 /// The `--indirect` choices.
@@ -364,7 +399,12 @@ fn render_one(
     }
     let start = Instant::now();
     let bar = Bar::new(job.progress, out);
-    let frame = frame::render_desc(desc, r, job.scale, job.crop, &job.settings, &bar);
+    let progress = report::Snapshots {
+        bar: &bar,
+        out,
+        tonemap: job.tonemap,
+    };
+    let frame = frame::render_desc(desc, r, job.scale, job.crop, &job.settings, &progress);
     bar.finish();
     let frame = frame?;
     for note in &frame.stats.plan.notes {

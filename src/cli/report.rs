@@ -55,6 +55,33 @@ impl Progress for Bar {
     }
 }
 
+/// The progress of one image: its [`Bar`], and a progressive render's running image written
+/// to the output at each snapshot (`--write-every`), so the file is always the latest mean.
+pub struct Snapshots<'a> {
+    pub bar: &'a Bar,
+    pub out: &'a Path,
+    pub tonemap: crate::io::image::Tonemap,
+}
+
+impl Progress for Snapshots<'_> {
+    fn start(&self, what: &str, total: u64) {
+        self.bar.start(what, total);
+    }
+
+    fn advance(&self, n: u64) {
+        self.bar.advance(n);
+    }
+
+    fn snapshot(&self, passes: u32, image: &crate::film::Film) {
+        // A failed snapshot loses nothing the final write will not retry; say so and go on.
+        if let Err(e) = crate::io::image::write_image(image, self.out, self.tonemap) {
+            self.bar
+                .bar
+                .suspend(|| eprintln!("warning: after {passes} passes: {e}"));
+        }
+    }
+}
+
 /// Prints `--stats` for one frame written to `out` from the `gr.render` call `r`.
 pub fn print_stats(frame: &Frame, r: &RenderDesc, out: &Path) {
     let (scene, film, rstats) = (&frame.scene, &frame.film, &frame.stats.render);
@@ -117,6 +144,24 @@ pub fn print_stats(frame: &Frame, r: &RenderDesc, out: &Path) {
     println!("  plan: {}", frame.stats.plan.lines().join("; "));
     if let Some(photons) = &frame.stats.photons {
         print_photon_stats(photons, rstats);
+    }
+    if let Some(p) = &frame.stats.progressive {
+        let error = p
+            .estimated_error
+            .map_or("none".to_string(), |e| format!("{e:.4}"));
+        println!(
+            "  progressive: {} passes in {:.3} s (stopped by {:?}); radii global {:.4e} -> {:.4e}, caustic {:.4e} -> {:.4e}; estimated relative RMSE {error}",
+            p.passes,
+            p.time.as_secs_f64(),
+            p.stop,
+            p.first_radii.0,
+            p.last_radii.0,
+            p.first_radii.1,
+            p.last_radii.1,
+        );
+    }
+    if let Some(kib) = crate::mem::peak_resident_kib() {
+        println!("  peak resident memory: {:.1} MiB", kib as f64 / 1024.0);
     }
 }
 

@@ -1,10 +1,13 @@
 //! The command line's render options turned into the library's [`Settings`], with every numeric
 //! flag checked against its range (a usage error names the flag).
 
-use super::{GatherLookup, GiArg, IndirectArg, RenderArgs, TonemapArg};
+use super::{GatherLookup, GiArg, IndirectArg, IntegratorArg, RenderArgs, TonemapArg};
 use crate::error::{Error, Result};
 use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings, Indirect};
 use crate::integrator::plan::Overrides;
+use crate::integrator::progressive::{
+    MAX_PASSES, PASS_CAUSTIC_PHOTONS, PASS_GLOBAL_PHOTONS, ProgressiveSettings,
+};
 use crate::integrator::{GiMode, Settings};
 use crate::io::image::Tonemap;
 use crate::photon::trace::MAX_PHOTONS;
@@ -55,10 +58,15 @@ pub struct RenderJob {
 impl RenderJob {
     /// Returns the job the arguments ask for, or a usage error naming the flag out of range.
     pub fn from_args(a: &RenderArgs) -> Result<RenderJob> {
-        if a.spp == 0 || a.spp > 1 << 16 {
+        let progressive = progressive_settings(a)?;
+        let spp = a.spp.unwrap_or(if progressive.is_some() {
+            1
+        } else {
+            crate::integrator::DEFAULT_SPP
+        });
+        if spp == 0 || spp > 1 << 16 {
             return Err(Error::Usage(format!(
-                "--spp must be in [1, 65536], got {}",
-                a.spp
+                "--spp must be in [1, 65536], got {spp}"
             )));
         }
         if !(a.aa_threshold >= 0.0 && a.aa_threshold.is_finite()) || a.aa_depth > 8 {
@@ -72,8 +80,12 @@ impl RenderJob {
                 "--photon-scale must be in [0, 1000], got {photon_scale}"
             )));
         }
-        let photons = a.photons.unwrap_or(GLOBAL_PHOTONS);
-        let caustic_photons = a.caustic_photons.unwrap_or(CAUSTIC_PHOTONS);
+        let (photons, caustic_photons) = match progressive {
+            Some(_) => (PASS_GLOBAL_PHOTONS, PASS_CAUSTIC_PHOTONS),
+            None => (GLOBAL_PHOTONS, CAUSTIC_PHOTONS),
+        };
+        let photons = a.photons.unwrap_or(photons);
+        let caustic_photons = a.caustic_photons.unwrap_or(caustic_photons);
         if !a.exposure.is_finite() {
             return Err(Error::Usage("--exposure must be finite".into()));
         }
@@ -102,7 +114,7 @@ impl RenderJob {
                 max_depth: a.aa_depth,
             }
         } else {
-            Sampling::Stratified { spp: a.spp }
+            Sampling::Stratified { spp }
         };
         let tonemap = match a.tonemap {
             TonemapArg::Clamp => Tonemap::Clamp,
@@ -142,6 +154,7 @@ impl RenderJob {
                 precompute: a.gather_lookup == GatherLookup::Precomputed,
                 ..GiSettings::default()
             },
+            progressive,
         };
         Ok(RenderJob {
             settings,
@@ -153,4 +166,75 @@ impl RenderJob {
             progress: !a.quiet && std::io::stderr().is_terminal(),
         })
     }
+}
+
+/// Returns the progressive settings the arguments ask for (`None` without `--integrator
+/// progressive`), or a usage error naming the flag out of range or given without it.
+fn progressive_settings(a: &RenderArgs) -> Result<Option<ProgressiveSettings>> {
+    let usage = |m: String| Err(Error::Usage(m));
+    if a.integrator != IntegratorArg::Progressive {
+        let given = [
+            ("--passes", a.passes.is_some()),
+            ("--radius", a.radius.is_some()),
+            ("--target-error", a.target_error.is_some()),
+            ("--time-budget", a.time_budget.is_some()),
+            ("--write-every", a.write_every.is_some()),
+        ];
+        if let Some((flag, _)) = given.iter().find(|g| g.1) {
+            return usage(format!("{flag} needs --integrator progressive"));
+        }
+        return Ok(None);
+    }
+    if a.adaptive {
+        return usage(
+            "--adaptive has no progressive form; progressive passes jitter --spp samples".into(),
+        );
+    }
+    if a.gi == GiArg::Off {
+        return usage("--integrator progressive is photon mapping; it contradicts --gi off".into());
+    }
+    let bounded = a.target_error.is_some() || a.time_budget.is_some();
+    let passes = a.passes.unwrap_or(if bounded {
+        MAX_PASSES
+    } else {
+        crate::integrator::progressive::DEFAULT_PASSES
+    });
+    if !(1..=MAX_PASSES).contains(&passes) {
+        return usage(format!(
+            "--passes must be in [1, {MAX_PASSES}], got {passes}"
+        ));
+    }
+    if !(a.alpha > 0.0 && a.alpha < 1.0) {
+        return usage(format!("--alpha must be in (0, 1), got {}", a.alpha));
+    }
+    if let Some(r) = a.radius
+        && !(r > 0.0 && r <= 1.0)
+    {
+        return usage(format!(
+            "--radius must be in (0, 1] (of the scene's diagonal), got {r}"
+        ));
+    }
+    if let Some(e) = a.target_error
+        && !(e > 0.0 && e <= 10.0)
+    {
+        return usage(format!("--target-error must be in (0, 10], got {e}"));
+    }
+    if let Some(s) = a.time_budget
+        && !(s > 0.0 && s <= 1e7)
+    {
+        return usage(format!(
+            "--time-budget must be in (0, 1e7] seconds, got {s}"
+        ));
+    }
+    if a.write_every == Some(0) {
+        return usage("--write-every must be at least 1".into());
+    }
+    Ok(Some(ProgressiveSettings {
+        passes,
+        alpha: a.alpha,
+        initial_radius: a.radius,
+        target_error: a.target_error,
+        time_budget: a.time_budget.map(std::time::Duration::from_secs_f64),
+        snapshot_every: a.write_every,
+    }))
 }

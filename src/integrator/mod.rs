@@ -4,10 +4,13 @@
 //! - [`whitted`]: the course's ray tracer. Phases: camera pass.
 //! - [`photon_map`]: Jensen's photon mapping. Phases: trace photons, build maps, precompute
 //!   irradiance, camera pass.
+//! - [`progressive`]: progressive photon mapping, the consistent reference. Phases, per pass:
+//!   trace photons, build maps, camera pass with shrinking radii; then the mean of the passes.
 //!
-//! Both share the eye path ([`eye`]): direct light by shadow rays and deterministic specular
+//! All share the eye path ([`eye`]): direct light by shadow rays and deterministic specular
 //! splitting through the one scattering model ([`crate::material::bsdf`]); they differ in what a
-//! diffuse surface receives besides direct light ([`eye::DiffuseTerm`]). Which one a frame uses,
+//! diffuse surface receives besides direct light ([`eye::DiffuseTerm`]) and in how the photon
+//! estimates choose their photons (the `k` nearest, or a radius that shrinks with passes). Which one a frame uses,
 //! and which of its effects, is the effect plan's decision ([`plan`]).
 //!
 //! To add an integrator: a variant here, a file beside these with its phases, and its case in
@@ -16,6 +19,7 @@
 pub mod eye;
 pub mod photon_map;
 pub mod plan;
+pub mod progressive;
 pub mod whitted;
 
 use crate::camera::Camera;
@@ -33,6 +37,8 @@ pub enum Integrator {
     Whitted,
     /// Photon mapping: caustic and global maps, final gathering or the global map seen directly.
     PhotonMap,
+    /// Progressive photon mapping: passes of photon mapping with shrinking radii, averaged.
+    Progressive,
 }
 
 /// What shapes a frame besides the scene, the camera and the window.
@@ -48,8 +54,11 @@ pub struct Settings {
     pub gi: GiMode,
     /// `--force` and `--disable` (see [`plan`]).
     pub overrides: plan::Overrides,
-    /// The photon passes and estimates (photon-mapping integrator).
+    /// The photon passes and estimates (photon-mapping integrators; per pass for the
+    /// progressive one).
     pub photons: photon_map::GiSettings,
+    /// Render progressively (`--integrator progressive`) with these settings.
+    pub progressive: Option<progressive::ProgressiveSettings>,
     /// Time material evaluation for `--stats`.
     pub timing: bool,
 }
@@ -79,6 +88,7 @@ impl Default for Settings {
             gi: GiMode::Auto,
             overrides: plan::Overrides::default(),
             photons: photon_map::GiSettings::default(),
+            progressive: None,
             timing: false,
         }
     }
@@ -90,31 +100,42 @@ pub struct Stats {
     pub plan: Plan,
     /// The camera pass's counters.
     pub render: RenderStats,
-    /// The photon passes' counters, when the frame traced photons.
+    /// The photon passes' counters, when the frame traced photons (summed over passes).
     pub photons: Option<photon_map::GiStats>,
+    /// The passes, radii and estimated error of a progressive render.
+    pub progressive: Option<progressive::ProgressiveStats>,
 }
 
 impl Integrator {
-    /// Renders `window` of the image through `camera` with this integrator, running its phases
-    /// in turn and reporting each to `progress`.
+    /// Renders `window` of the image through `camera` with this integrator as `plan` says,
+    /// running its phases in turn and reporting each to `progress`.
     pub fn render(
         self,
         scene: &Scene,
         camera: &Camera,
         window: Window,
         settings: &Settings,
-        plan: &Plan,
+        plan: Plan,
         progress: &dyn Progress,
-    ) -> (Film, RenderStats, Option<photon_map::GiStats>) {
+    ) -> (Film, Stats) {
+        let stats = |plan, render, photons| Stats {
+            plan,
+            render,
+            photons,
+            progressive: None,
+        };
         match self {
             Integrator::Whitted => {
-                let (film, stats) = whitted::render(scene, camera, window, settings, progress);
-                (film, stats, None)
+                let (film, render) = whitted::render(scene, camera, window, settings, progress);
+                (film, stats(plan, render, None))
             }
             Integrator::PhotonMap => {
-                let (film, stats, photons) =
-                    photon_map::render(scene, camera, window, settings, plan, progress);
-                (film, stats, Some(photons))
+                let (film, render, photons) =
+                    photon_map::render(scene, camera, window, settings, &plan, progress);
+                (film, stats(plan, render, Some(photons)))
+            }
+            Integrator::Progressive => {
+                progressive::render(scene, camera, window, settings, plan, progress)
             }
         }
     }

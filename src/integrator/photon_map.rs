@@ -192,6 +192,9 @@ pub struct Gi {
     pub settings: GiSettings,
     global_r2: f32,
     caustic_r2: f32,
+    /// Whether estimates take every photon within the maps' radii (the progressive
+    /// integrator's fixed radii, [`Gi::with_fixed_radii`]) rather than the `k` nearest.
+    fixed_radii: bool,
     pub stats: GiStats,
 }
 
@@ -210,22 +213,27 @@ pub fn render(
     plan: &Plan,
     progress: &dyn Progress,
 ) -> (Film, RenderStats, GiStats) {
-    let indirect = match settings.photons.indirect {
+    let gi = Gi::build_with(scene, &planned(&settings.photons, plan), progress);
+    let diffuse = DiffuseTerm::Photons(&gi);
+    let (film, stats) = camera_pass(scene, camera, diffuse, window, settings, progress);
+    (film, stats, gi.stats)
+}
+
+/// Returns `settings` with the plan's choices: a caustic map or none, final gathering or the
+/// global map seen directly.
+pub fn planned(settings: &GiSettings, plan: &Plan) -> GiSettings {
+    let indirect = match settings.indirect {
         Indirect::Gather { .. } if !plan.final_gathering => Indirect::Direct,
         Indirect::Direct if plan.final_gathering => Indirect::Gather {
             rays: super::DEFAULT_GATHER_RAYS,
         },
         i => i,
     };
-    let gi_settings = GiSettings {
+    GiSettings {
         caustics: plan.caustics,
         indirect,
-        ..settings.photons.clone()
-    };
-    let gi = Gi::build_with(scene, &gi_settings, progress);
-    let diffuse = DiffuseTerm::Photons(&gi);
-    let (film, stats) = camera_pass(scene, camera, diffuse, window, settings, progress);
-    (film, stats, gi.stats)
+        ..settings.clone()
+    }
 }
 
 /// Phase 1: traces the global map's photons and, when asked, the caustic map's, with each
@@ -285,6 +293,7 @@ impl Gi {
             settings: settings.clone(),
             global_r2: r * r,
             caustic_r2: 0.25 * r * r,
+            fixed_radii: false,
         };
         let gathers = matches!(settings.indirect, Indirect::Gather { .. });
         if settings.precompute && gathers && !gi.global.is_empty() {
@@ -360,7 +369,12 @@ impl Gi {
         counts: &mut RayCounts,
     ) -> Vec3A {
         FOUND.with_borrow_mut(|found| {
-            let r2 = map.knn(p, self.settings.k, max_d2, found);
+            let r2 = if self.fixed_radii {
+                map.within(p, max_d2, found);
+                max_d2
+            } else {
+                map.knn(p, self.settings.k, max_d2, found)
+            };
             counts.lookups += 1;
             counts.photons_used += found.len() as u64;
             self.kernel_sum(map, found, r2, n, indirect_only)
@@ -390,6 +404,24 @@ impl Gi {
             e += ph.power * self.settings.filter.weight(d2, r2);
         }
         e
+    }
+
+    /// Returns these maps with estimates that take every photon within `global` (the global
+    /// map) or `caustic` (the caustic map) of the point, kernel-weighted over that disc, instead
+    /// of the `k` nearest: the progressive integrator's estimates, whose radii it shrinks from
+    /// pass to pass. Precomputed irradiance is dropped (it was made with the `k` nearest).
+    pub fn with_fixed_radii(mut self, global: f32, caustic: f32) -> Gi {
+        self.global_r2 = global * global;
+        self.caustic_r2 = caustic * caustic;
+        self.fixed_radii = true;
+        self.precomputed = None;
+        self
+    }
+
+    /// Returns the global and the caustic map's search radii (the largest, for `k`-nearest
+    /// estimates).
+    pub fn radii(&self) -> (f32, f32) {
+        (self.global_r2.sqrt(), self.caustic_r2.sqrt())
     }
 
     /// Returns the global map's irradiance estimate at `p` (all photons).

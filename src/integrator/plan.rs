@@ -95,6 +95,8 @@ pub enum Why {
     Disabled,
     /// Forced, but the scene cannot have it: the reason it will do nothing.
     ForcedInVain(&'static str),
+    /// `--integrator progressive`, which is photon mapping.
+    Progressive,
     /// A light has `power` or `num_photons`.
     LightAsks,
     /// No light has `power` or `num_photons`.
@@ -128,6 +130,7 @@ impl fmt::Display for Decision {
             Why::Forced => "--force".to_string(),
             Why::Disabled => "--disable".to_string(),
             Why::ForcedInVain(what) => format!("--force, but {what}"),
+            Why::Progressive => "--integrator progressive".to_string(),
             Why::LightAsks => "a light has power or num_photons".to_string(),
             Why::NoLightAsks => {
                 "no light has power or num_photons; ambient term instead".to_string()
@@ -169,6 +172,33 @@ impl Plan {
 /// Returns the effect plan for `scene` under `mode` with no overrides, gathering.
 pub fn plan(scene: &Scene, mode: GiMode) -> Plan {
     plan_with(scene, mode, &Overrides::default(), true)
+}
+
+/// Returns the effect plan for a frame of `scene` with `settings`: [`plan_with`] its `--gi`,
+/// overrides and indirect mode, and with `--integrator progressive` photon maps on (unless
+/// disabled) and the progressive integrator.
+pub fn plan_for(scene: &Scene, settings: &super::Settings) -> Plan {
+    let gather = matches!(
+        settings.photons.indirect,
+        super::photon_map::Indirect::Gather { .. }
+    );
+    if settings.progressive.is_none() {
+        return plan_with(scene, settings.gi, &settings.overrides, gather);
+    }
+    let mut plan = plan_with(scene, GiMode::On, &settings.overrides, gather);
+    if let Some(d) = plan
+        .decisions
+        .iter_mut()
+        .find(|d| d.effect == Effect::PhotonMaps)
+        && d.why == Why::Forced
+        && !settings.overrides.force.contains(&Effect::PhotonMaps)
+    {
+        d.why = Why::Progressive;
+    }
+    if plan.integrator == Integrator::PhotonMap {
+        plan.integrator = Integrator::Progressive;
+    }
+    plan
 }
 
 /// Returns the effect plan for `scene` under `mode` and `overrides`; `gather` is whether the

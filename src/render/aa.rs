@@ -112,12 +112,14 @@ impl<'a> PixelSampler<'a> {
 
     fn pixel_mean(&self, x: u32, y: u32, counts: &mut RayCounts) -> Vec3A {
         match self.opts.sampling {
-            Sampling::Stratified { spp } => {
+            Sampling::Stratified { spp } | Sampling::Jittered { spp } => {
                 let win = self.opts.window;
                 let index = y as u64 * win.full_width as u64 + x as u64;
                 let mut rng = Rng::new(self.opts.seed, Pass::Pixel, index);
-                // One sample is the pixel centre, as the course renders; more are stratified.
-                let positions = if spp == 1 {
+                // One stratified sample is the pixel centre, as the course renders; more, or
+                // jittered ones, are stratified.
+                let centre = matches!(self.opts.sampling, Sampling::Stratified { .. });
+                let positions = if spp == 1 && centre {
                     vec![(0.5, 0.5)]
                 } else {
                     stratified_2d(&mut rng, spp)

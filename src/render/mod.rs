@@ -3,8 +3,10 @@
 //! integrator answers [`Radiance::radiance`] for each camera ray ([`crate::integrator`]).
 //!
 //! # Pixel sampling ([`aa`])
-//! - `spp = 1` (the default): one ray through the pixel centre, as the course renders.
-//! - `spp = N`: N jittered samples stratified in x and y, box-filtered.
+//! - `spp = 1`: one ray through the pixel centre, as the course renders.
+//! - `spp = N`: N jittered samples stratified in x and y, box-filtered (the default is 4).
+//! - jittered (a progressive render's passes): as `spp = N`, one sample included, so the passes
+//!   together cover each pixel's area.
 //! - adaptive (the original project's scheme): rays through the pixel corners; where they differ by
 //!   more than a threshold, the pixel is split into four and refined recursively.
 //!
@@ -38,6 +40,9 @@ pub trait Radiance: Sync {
 pub enum Sampling {
     /// `n` stratified jittered samples per pixel (1 = the pixel centre).
     Stratified { spp: u32 },
+    /// `n` stratified jittered samples per pixel, one included: a pass of a progressive render,
+    /// whose passes together cover the pixel's area.
+    Jittered { spp: u32 },
     /// Corner rays, refined where neighbours differ by more than `threshold` (any channel),
     /// splitting at most `max_depth` times.
     Adaptive { threshold: f32, max_depth: u32 },

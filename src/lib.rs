@@ -59,5 +59,6 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod stats;
+pub mod study;
 
 pub use error::{Error, Fault, Loc};

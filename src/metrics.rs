@@ -93,33 +93,7 @@ impl Metrics {
         let n = n.max(1) as f64;
         let (mean_a, mean_r) = (sa / n, sr / n);
         let rmse = (sq / n).max(0.0).sqrt();
-        let mut blocks = (0.0f64, 0u64);
-        let block_mean = |img: &Image, bx: u32, by: u32| {
-            let mut s = 0.0f64;
-            for y in by..by + BLOCK {
-                for x in bx..bx + BLOCK {
-                    s += img.get(x, y).element_sum() as f64;
-                }
-            }
-            s / (3 * BLOCK * BLOCK) as f64
-        };
-        let first = |v: u32| v.div_ceil(BLOCK) * BLOCK;
-        let mut by = first(y0);
-        while by + BLOCK <= y1 {
-            let mut bx = first(x0);
-            while bx + BLOCK <= x1 {
-                let m = block_mean(a, bx, by);
-                blocks.0 += (m - block_mean(r1, bx, by)) * (m - block_mean(r2, bx, by));
-                blocks.1 += 1;
-                bx += BLOCK;
-            }
-            by += BLOCK;
-        }
-        let block_bias = if blocks.1 == 0 {
-            f64::NAN
-        } else {
-            (blocks.0 / blocks.1 as f64).max(0.0).sqrt() / mean_r
-        };
+        let block_bias = block_cross(a, a, r1, r2, region) / mean_r;
         Metrics {
             mean_ratio: mean_a / mean_r,
             mean_error: (mean_a - mean_r) / mean_r,
@@ -128,6 +102,50 @@ impl Metrics {
             block_bias,
             ref_mean: mean_r,
         }
+    }
+}
+
+/// Returns the block error between two independent renders `a1` and `a2` of the same setting
+/// and two references over `region`: the root of the mean over the 8x8 blocks of
+/// `(a1 − r1)(a2 − r2)` of the block means, over the references' mean. Its expectation is the
+/// squared bias of the blocks: the renders' noise and the references' drop out (NaN without a
+/// whole block in the region).
+pub fn pair_block_bias(a1: &Image, a2: &Image, r1: &Image, r2: &Image, region: Region) -> f64 {
+    let ref_mean = Metrics::against_two(r1, r1, r2, region).ref_mean;
+    block_cross(a1, a2, r1, r2, region) / ref_mean
+}
+
+/// Returns the root of the mean over the 8x8 blocks wholly inside `region` of
+/// `(m(a1) − m(r1))(m(a2) − m(r2))`, `m` a block's mean over its pixels and channels (NaN
+/// without a whole block; negative means clamped to zero).
+fn block_cross(a1: &Image, a2: &Image, r1: &Image, r2: &Image, region: Region) -> f64 {
+    let Region { x0, y0, x1, y1 } = region;
+    let mut blocks = (0.0f64, 0u64);
+    let block_mean = |img: &Image, bx: u32, by: u32| {
+        let mut s = 0.0f64;
+        for y in by..by + BLOCK {
+            for x in bx..bx + BLOCK {
+                s += img.get(x, y).element_sum() as f64;
+            }
+        }
+        s / (3 * BLOCK * BLOCK) as f64
+    };
+    let first = |v: u32| v.div_ceil(BLOCK) * BLOCK;
+    let mut by = first(y0);
+    while by + BLOCK <= y1 {
+        let mut bx = first(x0);
+        while bx + BLOCK <= x1 {
+            blocks.0 += (block_mean(a1, bx, by) - block_mean(r1, bx, by))
+                * (block_mean(a2, bx, by) - block_mean(r2, bx, by));
+            blocks.1 += 1;
+            bx += BLOCK;
+        }
+        by += BLOCK;
+    }
+    if blocks.1 == 0 {
+        f64::NAN
+    } else {
+        (blocks.0 / blocks.1 as f64).max(0.0).sqrt()
     }
 }
 

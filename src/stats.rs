@@ -1,5 +1,6 @@
 //! Counters of the camera pass: rays by kind, photon lookups, material time. A leaf: the passes
-//! fill them per thread ([`RayCounts`]) and `--stats` prints the sums ([`RenderStats`]).
+//! fill them per thread ([`RayCounts`]) and `--stats` prints the sums ([`RenderStats`]). And
+//! the process's CPU time ([`process_cpu_time`]), by which studies time renders.
 
 use std::time::Duration;
 
@@ -67,5 +68,30 @@ impl RayCounts {
         self.photons_used += o.photons_used;
         self.depth_capped += o.depth_capped;
         self.nonfinite += o.nonfinite;
+    }
+}
+
+/// Returns the CPU time the process has used so far, over all its threads (user and system), or
+/// `None` where the system does not say (`caustic study` times renders by it).
+pub fn process_cpu_time() -> Option<Duration> {
+    #[cfg(target_os = "linux")]
+    {
+        let mut usage = std::mem::MaybeUninit::<libc::rusage>::uninit();
+        // SAFETY: getrusage writes a whole rusage into the pointer it is given, or fails.
+        let ok = unsafe { libc::getrusage(libc::RUSAGE_SELF, usage.as_mut_ptr()) } == 0;
+        if !ok {
+            return None;
+        }
+        // SAFETY: getrusage succeeded, so it initialised the struct.
+        let u = unsafe { usage.assume_init() };
+        let time = |t: libc::timeval| {
+            Duration::from_secs(t.tv_sec.max(0) as u64)
+                + Duration::from_micros(t.tv_usec.max(0) as u64)
+        };
+        Some(time(u.ru_utime) + time(u.ru_stime))
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        None
     }
 }

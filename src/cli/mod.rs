@@ -4,6 +4,7 @@
 
 pub mod report;
 pub mod settings;
+pub mod study;
 
 use crate::camera::Camera;
 use crate::desc::{RenderDesc, SceneDesc};
@@ -14,6 +15,7 @@ use crate::integrator::plan::Effect;
 use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
 use crate::lua::{ScriptOptions, run_script, run_script_with};
+use crate::metrics::Region;
 use crate::scene::build::build_scene;
 use clap::{Args, Parser, Subcommand};
 use report::Bar;
@@ -51,6 +53,9 @@ pub enum Command {
     /// Compare an image with a reference: mean ratio, mean error, RMSE, relative RMSE and 8x8
     /// block bias, over the image or a region.
     Diff(DiffArgs),
+    /// Render a scene over a grid of settings and seeds and measure each against a reference:
+    /// a CSV, a Markdown table and a plot of error against time with the Pareto front.
+    Study(study::StudyArgs),
 }
 
 #[derive(Debug, Args)]
@@ -328,21 +333,42 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Photons(args) => photons_command(args),
         Command::Diff(args) => diff_command(args),
         Command::ExportMitsuba(args) => export_command(args),
+        Command::Study(args) => study::study_command(args),
+    }
+}
+
+/// Starts `n` worker threads for the whole process (`--threads`), or returns a usage error
+/// when `n` is out of range.
+fn set_threads(n: usize) -> Result<()> {
+    if !(1..=MAX_THREADS).contains(&n) {
+        return Err(Error::Usage(format!(
+            "--threads must be in [1, {MAX_THREADS}], got {n}"
+        )));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .map_err(|e| Error::Usage(format!("cannot start {n} threads: {e}")))
+}
+
+/// Returns the window `--region x0,y0,x1,y1` names in a `width × height` image (the whole
+/// image without one), or a usage error when it is not a non-empty window inside it.
+fn parse_region(region: Option<&[u32]>, width: u32, height: u32) -> Result<Region> {
+    match region {
+        None => Ok(Region::full(width, height)),
+        Some(&[x0, y0, x1, y1]) if x0 < x1 && y0 < y1 && x1 <= width && y1 <= height => {
+            Ok(Region { x0, y0, x1, y1 })
+        }
+        Some(v) => Err(Error::Usage(format!(
+            "--region {v:?} is not a non-empty window inside the {width}x{height} image"
+        ))),
     }
 }
 
 fn render_command(args: RenderArgs) -> Result<()> {
     settings::check_scale(args.scale)?;
     if let Some(n) = args.threads {
-        if !(1..=MAX_THREADS).contains(&n) {
-            return Err(Error::Usage(format!(
-                "--threads must be in [1, {MAX_THREADS}], got {n}"
-            )));
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .map_err(|e| Error::Usage(format!("cannot start {n} threads: {e}")))?;
+        set_threads(n)?;
     }
     let rendered = Rc::new(Cell::new(0u32));
     let count = Rc::clone(&rendered);
@@ -518,14 +544,15 @@ fn export_command(args: ExportArgs) -> Result<()> {
 }
 
 fn diff_command(args: DiffArgs) -> Result<()> {
-    use crate::metrics::{Metrics, Region, difference_image};
+    use crate::metrics::{Metrics, difference_image};
     let a = crate::io::image::read_rgb(&args.image)?;
     let r1 = crate::io::image::read_rgb(&args.reference)?;
     let r2 = match &args.second {
         Some(p) => crate::io::image::read_rgb(p)?,
         None => r1.clone(),
     };
-    for (img, path) in [(&r1, &args.reference), (&r2, &args.reference)] {
+    let second = args.second.as_ref().unwrap_or(&args.reference);
+    for (img, path) in [(&r1, &args.reference), (&r2, second)] {
         if (img.width, img.height) != (a.width, a.height) {
             return Err(Error::Usage(format!(
                 "{} is {}x{} but {} is {}x{}",
@@ -538,18 +565,7 @@ fn diff_command(args: DiffArgs) -> Result<()> {
             )));
         }
     }
-    let region = match args.region.as_deref() {
-        None => Region::full(a.width, a.height),
-        Some(&[x0, y0, x1, y1]) if x0 < x1 && y0 < y1 && x1 <= a.width && y1 <= a.height => {
-            Region { x0, y0, x1, y1 }
-        }
-        Some(v) => {
-            return Err(Error::Usage(format!(
-                "--region {v:?} is not a non-empty window inside the {}x{} image",
-                a.width, a.height
-            )));
-        }
-    };
+    let region = parse_region(args.region.as_deref(), a.width, a.height)?;
     let m = Metrics::against_two(&a, &r1, &r2, region);
     println!("mean ratio {:.5}", m.mean_ratio);
     println!("mean error {:+.5}", m.mean_error);
@@ -560,14 +576,14 @@ fn diff_command(args: DiffArgs) -> Result<()> {
         if !(args.gain.is_finite() && args.gain > 0.0) {
             return Err(Error::Usage("--gain must be positive".into()));
         }
-        crate::io::image::output_format(out)?;
+        if crate::io::image::output_format(out)? != crate::io::image::Format::Png {
+            return Err(Error::Usage(format!(
+                "-o {}: the difference picture is written as PNG; name it .png",
+                out.display()
+            )));
+        }
         let rgb = difference_image(&a, &r1, args.gain);
-        image::save_buffer(out, &rgb, a.width, a.height, image::ExtendedColorType::Rgb8).map_err(
-            |e| Error::File {
-                path: out.clone(),
-                message: format!("cannot write the difference picture: {e}"),
-            },
-        )?;
+        crate::io::image::write_rgb8_png(out, a.width, a.height, &rgb)?;
     }
     Ok(())
 }

@@ -177,6 +177,17 @@ pub fn write_sample_map(film: &Film, path: &Path) -> Result<()> {
     })
 }
 
+/// Writes 8-bit RGB `data` (`width × height`, row-major) as a PNG at `path`, atomically
+/// (difference pictures, plots).
+pub fn write_rgb8_png(path: &Path, width: u32, height: u32, data: &[u8]) -> Result<()> {
+    write_atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut out = BufWriter::new(file);
+        encode_png(&mut out, width, height, 3, data, None)?;
+        out.flush().map_err(|e| e.to_string())
+    })
+}
+
 /// A tile read back from disk: its window and 8-bit RGB pixels.
 struct Tile {
     path: PathBuf,

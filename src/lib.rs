@@ -9,7 +9,8 @@
 //!   ──scene::build_scene──▶ Scene (meshes and textures read, world-space instances, two-level BVH)
 //!   ──frame::render──▶ integrator::plan (which integrator, which effects, why)
 //!                    ──▶ the integrator's phases (photon_map: trace photons, build maps,
-//!                        precompute irradiance; then the camera pass, render::camera_pass)
+//!                        precompute irradiance; then the camera pass, render::camera_pass;
+//!                        progressive: the same per pass with shrinking radii, averaged)
 //!                    ──▶ Film + Stats ──io::image::write_image──▶ PNG or EXR on disk
 //! ```
 //!

@@ -293,6 +293,9 @@ fn peak_after(passes: u32) -> f64 {
         "--stats",
         "-q",
     ]));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let said = format!("progressive: {passes} passes in");
+    assert!(stderr.contains(&said), "no '{said}' on stderr:\n{stderr}");
     let stdout = String::from_utf8_lossy(&out.stdout);
     let line = stdout
         .lines()

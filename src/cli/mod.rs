@@ -12,6 +12,7 @@ use crate::error::{Error, Result};
 use crate::frame;
 use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings};
 use crate::integrator::plan::Effect;
+use crate::integrator::progressive::Stop;
 use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
 use crate::lua::{ScriptOptions, run_script, run_script_with};
@@ -451,6 +452,21 @@ fn render_one(
         out.display(),
         start.elapsed().as_secs_f64()
     );
+    if let Some(p) = &frame.stats.progressive {
+        let error = p
+            .estimated_error
+            .map_or("not yet (one pass)".to_string(), |e| format!("{e:.4}"));
+        let why = match p.stop {
+            Stop::Passes => "the passes asked for",
+            Stop::TargetError => "--target-error",
+            Stop::TimeBudget => "--time-budget",
+        };
+        eprintln!(
+            "progressive: {} passes in {:.2} s, stopped by {why}; estimated relative RMSE {error}",
+            p.passes,
+            p.time.as_secs_f64()
+        );
+    }
     if job.stats {
         report::print_stats(&frame, r, out);
     }

@@ -3,7 +3,7 @@
 reads (point, seed, cpu_s, wall_s, rel_rmse, block_bias), and the two references a study needs.
 
     tools/validate/.venv/bin/python tools/accuracy/mitsuba_curve.py SCENE.lua OUT_DIR \
-        [--scale F] [--spp 4,16,64,256] [--ref-spp 4096] [--refs DIR]
+        [--scale F] [--region x0,y0,x1,y1] [--spp 4,16,64,256] [--ref-spp 4096] [--refs DIR]
 
 References: REFS/NAME.exr and NAME.second.exr (two independent Mitsuba renders at --ref-spp),
 rendered here when missing (tools/validate/refs holds the validation scenes' ones). Errors are
@@ -26,6 +26,7 @@ def main():
     ap.add_argument("scene")
     ap.add_argument("out")
     ap.add_argument("--scale", type=float, default=1.0)
+    ap.add_argument("--region", help="x0,y0,x1,y1 in pixels (end exclusive), as caustic study's")
     ap.add_argument("--spp", default="4,16,64,256")
     ap.add_argument("--ref-spp", type=int, default=4096)
     ap.add_argument("--refs", default=os.path.join(validate.ROOT, "tools", "validate", "refs"))
@@ -43,12 +44,17 @@ def main():
         validate.render_mitsuba(xml, a.ref_spp, 1, ref)
         validate.render_mitsuba(xml, a.ref_spp, 2, second)
     r1, r2 = validate.load(ref), validate.load(second)
+    h, w, _ = r1.shape
+    box = (0, 0, 1, 1)
+    if a.region:
+        x0, y0, x1, y1 = (int(v) for v in a.region.split(","))
+        box = (x0 / w, y0 / h, x1 / w, y1 / h)
     validate.render_mitsuba(xml, 1, 99, os.path.join(a.out, "warmup.exr"))
     rows = ["point,seed,setting,cpu_s,wall_s,rel_rmse,block_bias"]
     for i, spp in enumerate(int(s) for s in a.spp.split(",")):
         out = os.path.join(a.out, f"mitsuba_{spp}spp.exr")
         cpu, wall = validate.render_mitsuba(xml, spp, 11 + i, out)
-        m = validate.metrics(validate.load(out), r1, r2, (0, 0, 1, 1))
+        m = validate.metrics(validate.load(out), r1, r2, box)
         rows.append(f"{i},0,\"spp={spp}\",{cpu:.4f},{wall:.4f},{m['rel_rmse']:.6f},{m['block_bias']:.6f}")
         print(f"mitsuba {name} {spp} spp: {cpu:.2f} s CPU, relative RMSE {m['rel_rmse']:.4f}",
               file=sys.stderr)

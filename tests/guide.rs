@@ -1,0 +1,108 @@
+//! The user guide (`docs/guide.md`) is true to the code: every Lua example in it runs, builds
+//! its scenes and renders a tiny image of each, and every CLI flag it names exists.
+
+mod common;
+
+use caustic::integrator::Settings;
+use caustic::render::Sampling;
+use common::{caustic, out_dir, render_films_with};
+
+/// Returns the ```lua blocks of the guide.
+fn lua_examples(guide: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut block: Option<String> = None;
+    for line in guide.lines() {
+        match (&mut block, line.trim()) {
+            (None, "```lua") => block = Some(String::new()),
+            (Some(_), "```") => out.push(block.take().unwrap()),
+            (Some(b), _) => {
+                b.push_str(line);
+                b.push('\n');
+            }
+            (None, _) => {}
+        }
+    }
+    out
+}
+
+/// Every Lua example of the guide (at least 5) runs from a folder holding the files it names
+/// (`tri.obj`, `tiles.png`), and each of its `gr.render` calls renders (one ray per pixel, few
+/// photons) an image with no NaN and some light.
+#[test]
+fn every_lua_example_in_the_guide_runs_and_renders() {
+    let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/guide.md"))
+        .expect("docs/guide.md");
+    let examples = lua_examples(&guide);
+    assert!(examples.len() >= 5, "{} examples", examples.len());
+    let dir = out_dir("guide");
+    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let tiles = image::RgbImage::from_fn(8, 8, |x, y| {
+        if (x / 4 + y / 4) % 2 == 0 {
+            image::Rgb([230, 230, 230])
+        } else {
+            image::Rgb([40, 60, 90])
+        }
+    });
+    tiles.save(dir.join("tiles.png")).unwrap();
+    let mut settings = Settings {
+        sampling: Sampling::Stratified { spp: 1 },
+        ..Settings::default()
+    };
+    settings.photons.photon_scale = 0.05;
+    settings.photons.follow_image = false;
+    for (i, src) in examples.iter().enumerate() {
+        let name = format!("example{i}.lua");
+        let films = render_films_with(src.as_bytes(), &name, &dir, &settings)
+            .unwrap_or_else(|e| panic!("example {i} of the guide fails: {e}\n{src}"));
+        for (r, _, film) in &films {
+            assert!(
+                film.pixels.iter().all(|p| p.is_finite()),
+                "example {i}: NaN in {}",
+                r.output.display()
+            );
+            assert!(
+                film.pixels.iter().any(|p| p.max_element() > 0.0),
+                "example {i}: {} is black",
+                r.output.display()
+            );
+        }
+    }
+}
+
+/// Every `--flag` the guide names is accepted by `caustic render --help`, `caustic study
+/// --help` or another command's help (no flag documented that does not exist).
+#[test]
+fn every_flag_in_the_guide_exists() {
+    let guide =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/guide.md")).unwrap();
+    let mut help = String::new();
+    for cmd in [
+        "render",
+        "study",
+        "diff",
+        "photons",
+        "stitch",
+        "export-mitsuba",
+        "info",
+    ] {
+        let out = caustic().args([cmd, "--help"]).output().unwrap();
+        help.push_str(&String::from_utf8_lossy(&out.stdout));
+    }
+    let mut missing = Vec::new();
+    for (i, _) in guide.match_indices("--") {
+        let flag: String = guide[i + 2..]
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '-')
+            .collect();
+        if flag.len() < 2 || !flag.chars().next().unwrap().is_ascii_lowercase() {
+            continue;
+        }
+        if !help.contains(&format!("--{flag}")) && !missing.contains(&flag) {
+            missing.push(flag);
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "flags in the guide that no command takes: {missing:?}"
+    );
+}

@@ -428,3 +428,23 @@ fn unknown_gr_functions_list_the_functions_that_exist() {
         "test.lua:2: bad argument #2 to 'translate' (finite number expected, got NaN)"
     );
 }
+
+/// A missing file named by a script run from its own folder (`caustic render scene.lua`, the
+/// script's folder the empty path) says where it looked once, naming the folder, where the
+/// message used to end in "the script's folder )".
+#[test]
+fn not_found_names_the_folder_of_a_script_run_from_its_own_folder() {
+    let dir = common::out_dir("not_found_here");
+    std::fs::write(dir.join("scene.lua"), "m = gr.mesh('cow', 'cow.obj')\n").unwrap();
+    let out = common::caustic()
+        .current_dir(&dir)
+        .args(["render", "scene.lua"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("mesh file 'cow.obj' not found"), "{err}");
+    assert!(!err.contains("folder )"), "{err}");
+    let folder = std::fs::canonicalize(&dir).unwrap();
+    assert!(err.contains(&folder.display().to_string()), "{err}");
+}

@@ -165,10 +165,22 @@ impl State {
     /// Returns the message for a file `given` that resolves nowhere.
     fn not_found(&self, what: &str, given: &str) -> String {
         let cwd = std::env::current_dir().unwrap_or_default();
+        // A script named without a folder (`scene.lua`) has the empty path as its folder.
+        let dir = if self.script_dir.as_os_str().is_empty() {
+            cwd.join("")
+        } else {
+            self.script_dir.clone()
+        };
+        if dir == cwd || dir == cwd.join("") {
+            return format!(
+                "{what} '{given}' not found (looked in the working directory {}, which holds the script)",
+                cwd.display()
+            );
+        }
         format!(
             "{what} '{given}' not found (looked in the working directory {} and in the script's folder {})",
             cwd.display(),
-            self.script_dir.display()
+            dir.display()
         )
     }
 }

@@ -377,6 +377,37 @@ mod tests {
         assert!((t / n as f64 - 0.3).abs() < 0.01);
     }
 
+    /// Two transparent solids touching are crossed as one interface: glass (material 1) resting
+    /// on water (material 2) goes straight from glass to water, and two blocks of one material
+    /// face to face are no interface at all.
+    #[test]
+    fn touching_surfaces_are_crossed_together() {
+        let mut glass = Material::fallback();
+        (glass.transparency, glass.ior) = (1.0, 1.5);
+        let dir = Vec3A::new(0.3, 0.0, 1.0).normalize();
+        let in_glass = MediumStack::air().cross(1, 1.5, true).after;
+        // A ray along `dir` leaves the glass through its face (normal +z) and enters the water's.
+        let mut b = Bsdf::new(&glass, &flat(1), -dir, true);
+        assert!(!b.front);
+        b.touching = Some(Touching {
+            material_id: 2,
+            ior: 1.33,
+            entering: true,
+        });
+        let c = b.crossing(&in_glass).unwrap();
+        assert_eq!((c.n_from, c.n_to), (1.5, 1.33));
+        assert_eq!(c.after, MediumStack::air().cross(2, 1.33, true).after);
+        // One glass block resting on another: the stack and the index stay.
+        b.touching = Some(Touching {
+            material_id: 1,
+            ior: 1.5,
+            entering: true,
+        });
+        let c = b.crossing(&in_glass).unwrap();
+        assert!(c.is_false());
+        assert_eq!(c.after, in_glass);
+    }
+
     #[test]
     fn dielectric_split_follows_fresnel_and_snell() {
         let mut m = Material::fallback();

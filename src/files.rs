@@ -4,7 +4,8 @@
 //! - **Inputs** ([`read_regular`], [`check_regular`]): a device, FIFO or socket named as a
 //!   script, mesh, material library, buffer, texture or tile is refused before it is opened
 //!   (reading `/dev/zero` never ends; opening a FIFO blocks until someone writes to it).
-//! - **Outputs** ([`write_replacing`]): the data goes to a temporary file beside the target,
+//! - **Outputs** ([`write_replacing`]; [`write_bytes`] and [`write_replacing_io`] wrap it), for
+//!   images, exported meshes (OBJ, glTF, GLB) and Mitsuba scenes alike: the data goes to a temporary file beside the target,
 //!   which is renamed over it, so an interrupted write never leaves a truncated file where a good
 //!   one was. A symlink is followed (the file it names is replaced, the link kept); an existing
 //!   file keeps its permissions; a special file (`/dev/null`, a FIFO) is refused, never replaced.
@@ -116,6 +117,22 @@ pub fn write_replacing(
     }
     drop(guard);
     result
+}
+
+/// Writes `bytes` as the file at `path` by [`write_replacing`].
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    write_replacing(path, |tmp| {
+        std::fs::write(tmp, bytes).map_err(|e| e.to_string())
+    })
+}
+
+/// Writes the file at `path` by [`write_replacing`] through `write`, an `io` writer given the
+/// temporary path; the error keeps its message.
+pub fn write_replacing_io(
+    path: &Path,
+    write: impl FnOnce(&Path) -> io::Result<()>,
+) -> io::Result<()> {
+    write_replacing(path, |tmp| write(tmp).map_err(|e| e.to_string())).map_err(io::Error::other)
 }
 
 /// Removing temporary files when SIGINT or SIGTERM arrives, with libc's `sigaction` (already a

@@ -1,6 +1,7 @@
-//! Coincident and touching faces between different objects: water resting on a floor, thin
-//! walls that meet only along an edge. Each object is watertight alone; the hard part is the
-//! tie between two objects' surfaces at the same `t` and the crack along a shared edge.
+//! Coincident and touching faces between different objects: water resting on a floor, glass
+//! resting on water, a glass ball touching the water surface, thin walls that meet only along an
+//! edge. Each object is watertight alone; the hard part is the tie between two objects' surfaces
+//! at the same `t` and the crack along a shared edge.
 
 mod common;
 
@@ -44,16 +45,22 @@ fn pixels(src: &str) -> (u32, Vec<Vec3A>) {
 fn water_on_the_floor_matches_a_floor_just_inside_the_water() {
     let (size, touching) = pixels(&water_scene(0.0, 48));
     let (_, lifted) = pixels(&water_scene(1e-3, 48));
-    let bad: Vec<(usize, Vec3A, Vec3A)> = touching
+    assert_within(&touching, &lifted, size, "water");
+}
+
+/// Asserts that images `a` and `b` (`size²` pixels) differ by at most 0.02 in every channel of
+/// every pixel; `what` names the case in the message.
+fn assert_within(a: &[Vec3A], b: &[Vec3A], size: u32, what: &str) {
+    let bad: Vec<(usize, Vec3A, Vec3A)> = a
         .iter()
-        .zip(&lifted)
+        .zip(b)
         .enumerate()
         .filter(|(_, (a, b))| (**a - **b).abs().max_element() > 0.02)
         .map(|(i, (a, b))| (i, *a, *b))
         .collect();
     assert!(
         bad.is_empty(),
-        "{} of {} pixels differ by more than 0.02, e.g. (index, touching, lifted) {:?}",
+        "{what}: {} of {} pixels differ by more than 0.02, e.g. (index, touching, reference) {:?}",
         bad.len(),
         size * size,
         &bad[..bad.len().min(5)]
@@ -114,4 +121,64 @@ fn thin_walls_touching_along_an_edge_leave_no_crack() {
             &misses[..misses.len().min(5)]
         );
     }
+}
+
+/// A white floor, a water box (index 1.33, top face at y = 0.5) standing on it and `glass`
+/// (a Lua snippet making the node `glass` of index 1.5), seen from above at a slant through the
+/// point (0, 0.5, 0) on the water's top with a field of view of `fov` degrees.
+fn glass_and_water_scene(glass: &str, fov: f64) -> String {
+    format!(
+        "white = gr.material({{0.7, 0.7, 0.7}}, {{0, 0, 0}}, 0)\n\
+         water_m = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 1.33)\n\
+         glass_m = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 1.5)\n\
+         root = gr.node('root')\n\
+         floor = gr.cube('floor'); floor:scale(8, 1, 8); floor:translate(-4, -1, -4)\n\
+         floor:set_material(white); root:add_child(floor)\n\
+         water = gr.cube('water'); water:scale(6, 0.5, 6); water:translate(-3, 0, -3)\n\
+         water:set_material(water_m); root:add_child(water)\n\
+         {glass}\n\
+         glass:set_material(glass_m); root:add_child(glass)\n\
+         gr.render(root, 'g.png', 48, 48, {{0, 2.2, 2.0}}, {{0, -1.7, -2.0}}, {{0, 1, 0}}, {fov},\n\
+                   {{0.3, 0.3, 0.3}}, {{gr.light({{0.5, 4, 0.5}}, {{1, 1, 1}}, {{1, 0, 0}})}})\n"
+    )
+}
+
+/// Asserts that the 48² images of `glass` placed by `touching` and by `reference` (a Lua
+/// snippet each) differ by at most 0.02 in every pixel, at each field of view in `fovs`.
+fn assert_same_images(touching: &str, reference: &str, fovs: &[f64]) {
+    for &fov in fovs {
+        let (size, a) = pixels(&glass_and_water_scene(touching, fov));
+        let (_, b) = pixels(&glass_and_water_scene(reference, fov));
+        assert_within(&a, &b, size, &format!("field of view {fov}"));
+    }
+}
+
+/// A glass cube resting on a water box's top face looks like the cube sunk 1e-4 into the water:
+/// every one of 48² pixels within 0.02 (both faces tie at the same `t`; a ray leaving one was
+/// spawned past the other, so it saw glass to air, total reflection, or glass going on under
+/// water: 352 pixels differed).
+#[test]
+fn glass_cube_resting_on_water_matches_a_cube_sunk_just_into_it() {
+    let cube = |sink: f64| {
+        format!(
+            "glass = gr.cube('glass'); glass:translate(-0.5, {}, -0.5)",
+            0.5 - sink
+        )
+    };
+    assert_same_images(&cube(0.0), &cube(1e-4), &[50.0]);
+}
+
+/// A glass ball under water touching the water surface from below looks like the ball 1e-4
+/// lower: 48² pixels within 0.02, once for the whole scene and once for a 1° view of the point
+/// of contact (where the film of water between the surfaces is thinner than the spawn offset:
+/// 8 of its pixels differed).
+#[test]
+fn glass_ball_touching_the_water_surface_from_below_matches_a_ball_just_under_it() {
+    let ball = |sink: f64| {
+        format!(
+            "glass = gr.nh_sphere('glass', {{0, {}, 0}}, 0.4)",
+            0.1 - sink
+        )
+    };
+    assert_same_images(&ball(0.0), &ball(1e-4), &[50.0, 1.0]);
 }

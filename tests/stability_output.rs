@@ -186,3 +186,107 @@ fn sigterm_while_writing_removes_the_temporary_file() {
     assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
     assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), b"old");
 }
+
+/// Returns a 5×5-vertex water surface, a mesh with normals and texture coordinates.
+fn small_mesh() -> caustic::geometry::mesh::MeshData {
+    use caustic::geometry::water::{WaveParams, wave_mesh};
+    wave_mesh(&WaveParams {
+        n: 5,
+        ..WaveParams::default()
+    })
+}
+
+/// An exporter writing to the path it is given.
+type Writer = fn(&Path) -> Result<(), String>;
+
+/// Runs `write` on another thread and returns its result, or `None` when it has not returned
+/// within 20 s (opening a FIFO for writing blocks until someone reads it).
+fn within_20_s<T: Send + 'static>(write: impl FnOnce() -> T + Send + 'static) -> Option<T> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(write());
+    });
+    rx.recv_timeout(std::time::Duration::from_secs(20)).ok()
+}
+
+/// The exporters write as images do (`files::write_replacing`): an OBJ, a GLB, a glTF with its
+/// `.bin` and a Mitsuba scene with its mesh, each behind a symlink to a file of mode 0640, keep
+/// the link and the mode and leave no temporary file, and a FIFO named as any of them is refused
+/// with an error (4 writers, 2 cases each). They wrote in place with `File::create`, so an
+/// interrupted export left a truncated file, and the OBJ writer blocked for ever on the FIFO.
+#[test]
+fn exporters_write_through_links_keep_modes_and_refuse_fifos() {
+    let dir = out_dir("stability_output_exporters");
+    let mitsuba_scene = "m = gr.material({0.5, 0.5, 0.5}, {0, 0, 0}, 0)\n\
+        root = gr.node('root')\n\
+        t = gr.mesh('t', {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}); t:set_material(m)\n\
+        root:add_child(t)\n\
+        gr.render(root, 'x.png', 8, 8, {0, 0, 3}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0},\n\
+                  {gr.light({0, 0, 3}, {1, 1, 1}, {0, 0, 1})})\n";
+    std::fs::write(dir.join("m.lua"), mitsuba_scene).unwrap();
+    // Each writer, by the name it is given (the glTF also writes `<stem>.bin` beside it).
+    let writers: [(&str, Writer); 4] = [
+        ("mesh.obj", |p| {
+            caustic::io::obj::write_obj(&small_mesh(), p).map_err(|e| e.to_string())
+        }),
+        ("mesh.glb", |p| {
+            caustic::io::gltf::write_gltf(&small_mesh(), p).map_err(|e| e.to_string())
+        }),
+        ("mesh.gltf", |p| {
+            caustic::io::gltf::write_gltf(&small_mesh(), p).map_err(|e| e.to_string())
+        }),
+        ("scene.xml", |p| {
+            let o = caustic()
+                .current_dir(p.parent().unwrap())
+                .args(["export-mitsuba", "m.lua", "-o"])
+                .arg(p.file_name().unwrap())
+                .output()
+                .unwrap();
+            o.status
+                .success()
+                .then_some(())
+                .ok_or_else(|| String::from_utf8_lossy(&o.stderr).into_owned())
+        }),
+    ];
+    for (name, write) in writers {
+        let real = dir.join(format!("real-{name}"));
+        std::fs::write(&real, b"old").unwrap();
+        std::fs::set_permissions(&real, std::fs::Permissions::from_mode(0o640)).unwrap();
+        let link = dir.join(name);
+        std::os::unix::fs::symlink(real.file_name().unwrap(), &link).unwrap();
+        let target = link.clone();
+        let result = within_20_s(move || write(&target)).expect("the write did not return");
+        assert_eq!(result, Ok(()), "{name}");
+        let meta = std::fs::symlink_metadata(&link).unwrap();
+        assert!(
+            meta.file_type().is_symlink(),
+            "{name}: the link was replaced"
+        );
+        let real_meta = std::fs::metadata(&real).unwrap();
+        assert!(
+            real_meta.len() > 3,
+            "{name}: the linked file was not written"
+        );
+        assert_eq!(
+            real_meta.permissions().mode() & 0o777,
+            0o640,
+            "{name}: mode"
+        );
+        assert!(leftovers(&dir).is_empty(), "{name}: {:?}", leftovers(&dir));
+        std::fs::remove_file(&link).unwrap();
+
+        mkfifo(&link);
+        let target = link.clone();
+        let result = within_20_s(move || write(&target)).expect("the write blocked on a FIFO");
+        let err = result.expect_err(name);
+        assert!(err.contains("regular files only"), "{name}: {err}");
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_fifo(),
+            "{name}: the FIFO was replaced"
+        );
+        std::fs::remove_file(&link).unwrap();
+    }
+}

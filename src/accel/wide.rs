@@ -282,10 +282,14 @@ fn any_with<T: NodeTest>(
     )
 }
 
-/// Returns `1/x`, or `±1/ε` for `|x| <= ε`, so slab distances stay finite (obvhs's rule).
-fn safe_inverse(x: f32) -> f32 {
-    if x.abs() <= f32::EPSILON {
-        x.signum() / f32::EPSILON
+/// Returns `1/x`, or `±1/ε` for `|x| <= ε`, so slab distances stay finite (obvhs's rule), with
+/// `ε` relative to `size`, the direction's largest component: a ray moved into the object space
+/// of an instance scaled by 1e5 is not renormalised, and an absolute `ε` there shortened a slab
+/// to less than the distance to a triangle inside it (`tests/stability_spawn.rs`).
+fn safe_inverse(x: f32, size: f32) -> f32 {
+    let eps = (f32::EPSILON * size).max(f32::MIN_POSITIVE);
+    if x.abs() <= eps {
+        x.signum() / eps
     } else {
         1.0 / x
     }
@@ -304,10 +308,11 @@ pub(super) struct SlabRay {
 impl SlabRay {
     #[inline(always)]
     pub(super) fn new(r: &Ray) -> SlabRay {
+        let size = r.dir.abs().max_element();
         let inv_dir = [
-            safe_inverse(r.dir.x),
-            safe_inverse(r.dir.y),
-            safe_inverse(r.dir.z),
+            safe_inverse(r.dir.x, size),
+            safe_inverse(r.dir.y, size),
+            safe_inverse(r.dir.z, size),
         ];
         let neg = |a: usize| (inv_dir[a] < 0.0) as usize;
         SlabRay {

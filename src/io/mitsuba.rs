@@ -118,7 +118,7 @@ pub fn export(
         emitter(&mut s, light).map_err(|e| Error::at(loc, e))?;
     }
     let _ = writeln!(s, "</scene>");
-    std::fs::write(xml, s).map_err(|e| Error::File {
+    crate::files::write_bytes(xml, s.as_bytes()).map_err(|e| Error::File {
         path: xml.to_path_buf(),
         message: format!("cannot write the Mitsuba scene: {e}"),
     })
@@ -298,7 +298,7 @@ fn write_obj(
             let _ = writeln!(s, "f {a} {b} {c}");
         }
     }
-    std::fs::write(path, s).map_err(|e| Error::File {
+    crate::files::write_bytes(path, s.as_bytes()).map_err(|e| Error::File {
         path: path.to_path_buf(),
         message: format!("cannot write mesh: {e}"),
     })

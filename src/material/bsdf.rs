@@ -49,6 +49,19 @@ pub struct Bsdf<'a> {
     pub n: Vec3A,
     /// Unit geometric normal, on `wo`'s side.
     pub ng: Vec3A,
+    /// Another transparent solid's surface at the same place (glass resting on water), crossed
+    /// together with this one ([`Bsdf::crossing`]); set by `Scene::interaction`.
+    pub touching: Option<Touching>,
+}
+
+/// The surface of a second transparent solid that touches the one hit, within rounding.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Touching {
+    /// The solid's material index in the scene.
+    pub material_id: u32,
+    pub ior: f32,
+    /// Whether the ray goes into that solid (against its outward normal).
+    pub entering: bool,
 }
 
 /// Where one sampled photon goes next ([`Bsdf::sample`]).
@@ -119,6 +132,7 @@ impl<'a> Bsdf<'a> {
             front,
             n,
             ng,
+            touching: None,
         }
     }
 
@@ -130,9 +144,29 @@ impl<'a> Bsdf<'a> {
     /// Returns the crossing of this surface for a path in `media`, or `None` for an opaque
     /// material (`t = 0`). A crossing that [`Crossing::is_false`] is no surface at all: the
     /// boundary of a solid inside a denser one, passed straight through.
+    ///
+    /// Where another transparent solid touches this surface ([`Bsdf::touching`]) the ray
+    /// crosses both boundaries at once: one interface between the media before and after both
+    /// (glass to water where a glass cube rests on water), not a film of air between them, which
+    /// a ray spawned past both surfaces would otherwise see by the rounding of the two hits.
     pub fn crossing(&self, media: &MediumStack) -> Option<Crossing> {
-        (self.material.transparency > 0.0)
-            .then(|| media.cross(self.material_id, self.material.ior, self.front))
+        if self.material.transparency <= 0.0 {
+            return None;
+        }
+        let first = media.cross(self.material_id, self.material.ior, self.front);
+        Some(match self.touching {
+            // Two solids of one material meeting face to face: no interface at all.
+            Some(t) if t.material_id == self.material_id && t.entering != self.front => Crossing {
+                n_to: first.n_from,
+                after: *media,
+                ..first
+            },
+            Some(t) => Crossing {
+                n_from: first.n_from,
+                ..first.after.cross(t.material_id, t.ior, t.entering)
+            },
+            None => first,
+        })
     }
 
     /// Returns the course's direct-light term per unit of light intensity arriving along `wi`
@@ -341,6 +375,37 @@ mod tests {
         assert!(close(d, lobes.diffuse), "{}", d / n as f32);
         assert!(close(mirror, lobes.mirror), "{}", mirror / n as f32);
         assert!((t / n as f64 - 0.3).abs() < 0.01);
+    }
+
+    /// Two transparent solids touching are crossed as one interface: glass (material 1) resting
+    /// on water (material 2) goes straight from glass to water, and two blocks of one material
+    /// face to face are no interface at all.
+    #[test]
+    fn touching_surfaces_are_crossed_together() {
+        let mut glass = Material::fallback();
+        (glass.transparency, glass.ior) = (1.0, 1.5);
+        let dir = Vec3A::new(0.3, 0.0, 1.0).normalize();
+        let in_glass = MediumStack::air().cross(1, 1.5, true).after;
+        // A ray along `dir` leaves the glass through its face (normal +z) and enters the water's.
+        let mut b = Bsdf::new(&glass, &flat(1), -dir, true);
+        assert!(!b.front);
+        b.touching = Some(Touching {
+            material_id: 2,
+            ior: 1.33,
+            entering: true,
+        });
+        let c = b.crossing(&in_glass).unwrap();
+        assert_eq!((c.n_from, c.n_to), (1.5, 1.33));
+        assert_eq!(c.after, MediumStack::air().cross(2, 1.33, true).after);
+        // One glass block resting on another: the stack and the index stay.
+        b.touching = Some(Touching {
+            material_id: 1,
+            ior: 1.5,
+            entering: true,
+        });
+        let c = b.crossing(&in_glass).unwrap();
+        assert!(c.is_false());
+        assert_eq!(c.after, in_glass);
     }
 
     #[test]

@@ -38,7 +38,10 @@ impl Scene {
         let material = &self.materials[surf.material as usize];
         let wo = -ray.dir.normalize();
         let start = clock.is_some().then(std::time::Instant::now);
-        let bsdf = Bsdf::new(material, &surf, wo, needs == Needs::Full);
+        let mut bsdf = Bsdf::new(material, &surf, wo, needs == Needs::Full);
+        if material.transparency > 0.0 {
+            bsdf.touching = self.touching(ray, hit);
+        }
         if let (Some(clock), Some(start)) = (clock, start) {
             *clock += start.elapsed().as_nanos() as u64;
         }

@@ -10,6 +10,7 @@ use crate::geometry::hit::{Hit, SurfaceHit};
 use crate::geometry::triangle;
 use crate::geometry::uv::{analytic_dpdu, analytic_uv};
 use crate::geometry::{Analytic, Interval, Ray, spawn_offset};
+use crate::material::bsdf::Touching;
 use crate::scene::types::{Instance, Scene, Shape};
 use glam::{Vec2, Vec3A};
 
@@ -56,6 +57,52 @@ impl Scene {
                 }
             }
         })
+    }
+
+    /// Returns the surface of another transparent solid within the tie slack ([`tie_slack`]) of
+    /// `hit` on `ray`, where two transparent solids touch (glass resting on water, a ball
+    /// touching the water surface), if any.
+    pub fn touching(&self, ray: &Ray, hit: &Hit) -> Option<Touching> {
+        let slack = tie_slack(ray)(hit.t);
+        let window = Ray {
+            tmin: hit.t - slack,
+            tmax: hit.t + slack,
+            ..*ray
+        };
+        let mut found = None;
+        self.tlas.closest(&window, |r, i| {
+            let h = match self.hit_instance(i, r) {
+                Some(h) if i != hit.instance as usize => h,
+                _ => return f32::INFINITY,
+            };
+            let m = &self.materials[h.material as usize];
+            if m.transparency <= 0.0 {
+                return f32::INFINITY;
+            }
+            found = Some(Touching {
+                material_id: h.material,
+                ior: m.ior,
+                entering: self.enters(i, r, &h),
+            });
+            h.t
+        });
+        found
+    }
+
+    /// Returns whether `r` crosses the surface of instance `i` at `h` against its outward normal
+    /// (for a mesh, the triangle's winding, as the BSDF's front side is).
+    fn enters(&self, i: usize, r: &Ray, h: &Hit) -> bool {
+        let inst = &self.instances[i];
+        let normal = match inst.shape {
+            Shape::Mesh(m) => {
+                let mesh = &self.meshes[m as usize];
+                let [a, b, c] = mesh.triangles[h.prim as usize].map(|v| mesh.positions[v as usize]);
+                (b - a).cross(c - a)
+            }
+            Shape::Analytic(_) | Shape::Csg(_) => h.normal,
+        };
+        // The sign of d·n is the same in object space: normals transform by the inverse transpose.
+        inst.object_from_world.transform_vector3a(r.dir).dot(normal) < 0.0
     }
 
     fn hit_instance(&self, i: usize, r: &Ray) -> Option<Hit> {

@@ -9,38 +9,48 @@ use std::path::Path;
 ///
 /// Positions, normals and uvs (when present) and `u32` indices are written exactly (little-endian
 /// `f32`), so [`super::load_gltf`] reads back the same numbers. Materials are not written.
+/// Each file is replaced as images are ([`crate::files::write_replacing`]: symlinks followed,
+/// permissions kept, special files refused, no temporary file left behind).
 pub fn write_gltf(mesh: &MeshData, path: &Path) -> io::Result<()> {
     let is_glb = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
     let layout = Layout::new(mesh);
     if is_glb {
-        let json = pad(layout.json(None).into_bytes(), b' ');
-        let bin_len = layout.total.next_multiple_of(4);
-        let total = 12 + 8 + json.len() + 8 + bin_len;
-        let mut out = BufWriter::new(std::fs::File::create(path)?);
-        out.write_all(b"glTF")?;
-        out.write_all(&2u32.to_le_bytes())?;
-        out.write_all(&to_u32(total)?.to_le_bytes())?;
-        out.write_all(&to_u32(json.len())?.to_le_bytes())?;
-        out.write_all(b"JSON")?;
-        out.write_all(&json)?;
-        out.write_all(&to_u32(bin_len)?.to_le_bytes())?;
-        out.write_all(b"BIN\0")?;
-        write_buffer(mesh, &mut out)?;
-        out.write_all(&vec![0; bin_len - layout.total])?;
-        out.flush()
+        crate::files::write_replacing_io(path, |tmp| write_glb(mesh, &layout, tmp))
     } else {
         let bin_path = path.with_extension("bin");
         let bin_name = bin_path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let mut bin = BufWriter::new(std::fs::File::create(&bin_path)?);
-        write_buffer(mesh, &mut bin)?;
-        bin.flush()?;
-        std::fs::write(path, layout.json(Some(&percent_encode(&bin_name))))
+        crate::files::write_replacing_io(&bin_path, |tmp| {
+            let mut bin = BufWriter::new(std::fs::File::create(tmp)?);
+            write_buffer(mesh, &mut bin)?;
+            bin.flush()
+        })?;
+        let json = layout.json(Some(&percent_encode(&bin_name)));
+        crate::files::write_bytes(path, json.as_bytes()).map_err(io::Error::other)
     }
+}
+
+/// Writes `mesh` laid out by `layout` as one GLB file at `path`.
+fn write_glb(mesh: &MeshData, layout: &Layout, path: &Path) -> io::Result<()> {
+    let json = pad(layout.json(None).into_bytes(), b' ');
+    let bin_len = layout.total.next_multiple_of(4);
+    let total = 12 + 8 + json.len() + 8 + bin_len;
+    let mut out = BufWriter::new(std::fs::File::create(path)?);
+    out.write_all(b"glTF")?;
+    out.write_all(&2u32.to_le_bytes())?;
+    out.write_all(&to_u32(total)?.to_le_bytes())?;
+    out.write_all(&to_u32(json.len())?.to_le_bytes())?;
+    out.write_all(b"JSON")?;
+    out.write_all(&json)?;
+    out.write_all(&to_u32(bin_len)?.to_le_bytes())?;
+    out.write_all(b"BIN\0")?;
+    write_buffer(mesh, &mut out)?;
+    out.write_all(&vec![0; bin_len - layout.total])?;
+    out.flush()
 }
 
 /// Converts a byte count to the `u32` GLB stores, failing past 4 GiB.

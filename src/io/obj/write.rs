@@ -8,8 +8,14 @@ use std::path::Path;
 /// corners share one index for all attributes (`f a/a/a`, `a//a`, `a/a` or `a`).
 ///
 /// Numbers are written in Rust's shortest round-trip form, so [`super::load_obj`] reads back
-/// the same `f32`s. Materials are not written.
+/// the same `f32`s. Materials are not written. The file is replaced as images are
+/// ([`crate::files::write_replacing`]: symlinks followed, permissions kept, special files
+/// refused, no temporary file left behind).
 pub fn write_obj(mesh: &MeshData, path: &Path) -> io::Result<()> {
+    crate::files::write_replacing_io(path, |tmp| write_to(mesh, tmp))
+}
+
+fn write_to(mesh: &MeshData, path: &Path) -> io::Result<()> {
     let mut out = BufWriter::with_capacity(1 << 20, std::fs::File::create(path)?);
     writeln!(out, "# written by caustic")?;
     for p in &mesh.positions {

@@ -40,7 +40,19 @@ study() {
     cp "$OUT/$name/$kind/study.md" "$DOCS/$name/$kind.md"
   done
   cp "$OUT/$name/mitsuba/mitsuba.csv" "$DOCS/$name/mitsuba.csv"
+  # --target-error: where the progressive integrator stops, and the error it really has there
+  # (whole image, as its estimate is).
+  "$BIN" render "$scene" --scale "$scale" --integrator progressive $prog --target-error "$TARGET" \
+    -q -o "$OUT/$name/target.exr" 2> "$OUT/$name/target.log"
+  local line actual
+  line=$(grep '^progressive:' "$OUT/$name/target.log")
+  actual=$("$BIN" diff "$OUT/$name/target.exr" "$ref" --second "$second" | awk '/relative RMSE/ {print $3}')
+  echo "target,passes,seconds,estimated,actual" > "$DOCS/$name/target.csv"
+  echo "$line" | awk -v t="$TARGET" -v a="$actual" \
+    '{for (i = 1; i <= NF; i++) { if ($(i+1) == "passes") p = $i; if ($i == "in") s = $(i+1) }
+      print t "," p "," s "," $NF "," a}' >> "$DOCS/$name/target.csv"
 }
+TARGET=0.15
 
 study cornell_diffuse scenes/validate/cornell_diffuse.lua tools/validate/refs 1 0,8,96,96 \
   "--sweep spp=4,16,32 --sweep photons=5e4,4e5" ""

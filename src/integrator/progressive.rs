@@ -176,6 +176,8 @@ pub fn render(
         add_photon_stats(&mut photon_stats, &gi.stats);
         drop(gi);
         acc.add(&film);
+        drop(film);
+        crate::mem::release_free_memory();
         progress.advance(1);
         if let Some(k) = prog.snapshot_every
             && acc.passes.is_multiple_of(k)

@@ -138,3 +138,34 @@ fn facing_perfect_mirrors_stop_at_the_hard_cap() {
         "each of the 9 camera rays bounces until the cap of {MAX_PATH_DEPTH}"
     );
 }
+
+/// The command line says when paths hit the cap, without `--stats`: rendering the facing
+/// mirrors prints a warning counting the 9 capped paths and naming the image.
+#[test]
+fn capped_paths_are_reported_on_the_command_line() {
+    let dir = common::out_dir("capped_paths");
+    let script = dir.join("mirrors.lua");
+    std::fs::write(
+        &script,
+        "mirror = gr.material({0,0,0}, {1,1,1}, 0)\n\
+         root = gr.node('root')\n\
+         a = gr.cube('a'); a:scale(4000, 4000, 0.1); a:translate(-2000, -2000, -1.1); a:set_material(mirror); root:add_child(a)\n\
+         b = gr.cube('b'); b:scale(4000, 4000, 0.1); b:translate(-2000, -2000, 1); b:set_material(mirror); root:add_child(b)\n\
+         gr.render(root, 'm.png', 3, 3, {0,0,0}, {0,0,-1}, {0,1,0}, 10, {0,0,0},\n\
+                   {gr.light({0,0,0.5}, {1,1,1}, {1,0,0})})\n",
+    )
+    .unwrap();
+    let out = common::run_ok(common::caustic().args([
+        "render",
+        script.to_str().unwrap(),
+        "--spp",
+        "1",
+        "-q",
+    ]));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning: 9 eye paths stopped at the 1024-bounce cap")
+            && err.contains("m.png"),
+        "{err}"
+    );
+}

@@ -442,6 +442,16 @@ fn render_one(
             eprintln!("warning: {d}");
         }
     }
+    // Never a silent loss: paths ended by the safety cap miss the light of longer paths.
+    let capped = frame.stats.render.depth_capped;
+    if capped > 0 {
+        eprintln!(
+            "warning: {capped} eye paths stopped at the {}-bounce cap; light that only longer \
+             paths carry (many nested glass shells, facing mirrors) is missing from {}",
+            crate::integrator::eye::MAX_PATH_DEPTH,
+            out.display()
+        );
+    }
     write_image(&frame.film, out, job.tonemap)?;
     if let Some(map) = &job.aa_map {
         write_sample_map(&frame.film, map)?;

@@ -183,6 +183,14 @@ fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
             bytes as f64 / stored.max(1) as f64
         );
     }
+    let emitted: u64 = s.caustic.iter().map(|c| c.emitted).sum();
+    if emitted > 0 {
+        let on: u64 = s.caustic.iter().map(|c| c.first_hit_specular).sum();
+        println!(
+            "  caustic photons aimed at the specular objects: {:.1}% of {emitted} met a specular surface first",
+            100.0 * on as f64 / emitted as f64
+        );
+    }
     let (lookups, used) = (rstats.lookups, rstats.photons_used);
     println!(
         "  photon phases: trace {:.3} s, kd-tree build {:.3} s, irradiance precomputed at {} points in {:.3} s",

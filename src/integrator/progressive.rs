@@ -298,6 +298,7 @@ fn add_photon_stats(total: &mut GiStats, pass: &GiStats) {
             let t: &mut crate::photon::trace::LightCounts = t;
             t.emitted += p.emitted;
             t.stored += p.stored;
+            t.first_hit_specular += p.first_hit_specular;
         }
     };
     add(&mut total.global, &pass.global);

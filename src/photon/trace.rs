@@ -54,6 +54,9 @@ pub enum MapKind {
 pub struct LightCounts {
     pub emitted: u64,
     pub stored: u64,
+    /// Photons whose first surface was specular (a mirror or a dielectric): for the caustic
+    /// map, how well aiming at the specular objects works (Jensen's projection maps).
+    pub first_hit_specular: u64,
 }
 
 /// The photons of one map, as the tracing tasks stored them (see [`PhotonMap::from_chunks`]),
@@ -151,7 +154,14 @@ impl Cone {
 }
 
 /// Returns the bounding spheres (centre, radius) of every instance that can scatter specularly.
+///
+/// Each is the smaller of the sphere around the instance's world box and, for an analytic
+/// primitive, its own bounding sphere carried into the world: for a sphere that is the sphere
+/// itself, where the box's sphere is √3 times wider and would waste two thirds of the caustic
+/// photons aimed at it (the share that meets it first is in `--stats`).
 pub fn specular_targets(scene: &Scene) -> Vec<(Vec3A, f32)> {
+    use crate::geometry::Analytic;
+    use crate::scene::types::Shape;
     scene
         .instances
         .iter()
@@ -163,9 +173,42 @@ pub fn specular_targets(scene: &Scene) -> Vec<(Vec3A, f32)> {
         })
         .map(|inst| {
             let c = (inst.bounds.min + inst.bounds.max) * 0.5;
-            (c, (inst.bounds.max - c).length() * 1.001 + 1e-6)
+            let boxed = (c, (inst.bounds.max - c).length());
+            let own = match inst.shape {
+                Shape::Analytic(Analytic::Sphere) => Some((Vec3A::ZERO, 1.0)),
+                Shape::Analytic(Analytic::Cube) => Some((Vec3A::splat(0.5), 0.75f32.sqrt())),
+                Shape::Analytic(Analytic::Cylinder) => Some((Vec3A::ZERO, 2.0f32.sqrt())),
+                Shape::Analytic(Analytic::Cone) => {
+                    Some((Vec3A::new(0.0, 0.0, 0.5), 1.25f32.sqrt()))
+                }
+                Shape::Mesh(_) | Shape::Csg(_) => None,
+            };
+            let (centre, radius) = own
+                .map(|(oc, r)| {
+                    let m = inst.world_from_object;
+                    (m.transform_point3a(oc), r * stretch(m.matrix3))
+                })
+                .filter(|own| own.1 < boxed.1)
+                .unwrap_or(boxed);
+            (centre, radius * 1.001 + 1e-6)
         })
         .collect()
+}
+
+/// Returns a bound on how much `m` lengthens a vector: its longest column when the columns are
+/// orthogonal (scales and rotations without shear: the exact bound), else the Frobenius norm
+/// (always a bound).
+fn stretch(m: glam::Mat3A) -> f32 {
+    let cols = [m.x_axis, m.y_axis, m.z_axis];
+    let orthogonal = (0..3).all(|i| {
+        let (a, b) = (cols[i], cols[(i + 1) % 3]);
+        a.dot(b).abs() <= 1e-5 * a.length() * b.length()
+    });
+    if orthogonal {
+        cols.iter().map(|c| c.length()).fold(0.0, f32::max)
+    } else {
+        cols.iter().map(|c| c.length_squared()).sum::<f32>().sqrt()
+    }
 }
 
 /// Traces the photons of `kind` for every light: `budget[l]` emitted by light `l`.
@@ -199,29 +242,43 @@ pub fn trace_map_with(
     progress.start(what, budget.iter().take(scene.lights.len()).sum());
     for (l, light) in scene.lights.iter().enumerate() {
         let n = budget.get(l).copied().unwrap_or(0);
-        let chunks: Vec<Vec<Photon>> = (0..n.div_ceil(CHUNK))
+        let traced: Vec<(Vec<Photon>, u64)> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
-                let mut photons = Vec::new();
+                let (mut photons, mut on_specular) = (Vec::new(), 0);
                 for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
                     let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
                     let mut rng = Rng::new(seed, Pass::Photon, key);
-                    trace_one(scene, light, n, kind, &targets, &mut rng, &mut photons);
+                    let hit = trace_one(scene, light, n, kind, &targets, &mut rng, &mut photons);
+                    on_specular += u64::from(hit == FirstHit::Specular);
                 }
                 progress.advance(CHUNK.min(n - c * CHUNK));
-                photons
+                (photons, on_specular)
             })
             .collect();
         out.per_light.push(LightCounts {
             emitted: n,
-            stored: chunks.iter().map(|c| c.len() as u64).sum(),
+            stored: traced.iter().map(|c| c.0.len() as u64).sum(),
+            first_hit_specular: traced.iter().map(|c| c.1).sum(),
         });
-        out.chunks.extend(chunks);
+        out.chunks.extend(traced.into_iter().map(|c| c.0));
     }
     out
 }
 
-/// Traces one photon of `light` (one of `n`), appending what it stores to `out`.
+/// What a photon met first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum FirstHit {
+    /// Nothing: it left the scene, or carried no power.
+    Nothing,
+    /// A mirror or a dielectric.
+    Specular,
+    /// Any other surface.
+    Other,
+}
+
+/// Traces one photon of `light` (one of `n`), appending what it stores to `out`; returns what
+/// it met first.
 fn trace_one(
     scene: &Scene,
     light: &Light,
@@ -230,7 +287,7 @@ fn trace_one(
     targets: &[(Vec3A, f32)],
     rng: &mut Rng,
     out: &mut Vec<Photon>,
-) {
+) -> FirstHit {
     let u = [
         rng.next_f32(),
         rng.next_f32(),
@@ -273,7 +330,7 @@ fn trace_one(
         }
     };
     if power.max_element() <= 0.0 {
-        return;
+        return FirstHit::Nothing;
     }
     let start = if e.normal == Vec3A::ZERO {
         e.origin
@@ -285,9 +342,10 @@ fn trace_one(
     let mut first = true;
     let mut diffuse_bounced = false;
     let mut specular_bounced = false;
+    let mut met = FirstHit::Nothing;
     for _ in 0..MAX_BOUNCES {
         let Some(hit) = scene.intersect(&ray) else {
-            return;
+            return met;
         };
         if first {
             power *= light.falloff_ratio(hit.t * ray.dir.length());
@@ -302,6 +360,13 @@ fn trace_one(
             media = c.after;
             ray = Ray::new(offset_ray_origin(surf.p, surf.ng, ray.dir), ray.dir);
             continue;
+        }
+        if met == FirstHit::Nothing {
+            met = if scene.materials[hit.material as usize].is_specular() {
+                FirstHit::Specular
+            } else {
+                FirstHit::Other
+            };
         }
         let store = match kind {
             MapKind::Global => true,
@@ -318,11 +383,11 @@ fn trace_one(
         }
         // Russian roulette over the material's lobes.
         let Some(next) = bsdf.sample(crossing.as_ref(), rng) else {
-            return;
+            return met;
         };
         match next.lobe {
             // Caustic paths end at their first diffuse surface.
-            Lobe::Diffuse if kind == MapKind::Caustic => return,
+            Lobe::Diffuse if kind == MapKind::Caustic => return met,
             Lobe::Diffuse => diffuse_bounced = true,
             Lobe::Mirror | Lobe::Dielectric => specular_bounced = true,
         }
@@ -332,11 +397,35 @@ fn trace_one(
         }
         ray = Ray::new(offset_ray_origin(surf.p, bsdf.ng, next.dir), next.dir);
     }
+    met
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `stretch` bounds how far a matrix moves unit vectors, exactly for scales and rotations
+    /// and safely for shears: 2000 random unit vectors through a rotated non-uniform scale and
+    /// through a shear never come out longer than it says.
+    #[test]
+    fn stretch_bounds_every_vector_and_is_exact_without_shear() {
+        let rotated = glam::Mat3A::from_rotation_y(0.7)
+            * glam::Mat3A::from_diagonal(glam::Vec3::new(3.0, 1.0, 0.5));
+        let sheared = glam::Mat3A::from_cols(Vec3A::X, Vec3A::new(2.0, 1.0, 0.0), Vec3A::Z);
+        assert!((stretch(rotated) - 3.0).abs() < 1e-5);
+        let mut rng = Rng::new(1, Pass::Photon, 0);
+        for m in [rotated, sheared] {
+            for _ in 0..1000 {
+                let v = Vec3A::new(
+                    rng.next_f32() - 0.5,
+                    rng.next_f32() - 0.5,
+                    rng.next_f32() - 0.5,
+                )
+                .normalize_or(Vec3A::X);
+                assert!((m * v).length() <= stretch(m) * (1.0 + 1e-6));
+            }
+        }
+    }
 
     #[test]
     fn budgets_follow_power_with_a_floor_and_explicit_counts() {

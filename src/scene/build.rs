@@ -83,7 +83,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
     stats.bvh_bytes = tlas.bytes() + b.meshes.iter().map(|m| m.bvh.bytes()).sum::<usize>();
     stats.triangles_stored = b.meshes.iter().map(|m| m.triangles.len()).sum();
     stats.build_time = start.elapsed();
-    Ok(Scene {
+    let mut scene = Scene {
         instances,
         meshes: b.meshes,
         csgs: b.csgs,
@@ -96,7 +96,19 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         ambient: render.ambient.into(),
         tlas,
         stats,
-    })
+        transparent_instances: 0,
+    };
+    scene.transparent_instances = scene
+        .instances
+        .iter()
+        .filter(|inst| {
+            scene
+                .instance_materials(inst)
+                .iter()
+                .any(|&m| scene.materials[m as usize].transparency > 0.0)
+        })
+        .count();
+    Ok(scene)
 }
 
 /// What a render's root places in the world, by kind, without building anything.

@@ -85,6 +85,9 @@ pub struct Scene {
     pub ambient: Vec3A,
     pub tlas: Bvh,
     pub stats: BuildStats,
+    /// Instances that can shade with a transparent material: with fewer than two, no two
+    /// transparent solids can touch, and [`Scene::touching`] is skipped.
+    pub transparent_instances: usize,
 }
 
 impl Scene {

@@ -8,6 +8,11 @@ cd "$(dirname "$0")/.."
 for tool in fmt clippy; do
   if ! cargo "$tool" --version >/dev/null 2>&1; then
     component=$([ "$tool" = fmt ] && echo rustfmt || echo clippy)
+    if ! command -v rustup >/dev/null 2>&1; then
+      echo "check: cargo $tool is missing and there is no rustup to add it; install $component" \
+        "with the toolchain (https://rustup.rs, or your distribution's $component package)" >&2
+      exit 1
+    fi
     echo "check: installing $component" >&2
     rustup component add "$component"
   fi

@@ -96,18 +96,20 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         ambient: render.ambient.into(),
         tlas,
         stats,
-        transparent_instances: 0,
+        transparent: Vec::new(),
     };
-    scene.transparent_instances = scene
+    scene.transparent = scene
         .instances
         .iter()
-        .filter(|inst| {
+        .enumerate()
+        .filter(|(_, inst)| {
             scene
                 .instance_materials(inst)
                 .iter()
                 .any(|&m| scene.materials[m as usize].transparency > 0.0)
         })
-        .count();
+        .map(|(i, inst)| (i as u32, inst.bounds))
+        .collect();
     Ok(scene)
 }
 

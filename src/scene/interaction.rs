@@ -40,7 +40,7 @@ impl Scene {
         let start = clock.is_some().then(std::time::Instant::now);
         let mut bsdf = Bsdf::new(material, &surf, wo, needs == Needs::Full);
         // Only where a second transparent solid exists can one touch this surface.
-        if material.transparency > 0.0 && self.transparent_instances > 1 {
+        if material.transparency > 0.0 && self.transparent.len() > 1 {
             bsdf.touching = self.touching(ray, hit);
         }
         if let (Some(clock), Some(start)) = (clock, start) {

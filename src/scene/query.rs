@@ -5,6 +5,7 @@
 //! A ray reaching an instance is moved into its object space (not renormalised, so `t` carries
 //! over) and tested against the instance's [`Shape`]; every `match` names each shape.
 
+use crate::accel::Bounds;
 use crate::geometry::csg::CsgNode;
 use crate::geometry::hit::{Hit, SurfaceHit};
 use crate::geometry::triangle;
@@ -69,11 +70,28 @@ impl Scene {
             tmax: hit.t + slack,
             ..*ray
         };
+        // The window spans points within `reach` of the hit: no other transparent solid whose
+        // bounds, grown by it, miss the hit point can be found (most hits: a water surface far
+        // from the glass in it). The margin covers the rounding of the points themselves.
+        let p = ray.at(hit.t);
+        let reach = slack * ray.dir.length() * 1.01 + 1e-6 * (1.0 + p.abs().max_element());
+        let near = |b: &Bounds| {
+            (p.cmpge(b.min - Vec3A::splat(reach)) & p.cmple(b.max + Vec3A::splat(reach))).all()
+        };
+        if !self
+            .transparent
+            .iter()
+            .any(|(i, b)| *i != hit.instance && near(b))
+        {
+            return None;
+        }
         let mut found = None;
         self.tlas.closest(&window, |r, i| {
-            let h = match self.hit_instance(i, r) {
-                Some(h) if i != hit.instance as usize => h,
-                _ => return f32::INFINITY,
+            if i == hit.instance as usize || !self.transparent.iter().any(|t| t.0 as usize == i) {
+                return f32::INFINITY;
+            }
+            let Some(h) = self.hit_instance(i, r) else {
+                return f32::INFINITY;
             };
             let m = &self.materials[h.material as usize];
             if m.transparency <= 0.0 {

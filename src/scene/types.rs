@@ -85,9 +85,10 @@ pub struct Scene {
     pub ambient: Vec3A,
     pub tlas: Bvh,
     pub stats: BuildStats,
-    /// Instances that can shade with a transparent material: with fewer than two, no two
-    /// transparent solids can touch, and [`Scene::touching`] is skipped.
-    pub transparent_instances: usize,
+    /// The instances that can shade with a transparent material, with their world bounds: with
+    /// fewer than two, no two transparent solids can touch and [`Scene::touching`] is skipped;
+    /// otherwise it runs only at hits inside another one's bounds.
+    pub transparent: Vec<(u32, Bounds)>,
 }
 
 impl Scene {

@@ -16,12 +16,17 @@
 //! amplitude`, hence `|h| ≤ amplitude`. Sine waves rather than Gerstner waves keep the surface a
 //! true height field over the grid, so vertex `(i, j)` sits exactly at its grid point.
 //!
-//! The generator is reached through the `water` tool, whose file `gr.mesh` then loads:
+//! A scene reaches the generator through `gr.water_mesh` (which writes its output once as a
+//! cached glTF file, `crate::lua` module `generated`), or through the `water` tool, whose file
+//! `gr.mesh` then loads:
 //!
 //! ```lua
-//! -- cargo run --release -p caustic-tools --bin water -- --n 1001 --seed 7 -o meshes/water_1001.obj
+//! pool = gr.water_mesh('water', {n = 1001, seed = 7, size = 2.1, depth = 0.85})
+//! -- or: cargo run --release -p caustic-tools --bin water -- --n 1001 --seed 7 -o meshes/water_1001.obj
 //! water = gr.mesh('water', 'meshes/water_1001.obj')
 //! ```
+//!
+//! [`close_volume`] closes the surface into a watertight body of water (sides and a bottom).
 
 use crate::geometry::mesh::MeshData;
 use glam::{DVec2, Vec2, Vec3};
@@ -198,6 +203,103 @@ pub fn wave_mesh(p: &WaveParams) -> MeshData {
     mesh
 }
 
+/// Closes the surface [`wave_mesh`] made from `p` into a watertight body of water reaching
+/// down to `y = bottom`: four side walls under the grid's edges and a flat bottom.
+///
+/// The side walls and the bottom have their own vertices (with flat outward normals) at exactly
+/// the positions of the grid's edge vertices and of each other, so every edge is shared by two
+/// faces at bit-identical end points: the watertight ray/triangle test then never lets a ray slip
+/// between the surface and a wall. Triangles wind
+/// counter-clockwise seen from outside, so every geometric normal points out of the water.
+///
+/// # Panics
+/// If `bottom` is not below every vertex of the surface (`p.amplitude`).
+pub fn close_volume(mesh: &mut MeshData, p: &WaveParams, bottom: f32) {
+    assert!(
+        bottom < -p.amplitude,
+        "the bottom {bottom} must lie below the waves (amplitude {})",
+        p.amplitude
+    );
+    let n = p.n as usize;
+    // The grid's boundary, counter-clockwise seen from +y, as positions of surface vertices:
+    // found by their grid coordinates, so the sides reuse the surface's exact floats.
+    let by_xz: std::collections::HashMap<(u32, u32), Vec3> = mesh
+        .positions
+        .iter()
+        .map(|v| ((v.x.to_bits(), v.z.to_bits()), *v))
+        .collect();
+    let last = (n - 1) as f64;
+    let coordinate = |k: usize| (p.size as f64 * (k as f64 / last - 0.5)) as f32;
+    let at = |i: usize, j: usize| by_xz[&(coordinate(i).to_bits(), coordinate(j).to_bits())];
+    // Counter-clockwise seen from +y (x right, z towards the viewer): along z = +half (j = n-1)
+    // with x rising, up x = +half with z falling, back along z = -half, down x = -half.
+    let mut ring: Vec<(Vec3, Vec3)> = Vec::with_capacity(4 * (n - 1));
+    for i in 0..n - 1 {
+        ring.push((at(i, n - 1), Vec3::Z));
+    }
+    for j in (1..n).rev() {
+        ring.push((at(n - 1, j), Vec3::X));
+    }
+    for i in (1..n).rev() {
+        ring.push((at(i, 0), Vec3::NEG_Z));
+    }
+    for j in 0..n - 1 {
+        ring.push((at(0, j), Vec3::NEG_X));
+    }
+    let push = |mesh: &mut MeshData, v: Vec3, normal: Vec3| {
+        mesh.positions.push(v);
+        mesh.normals.push(normal);
+        mesh.uvs.push(Vec2::ZERO);
+        (mesh.positions.len() - 1) as u32
+    };
+    let floor = |v: Vec3| Vec3::new(v.x, bottom, v.z);
+    for k in 0..ring.len() {
+        let (a, normal) = ring[k];
+        let b = ring[(k + 1) % ring.len()].0;
+        // One quad per boundary edge, facing `normal` (a corner edge belongs to the side it
+        // starts on).
+        let ta = push(mesh, a, normal);
+        let tb = push(mesh, b, normal);
+        let ba = push(mesh, floor(a), normal);
+        let bb = push(mesh, floor(b), normal);
+        mesh.triangles.push([ta, ba, bb]);
+        mesh.triangles.push([ta, bb, tb]);
+    }
+    // The bottom, in columns between x_i and x_(i+1) reaching from z = -size/2 to +size/2 (long,
+    // thin, disjoint triangles a BVH separates well, unlike a fan around the centre). The two
+    // outer columns also take the side walls' vertices along x = -size/2 and +size/2, as fans.
+    let mut below = std::collections::HashMap::new();
+    let mut b = |mesh: &mut MeshData, i: usize, j: usize| {
+        *below
+            .entry((i, j))
+            .or_insert_with(|| push(mesh, floor(at(i, j)), Vec3::NEG_Y))
+    };
+    let (lo, hi) = (0, n - 1);
+    for i in 0..n - 1 {
+        let (p, q) = (b(mesh, i + 1, lo), b(mesh, i + 1, hi));
+        if i == 0 && n > 2 {
+            for j in 0..n - 1 {
+                let (l0, l1) = (b(mesh, 0, j), b(mesh, 0, j + 1));
+                mesh.triangles.push([p, l1, l0]);
+            }
+            let top = b(mesh, 0, hi);
+            mesh.triangles.push([p, q, top]);
+        } else if i == n - 2 && n > 2 {
+            let (p, q) = (b(mesh, i, lo), b(mesh, i, hi));
+            for j in 0..n - 1 {
+                let (r0, r1) = (b(mesh, n - 1, j), b(mesh, n - 1, j + 1));
+                mesh.triangles.push([p, r0, r1]);
+            }
+            let top = b(mesh, n - 1, hi);
+            mesh.triangles.push([p, top, q]);
+        } else {
+            let (a, d) = (b(mesh, i, lo), b(mesh, i, hi));
+            mesh.triangles.push([a, p, d]);
+            mesh.triangles.push([p, q, d]);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -228,5 +330,48 @@ mod tests {
         let xz: Vec<[f32; 2]> = mesh.positions.iter().map(|p| [p.x, p.z]).collect();
         assert_eq!(xz, [[-5.0, -5.0], [-5.0, 5.0], [5.0, -5.0], [5.0, 5.0]]);
         assert_eq!(mesh.uvs, [Vec2::ZERO, Vec2::Y, Vec2::X, Vec2::ONE]);
+    }
+
+    #[test]
+    fn a_closed_volume_is_watertight_with_outward_faces_and_the_expected_volume() {
+        for n in [2, 3, 17] {
+            let p = WaveParams {
+                n,
+                size: 2.0,
+                amplitude: 0.05,
+                ..Default::default()
+            };
+            let mut mesh = wave_mesh(&p);
+            close_volume(&mut mesh, &p, -0.8);
+            // Every directed edge, by exact positions, has its reverse exactly once: a closed,
+            // consistently oriented 2-manifold.
+            let key = |v: Vec3| v.to_array().map(f32::to_bits);
+            let mut edges = std::collections::HashMap::new();
+            for t in &mesh.triangles {
+                for k in 0..3 {
+                    let (a, b) = (
+                        mesh.positions[t[k] as usize],
+                        mesh.positions[t[(k + 1) % 3] as usize],
+                    );
+                    *edges.entry((key(a), key(b))).or_insert(0) += 1;
+                }
+            }
+            for (&(a, b), &count) in &edges {
+                assert_eq!(count, 1, "edge used {count} times in one direction");
+                assert_eq!(edges.get(&(b, a)), Some(&1), "edge without its twin");
+            }
+            // Divergence theorem: V = Σ (a · (b × c)) / 6, positive for outward faces; the waves add
+            // at most amplitude · size² to the slab's 0.8 · 4.
+            let volume: f64 = mesh
+                .triangles
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+                    a.dot(b.cross(c)) / 6.0
+                })
+                .sum();
+            assert!((volume - 3.2).abs() <= 0.05 * 4.0, "volume {volume}");
+            assert_eq!(mesh.normals.len(), mesh.positions.len());
+        }
     }
 }

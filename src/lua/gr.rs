@@ -61,6 +61,7 @@ const GR: &[(&str, Call, GrFn)] = &[
     ("nh_sphere", Call::Function, gr_nh_sphere),
     ("nh_box", Call::Function, gr_nh_box),
     ("mesh", Call::Function, gr_mesh),
+    ("water_mesh", Call::Function, gr_water_mesh),
     ("union", Call::Function, |l, s, a| {
         gr_csg(l, s, a, CsgOp::Union)
     }),
@@ -176,8 +177,15 @@ fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     new_node(lua, s, a, name, NodeKind::Mesh(id))
 }
 
+/// `gr.water_mesh(name, {params})`: a generated, cached wave surface (`super::generated`).
+fn gr_water_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let name = a.string(1)?;
+    let id = super::generated::water_mesh(s, a)?;
+    new_node(lua, s, a, name, NodeKind::Mesh(id))
+}
+
 /// Resolves a mesh file and checks its format; the file is read when a scene is built.
-fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> {
+pub(super) fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> {
     let Some(path) = s.resolve_input(given) else {
         return Err(a.fault(Fault::NotFound, s.not_found("mesh file", given)));
     };

@@ -5,6 +5,7 @@
 //! there). The layer has three parts:
 //! - `sandbox.rs`: the Lua state and its standard library;
 //! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
+//! - `generated.rs`: meshes a script generates (`gr.water_mesh`), cached as files;
 //! - [`args`]: argument checks with lauxlib's messages and the calling script line.
 //!
 //! This module owns what a run shares: the description being filled, path resolution and
@@ -22,6 +23,7 @@
 //! ```
 
 pub mod args;
+mod generated;
 mod gr;
 mod sandbox;
 

@@ -5,7 +5,7 @@
 //! cargo run --release -p caustic-tools --bin water -- --n 1001 --seed 7 -o meshes/water_1001.obj
 //! ```
 
-use caustic::geometry::water::{MAX_N, WaveParams, wave_mesh};
+use caustic::geometry::water::{MAX_N, WaveParams, close_volume, wave_mesh};
 use caustic::io::{gltf, obj};
 use clap::Parser;
 use std::path::PathBuf;
@@ -36,6 +36,10 @@ struct Cli {
     /// Largest angle in radians between a component's direction and +x.
     #[arg(long, default_value_t = 0.6)]
     spread: f32,
+    /// Close the surface into a body of water this deep below y = 0 (sides and a flat bottom,
+    /// as `gr.water_mesh`'s `depth`); by default the surface stays open.
+    #[arg(long)]
+    depth: Option<f32>,
     /// Output file: .obj, .gltf (with a .bin beside it) or .glb.
     #[arg(short, long)]
     output: PathBuf,
@@ -43,7 +47,13 @@ struct Cli {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let numbers = [cli.size, cli.amplitude, cli.wavelength, cli.spread];
+    let numbers = [
+        cli.size,
+        cli.amplitude,
+        cli.wavelength,
+        cli.spread,
+        cli.depth.unwrap_or(1.0),
+    ];
     if numbers.iter().any(|x| !x.is_finite()) || cli.size <= 0.0 || cli.wavelength <= 0.0 {
         eprintln!("water: size and wavelength must be positive, all numbers finite");
         return ExitCode::FAILURE;
@@ -72,7 +82,14 @@ fn main() -> ExitCode {
         }
     };
     let start = Instant::now();
-    let mesh = wave_mesh(&params);
+    let mut mesh = wave_mesh(&params);
+    if let Some(depth) = cli.depth {
+        if depth <= cli.amplitude {
+            eprintln!("water: --depth must exceed --amplitude (the bottom lies below the waves)");
+            return ExitCode::FAILURE;
+        }
+        close_volume(&mut mesh, &params, -depth);
+    }
     let generated = start.elapsed();
     let folder = cli.output.parent().filter(|p| !p.as_os_str().is_empty());
     let written = folder

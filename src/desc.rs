@@ -225,6 +225,9 @@ pub struct RenderDesc {
     pub ambient: Vec3,
     pub lights: Vec<LightId>,
     pub loc: Loc,
+    /// The `caustic render` flags `gr.settings` had set when this image was asked for, in
+    /// order (`["--gather-rays", "4"]`): the defaults the command line's own flags override.
+    pub settings: Vec<String>,
 }
 
 /// Everything a script has described so far.
@@ -240,6 +243,9 @@ pub struct SceneDesc {
     pub warnings: Vec<String>,
     /// `--missing-textures=warn`: unreadable images fall back to `kd` with a warning.
     pub missing_textures_warn: bool,
+    /// What `gr.settings` has set so far: a setting's name and its flag tokens, in the order
+    /// first set.
+    pub settings: Vec<(String, Vec<String>)>,
 }
 
 impl SceneDesc {

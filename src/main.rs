@@ -1,11 +1,10 @@
 //! The `caustic` command: parses the command line and reports errors; the work is in the library.
 
-use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     caustic::mem::return_big_blocks();
-    let cli = caustic::cli::Cli::parse();
+    let cli = caustic::cli::Cli::from_env();
     match caustic::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

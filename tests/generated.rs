@@ -1,11 +1,12 @@
-//! Meshes a scene makes for itself: `gr.water_mesh` (a wave surface or a closed body of water,
-//! generated once into a cache as glTF).
+//! Meshes and settings a scene makes for itself: `gr.water_mesh` (a wave surface or a closed body
+//! of water, generated once into a cache as glTF) and `gr.settings` (the scene's own defaults
+//! for `caustic render`'s quality flags, under the command line's).
 
 mod common;
 
 use caustic::desc::MeshSource;
 use caustic::geometry::water::{WaveParams, close_volume, wave_mesh};
-use common::{out_dir, run_lua_in};
+use common::{caustic, out_dir, run_lua_in};
 use std::path::{Path, PathBuf};
 
 /// Returns the file the script's only mesh resolved to.
@@ -89,4 +90,109 @@ fn water_mesh_rejects_bad_tables_naming_the_key() {
         );
     }
     assert!(!dir.join(".cache").exists(), "no file for a rejected table");
+}
+
+/// A small scene whose look depends on the settings `gr.settings` may set.
+const SCENE: &str = "
+white = gr.material({0.7, 0.7, 0.7}, {0, 0, 0}, 0)
+floor = gr.cube('floor'); floor:set_material(white); floor:scale(4, 0.1, 4); floor:translate(-2, -1.1, -2)
+ball = gr.nh_sphere('ball', {0, -0.5, 0}, 0.5); ball:set_material(white)
+root = gr.node('root'); root:add_child(floor); root:add_child(ball)
+SETTINGS
+gr.render(root, 'out.png', 24, 16, {0, 0.5, 3}, {0, -0.3, -1}, {0, 1, 0}, 50, {0, 0, 0},
+          {gr.area_light({0, 1.5, 0}, {2, 2, 2}, {0, 0, 1}, 1, nil, {0.5, 0, 0}, {0, 0, 0.5})})
+";
+
+/// Renders [`SCENE`] with `settings` in place of `SETTINGS` and `flags`, returning the PNG bytes.
+fn render(dir: &Path, name: &str, settings: &str, flags: &[&str]) -> Vec<u8> {
+    let script = dir.join(format!("{name}.lua"));
+    std::fs::write(&script, SCENE.replace("SETTINGS", settings)).unwrap();
+    let png = dir.join(format!("{name}.png"));
+    let out = caustic()
+        .arg("render")
+        .arg(&script)
+        .args(["-q", "--photons", "2000", "--caustic-photons", "2000", "-o"])
+        .arg(&png)
+        .args(flags)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::read(&png).unwrap()
+}
+
+#[test]
+fn scene_settings_are_defaults_the_command_line_overrides() {
+    let dir = out_dir("scene-settings");
+    let by_flags = render(&dir, "flags", "", &["--spp", "1", "--gather-rays", "2"]);
+    let by_scene = render(&dir, "scene", "gr.settings{spp = 1, gather_rays = 2}", &[]);
+    assert_eq!(
+        by_scene, by_flags,
+        "the scene's settings act as the flags do"
+    );
+    // The command line wins over the scene, flag by flag.
+    let plain = render(&dir, "plain", "", &["--gather-rays", "2"]);
+    let overridden = render(
+        &dir,
+        "overridden",
+        "gr.settings{spp = 1, gather_rays = 2}",
+        &["--spp", "4"],
+    );
+    assert_eq!(
+        overridden, plain,
+        "--spp 4 on the command line beats spp = 1"
+    );
+    assert_ne!(
+        by_flags, plain,
+        "spp 1 and 4 differ, so the comparisons can fail"
+    );
+    // Switches: adaptive = true is --adaptive; false leaves it off.
+    let adaptive = render(&dir, "adaptive", "gr.settings{adaptive = true}", &[]);
+    assert_eq!(adaptive, render(&dir, "adaptive-flag", "", &["--adaptive"]));
+    let off = render(&dir, "not-adaptive", "gr.settings{adaptive = false}", &[]);
+    assert_eq!(off, render(&dir, "default", "", &[]));
+}
+
+#[test]
+fn bad_scene_settings_are_errors_naming_the_setting() {
+    let dir = out_dir("scene-settings-errors");
+    let cases = [
+        (
+            "gr.settings{sp = 1}",
+            "test.lua:1: bad argument #1 to 'settings' (unknown setting 'sp' (the settings are spp, adaptive",
+        ),
+        ("gr.settings{threads = 2}", "unknown setting 'threads'"),
+        (
+            "gr.settings{adaptive = 1}",
+            "'adaptive' is a switch: true or false, got number",
+        ),
+        (
+            "gr.settings{spp = {}}",
+            "'spp' must be a finite number or a string, got table",
+        ),
+        ("gr.settings(3)", "table expected, got number"),
+    ];
+    for (src, want) in cases {
+        let e = run_lua_in(src, &dir).unwrap_err().to_string();
+        assert!(e.contains(want), "{src}: {e}");
+    }
+    // A value the flag's own check refuses is reported at the gr.render line, naming the flag.
+    let script = dir.join("bad.lua");
+    std::fs::write(&script, SCENE.replace("SETTINGS", "gr.settings{spp = 0}")).unwrap();
+    let out = caustic()
+        .arg("render")
+        .arg(&script)
+        .args(["-q", "-o"])
+        .arg(dir.join("bad.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("bad.lua:7: gr.settings: --spp must be in [1, 65536], got 0"),
+        "{stderr}"
+    );
 }

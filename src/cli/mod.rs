@@ -123,6 +123,11 @@ pub struct PhotonsArgs {
 pub struct RenderArgs {
     /// The Lua scene script.
     pub scene: PathBuf,
+    /// The words after `render` on the command line as typed, so a scene's `gr.settings` can
+    /// be applied under them ([`Cli::from_env`] fills it; empty, the scene's settings apply
+    /// alone over these arguments' other values).
+    #[arg(skip)]
+    pub argv: Vec<std::ffi::OsString>,
     /// Write the image here instead of the script's file name (scripts that render one image).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
@@ -325,6 +330,64 @@ pub struct InfoArgs {
     pub scene: PathBuf,
 }
 
+impl Cli {
+    /// Parses the process's command line (exiting with clap's message on a bad one), keeping the
+    /// words of `caustic render` for [`RenderArgs::argv`].
+    pub fn from_env() -> Cli {
+        let mut cli = Cli::parse();
+        if let Command::Render(a) = &mut cli.command {
+            a.argv = std::env::args_os().skip(2).collect();
+        }
+        cli
+    }
+}
+
+/// One `caustic render` command line without the binary's name, as `caustic study`'s settings
+/// and a scene's `gr.settings` are parsed; a flag given twice takes its last value.
+#[derive(Debug, Parser)]
+#[command(
+    name = "caustic render",
+    no_binary_name = true,
+    args_override_self = true
+)]
+pub(crate) struct RenderLine {
+    #[command(flatten)]
+    pub render: RenderArgs,
+}
+
+/// Returns the job of one `gr.render` call when the scene's `gr.settings` (`r.settings`) change
+/// `job`: them under the command line's words `argv` (or, without those, under `scene` alone).
+fn job_with_settings(
+    job: &RenderJob,
+    argv: &[std::ffi::OsString],
+    scene: &std::path::Path,
+    r: &RenderDesc,
+) -> Result<Option<RenderJob>> {
+    if r.settings.is_empty() {
+        return Ok(None);
+    }
+    let mut line: Vec<std::ffi::OsString> = r.settings.iter().map(Into::into).collect();
+    if argv.is_empty() {
+        line.push(scene.into());
+    } else {
+        line.extend(argv.iter().cloned());
+    }
+    let parsed = RenderLine::try_parse_from(&line).map_err(|e| {
+        let text = e.to_string();
+        let first = text
+            .lines()
+            .next()
+            .unwrap_or("bad setting")
+            .trim_start_matches("error: ");
+        Error::at(&r.loc, format!("gr.settings: {first}"))
+    })?;
+    let mut with = RenderJob::from_args(&parsed.render)
+        .map_err(|e| Error::at(&r.loc, format!("gr.settings: {e}")))?;
+    // Counts the scene sets still follow the image; only the command line fixes them.
+    with.settings.photons.follow_image = job.settings.photons.follow_image;
+    Ok(Some(with))
+}
+
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
@@ -375,6 +438,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let count = Rc::clone(&rendered);
     let output = args.output.clone();
     let job = RenderJob::from_args(&args)?;
+    let (argv, scene) = (args.argv.clone(), args.scene.clone());
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
         count.set(count.get() + 1);
         let out = match &output {
@@ -387,7 +451,10 @@ fn render_command(args: RenderArgs) -> Result<()> {
                 ));
             }
         };
-        render_one(desc, r, &job, &out)
+        match job_with_settings(&job, &argv, &scene, r)? {
+            Some(own) => render_one(desc, r, &own, &out),
+            None => render_one(desc, r, &job, &out),
+        }
     });
     let options = ScriptOptions {
         missing_textures_warn: args.missing_textures == MissingTextures::Warn,

@@ -3,14 +3,14 @@
 //! ([`crate::study`]). Each setting is a list of `caustic render` flags, parsed and checked as
 //! `caustic render` parses them, so a study renders exactly what the same command line would.
 
-use super::RenderArgs;
+use super::RenderLine;
 use super::settings::RenderJob;
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::metrics::{Image, Metrics, Region, pair_block_bias};
 use crate::progress::NoProgress;
 use crate::study::{Curve, MAX_SEEDS, Row, Sweep, grid, summarise};
-use clap::{Args, Parser};
+use clap::{Args, Parser as _};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -51,14 +51,6 @@ pub struct StudyArgs {
     /// The folder to write study.csv, study.md, study.png and the images to.
     #[arg(short, long, value_name = "DIR", default_value = "study")]
     pub output: PathBuf,
-}
-
-/// Parses one setting's `caustic render` command line.
-#[derive(Debug, Parser)]
-#[command(name = "caustic render", no_binary_name = true)]
-struct RenderLine {
-    #[command(flatten)]
-    render: RenderArgs,
 }
 
 /// Runs `caustic study`.

@@ -75,6 +75,9 @@ const GR: &[(&str, Call, GrFn)] = &[
     ("light", Call::Function, gr_light),
     ("area_light", Call::Function, gr_area_light),
     ("sphere_light", Call::Function, gr_sphere_light),
+    ("settings", Call::Function, |_, s, a| {
+        super::settings::settings(s, a).map(|()| Value::Nil)
+    }),
     ("render", Call::Function, gr_render),
     ("add_child", Call::Method, gr_add_child),
     ("set_material", Call::Method, gr_set_material),
@@ -449,6 +452,12 @@ fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         ambient,
         lights,
         loc: a.loc.clone(),
+        settings: s
+            .desc
+            .settings
+            .iter()
+            .flat_map(|(_, tokens)| tokens.iter().cloned())
+            .collect(),
     };
     s.desc.renders.push(render.clone());
     let State { desc, hook, .. } = s;

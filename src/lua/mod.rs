@@ -6,6 +6,7 @@
 //! - `sandbox.rs`: the Lua state and its standard library;
 //! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
 //! - `generated.rs`: meshes a script generates (`gr.water_mesh`), cached as files;
+//! - [`settings`]: a scene's own render settings (`gr.settings`);
 //! - [`args`]: argument checks with lauxlib's messages and the calling script line.
 //!
 //! This module owns what a run shares: the description being filled, path resolution and
@@ -26,6 +27,7 @@ pub mod args;
 mod generated;
 mod gr;
 mod sandbox;
+pub mod settings;
 
 use crate::desc::{MeshId, RenderDesc, SceneDesc};
 use crate::error::{Error, Loc, Result};

@@ -59,6 +59,12 @@ use std::time::{Duration, Instant};
 /// see the global map directly. Surfaces seen through a glass ball are at depth 2.
 pub const MAX_GATHER_DEPTH: u32 = 3;
 
+/// Least weight an eye path must carry for its diffuse hits to be final-gathered; weaker paths
+/// (a Fresnel reflection off water or glass, about 2–10% of the pixel) read the global map
+/// directly, as Jensen's renderer does for rays of low importance: its blotches, scaled by
+/// that weight, stay below the noise, and the gather rays go where the pixel's light comes from.
+pub const GATHER_MIN_WEIGHT: f32 = 0.1;
+
 /// Most specular bounces a final-gather ray follows before it reads the map where it is (a
 /// glass ball under water is four interfaces deep).
 pub const MAX_GATHER_SPECULAR: u32 = 8;
@@ -479,7 +485,9 @@ impl Gi {
         let ng = bsdf.ng;
         let mut e = self.caustic_at(p, ng, counts);
         match self.settings.indirect {
-            Indirect::Gather { rays } if state.depth <= MAX_GATHER_DEPTH => {
+            Indirect::Gather { rays }
+                if state.depth <= MAX_GATHER_DEPTH && state.weight >= GATHER_MIN_WEIGHT =>
+            {
                 let mut sum = Vec3A::ZERO;
                 for u in stratified_2d(rng, rays) {
                     let Some(d) = bsdf.sample_diffuse(u) else {

@@ -1,9 +1,7 @@
-//! Every scene in `scenes/` runs and renders; big generated meshes are replaced by small ones
-//! made here, at the path the scene expects.
+//! Every scene in `scenes/` runs and renders (generated meshes from the shared test cache).
 
 mod common;
 
-use caustic::geometry::water::{WaveParams, wave_mesh};
 use common::{caustic, out_dir};
 use std::path::Path;
 
@@ -11,16 +9,15 @@ use std::path::Path;
 fn every_scene_in_scenes_renders() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let tree = out_dir("scenes");
-    std::fs::create_dir_all(tree.join("scenes")).unwrap();
-    std::fs::create_dir_all(tree.join("meshes")).unwrap();
-    // The showcase's 2M-triangle water surface, at 65×65 vertices for the test.
-    let mesh = wave_mesh(&WaveParams {
-        n: 65,
-        size: 2.0,
-        seed: 7,
-        ..WaveParams::default()
-    });
-    caustic::io::gltf::write_gltf(&mesh, &tree.join("meshes/water_1001.glb")).unwrap();
+    std::fs::create_dir_all(tree.join("scenes/textures")).unwrap();
+    for entry in std::fs::read_dir(root.join("scenes/textures")).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(
+            &path,
+            tree.join("scenes/textures").join(path.file_name().unwrap()),
+        )
+        .unwrap();
+    }
     let mut count = 0;
     for entry in std::fs::read_dir(root.join("scenes")).unwrap() {
         let path = entry.unwrap().path();
@@ -32,6 +29,7 @@ fn every_scene_in_scenes_renders() {
         let png = tree.join(format!("{}.png", name.to_string_lossy()));
         let out = caustic()
             .current_dir(&tree)
+            .env("CAUSTIC_CACHE", common::mesh_cache())
             .arg("render")
             .arg(Path::new("scenes").join(name))
             .args(["--scale", "0.1", "-q", "-o"])

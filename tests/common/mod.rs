@@ -55,6 +55,12 @@ pub fn out_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// Returns the folder tests share for `gr.water_mesh`'s generated meshes (`CAUSTIC_CACHE`): kept
+/// between runs, so the final scene's 2M-triangle water is generated once per checkout.
+pub fn mesh_cache() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-mesh-cache")
+}
+
 /// Returns a command running the built `caustic` binary.
 pub fn caustic() -> Command {
     Command::new(env!("CARGO_BIN_EXE_caustic"))

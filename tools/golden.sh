@@ -12,7 +12,6 @@
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin=${BIN:-$root/target/release/caustic}
-water=${WATER:-$root/target/release/water}
 corpus=$root/../shared/corpus/cs488
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -33,11 +32,12 @@ one() {
 
 small=(--scale 0.125 --photon-scale 0.05)
 
-# The project's own scenes, with the showcase mesh replaced by a small one at the same path.
+# The project's own scenes (with their textures; generated meshes in a cache that persists).
 tree=$work/tree
-mkdir -p "$tree/scenes" "$tree/meshes"
+mkdir -p "$tree/scenes"
 cp "$root"/scenes/*.lua "$tree/scenes/"
-"$water" --n 65 --seed 7 -o "$tree/meshes/water_1001.glb" >/dev/null 2>&1
+cp -r "$root"/scenes/textures "$tree/scenes/"
+export CAUSTIC_CACHE=${CAUSTIC_CACHE:-$root/target/golden-mesh-cache}
 for s in "$tree"/scenes/*.lua; do
   n=$(basename "$s" .lua)
   one "scenes/$n" "$tree" render "scenes/$n.lua" "${small[@]}" -o "$work/$n.png"

@@ -139,6 +139,51 @@ impl Cone {
         }
     }
 
+    /// Returns the narrowest cone around `target` seen from `origin`: around its bounding
+    /// sphere, or around the eight corners of its world box when that is narrower (a flat,
+    /// wide water surface under a lamp, whose sphere is as wide as the box is long and takes
+    /// in the walls above the water).
+    fn around(origin: Vec3A, target: &Target) -> Cone {
+        let sphere = Cone::towards(origin, target.centre, target.radius);
+        let b = &target.bounds;
+        let mid = (b.min + b.max) * 0.5;
+        let to = mid - origin;
+        let d = to.length();
+        let inside = (origin.cmpge(b.min) & origin.cmple(b.max)).all();
+        if inside || !d.is_finite() || d == 0.0 {
+            return sphere;
+        }
+        let axis = to / d;
+        let mut cos_max = 1.0f32;
+        for k in 0..8 {
+            let corner = Vec3A::new(
+                if k & 1 == 0 { b.min.x } else { b.max.x },
+                if k & 2 == 0 { b.min.y } else { b.max.y },
+                if k & 4 == 0 { b.min.z } else { b.max.z },
+            );
+            let Some(dir) = (corner - origin).try_normalize() else {
+                return sphere;
+            };
+            cos_max = cos_max.min(dir.dot(axis));
+        }
+        // A cone is convex only below 90 degrees: holding the corners then means holding the
+        // box. Shrink the cosine by a hair for rounding, as the spheres are grown.
+        let cos_max = cos_max - 1e-5;
+        if cos_max <= 0.0 {
+            return sphere;
+        }
+        let boxed = Cone {
+            axis,
+            cos_max,
+            solid_angle: TAU * (1.0 - cos_max),
+        };
+        if boxed.solid_angle < sphere.solid_angle {
+            boxed
+        } else {
+            sphere
+        }
+    }
+
     fn contains(&self, dir: Vec3A) -> bool {
         dir.dot(self.axis) >= self.cos_max
     }
@@ -153,13 +198,22 @@ impl Cone {
     }
 }
 
-/// Returns the bounding spheres (centre, radius) of every instance that can scatter specularly.
+/// An instance that can scatter specularly, as caustic photons aim at it: a bounding sphere and
+/// its world box (from each emission point the narrower cone is used, [`Cone::around`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Target {
+    pub centre: Vec3A,
+    pub radius: f32,
+    pub bounds: crate::accel::Bounds,
+}
+
+/// Returns every instance that can scatter specularly, with its bounding sphere and box.
 ///
-/// Each is the smaller of the sphere around the instance's world box and, for an analytic
+/// Each sphere is the smaller of the sphere around the instance's world box and, for an analytic
 /// primitive, its own bounding sphere carried into the world: for a sphere that is the sphere
 /// itself, where the box's sphere is √3 times wider and would waste two thirds of the caustic
 /// photons aimed at it (the share that meets it first is in `--stats`).
-pub fn specular_targets(scene: &Scene) -> Vec<(Vec3A, f32)> {
+pub fn specular_targets(scene: &Scene) -> Vec<Target> {
     use crate::geometry::Analytic;
     use crate::scene::types::Shape;
     scene
@@ -190,7 +244,16 @@ pub fn specular_targets(scene: &Scene) -> Vec<(Vec3A, f32)> {
                 })
                 .filter(|own| own.1 < boxed.1)
                 .unwrap_or(boxed);
-            (centre, radius * 1.001 + 1e-6)
+            let grow =
+                Vec3A::splat(1e-4 * (inst.bounds.max - inst.bounds.min).max_element() + 1e-6);
+            Target {
+                centre,
+                radius: radius * 1.001 + 1e-6,
+                bounds: crate::accel::Bounds {
+                    min: inst.bounds.min - grow,
+                    max: inst.bounds.max + grow,
+                },
+            }
         })
         .collect()
 }
@@ -284,7 +347,7 @@ fn trace_one(
     light: &Light,
     n: u64,
     kind: MapKind,
-    targets: &[(Vec3A, f32)],
+    targets: &[Target],
     rng: &mut Rng,
     out: &mut Vec<Photon>,
 ) -> FirstHit {
@@ -299,10 +362,7 @@ fn trace_one(
         MapKind::Global => (e.dir, light.flux() / n as f32),
         MapKind::Caustic => {
             // Aim at one specular object's cone, chosen by solid angle; weight by 1 / density.
-            let cones: Vec<Cone> = targets
-                .iter()
-                .map(|&(c, r)| Cone::towards(e.origin, c, r))
-                .collect();
+            let cones: Vec<Cone> = targets.iter().map(|t| Cone::around(e.origin, t)).collect();
             let total: f32 = cones.iter().map(|c| c.solid_angle).sum();
             let mut pick = rng.next_f32() * total;
             let cone = cones

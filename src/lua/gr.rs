@@ -473,23 +473,25 @@ fn gr_set_material(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     Ok(Value::Nil)
 }
 
-fn pre_multiply(s: &mut State, a: &Args, t: DAffine3) -> mlua::Result<Value> {
+/// Composes the transform `t` of one `translate`, `scale` or `rotate` call into node 1's matrix,
+/// in the script's dialect: the one place call order becomes a matrix.
+fn compose(s: &mut State, a: &Args, t: DAffine3) -> mlua::Result<Value> {
     let node = a.node(1)?;
     let m = &mut s.desc.nodes[node.0 as usize].transform;
-    *m = t * *m;
+    *m = s.dialect.compose(*m, t);
     Ok(Value::Nil)
 }
 
 fn gr_translate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     a.node(1)?;
     let t = DAffine3::from_translation(a.dvec3_at(2)?);
-    pre_multiply(s, a, t)
+    compose(s, a, t)
 }
 
 fn gr_scale(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     a.node(1)?;
     let t = DAffine3::from_scale(a.dvec3_at(2)?);
-    pre_multiply(s, a, t)
+    compose(s, a, t)
 }
 
 fn gr_rotate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
@@ -505,7 +507,7 @@ fn gr_rotate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         "z" => DAffine3::from_rotation_z(angle),
         _ => return Err(a.bad(2, "Axis must be x, y or z")),
     };
-    pre_multiply(s, a, t)
+    compose(s, a, t)
 }
 
 impl UserData for NodeRef {

@@ -5,7 +5,8 @@
 //! there). The layer has three parts:
 //! - `sandbox.rs`: the Lua state and its standard library;
 //! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
-//! - [`args`]: argument checks with lauxlib's messages and the calling script line.
+//! - [`args`]: argument checks with lauxlib's messages and the calling script line;
+//! - `legacy/`: the course's legacy API ([`Dialect`], `--dialect`).
 //!
 //! This module owns what a run shares: the description being filled, path resolution and
 //! warnings. Paths (meshes, textures, output images) resolve against the working directory
@@ -23,7 +24,10 @@
 
 pub mod args;
 mod gr;
+mod legacy;
 mod sandbox;
+
+pub use legacy::Dialect;
 
 use crate::desc::{MeshId, RenderDesc, SceneDesc};
 use crate::error::{Error, Loc, Result};
@@ -46,6 +50,9 @@ pub struct ScriptOptions {
     pub missing_textures_warn: bool,
     /// Most bytes the script's Lua state may hold; `None` for [`sandbox::MAX_LUA_MEMORY`].
     pub memory_limit: Option<usize>,
+    /// `--dialect`: how transforms compose; `None` (no `--dialect`) reads the script the modern
+    /// way.
+    pub dialect: Option<Dialect>,
 }
 
 /// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
@@ -91,6 +98,7 @@ pub fn run_source_with(
         script_dir: script_dir.to_path_buf(),
         hook,
         mesh_cache: HashMap::new(),
+        dialect: options.dialect.unwrap_or_default(),
     }));
     let limit = options.memory_limit.unwrap_or(sandbox::MAX_LUA_MEMORY);
     let (lua, lines) = sandbox::new_lua(limit).map_err(convert_error)?;
@@ -127,6 +135,8 @@ struct State {
     mesh_cache: HashMap<PathBuf, MeshId>,
     /// Missing images already warned about (`--missing-textures=warn`).
     warned_images: HashSet<String>,
+    /// How transforms compose.
+    dialect: Dialect,
 }
 
 impl State {

@@ -318,3 +318,79 @@ pub fn run_ok(cmd: &mut Command) -> std::process::Output {
     );
     out
 }
+
+/// Returns a transform call statement's variable (`n` of `n:rotate('y', 30)`), or `None` for any
+/// other statement.
+fn transform_call(statement: &str) -> Option<&str> {
+    let (var, call) = statement.split_once(':')?;
+    let is_name = !var.is_empty()
+        && var
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_.[]".contains(c));
+    let is_call = ["translate(", "rotate(", "scale("]
+        .iter()
+        .any(|f| call.starts_with(f))
+        && call.ends_with(')');
+    (is_name && is_call).then_some(var)
+}
+
+/// Returns `src` with every node's transform calls in the reverse order, and how many runs it
+/// reversed: each run of consecutive `v:translate`, `v:rotate` or `v:scale` statements on one
+/// variable (one a line, or several separated by `;`, across lines) is reversed in place. This
+/// is how the two eras' copies of the course's hier.lua and macho-cows.lua differ: one read in
+/// the other's order renders the other's image. Lines holding no reversed call stay as they are.
+pub fn reverse_transform_calls(src: &str) -> (String, usize) {
+    let lines: Vec<&str> = src.lines().collect();
+    let mut statements: Vec<Vec<String>> = lines
+        .iter()
+        .map(|l| match l.trim() {
+            t if t.starts_with("--") => Vec::new(),
+            t => t
+                .split(';')
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(String::from)
+                .collect(),
+        })
+        .collect();
+    let slots: Vec<(usize, usize)> = statements
+        .iter()
+        .enumerate()
+        .flat_map(|(i, s)| (0..s.len()).map(move |j| (i, j)))
+        .collect();
+    let original = statements.clone();
+    let var_at = |k: usize| transform_call(&original[slots[k].0][slots[k].1]);
+    let (mut k, mut runs) = (0, 0);
+    while k < slots.len() {
+        let Some(var) = var_at(k) else {
+            k += 1;
+            continue;
+        };
+        let mut end = k;
+        while end + 1 < slots.len() && var_at(end + 1) == Some(var) {
+            end += 1;
+        }
+        if end > k {
+            runs += 1;
+            for (slot, from) in (k..=end).zip((k..=end).rev()) {
+                let (i, j) = slots[slot];
+                let (fi, fj) = slots[from];
+                statements[i][j] = original[fi][fj].clone();
+            }
+        }
+        k = end + 1;
+    }
+    let out: Vec<String> = lines
+        .iter()
+        .zip(statements.iter().zip(&original))
+        .map(|(line, (new, old))| {
+            if new == old {
+                line.to_string()
+            } else {
+                let indent = &line[..line.len() - line.trim_start().len()];
+                format!("{indent}{}", new.join("; "))
+            }
+        })
+        .collect();
+    (out.join("\n") + "\n", runs)
+}

@@ -1,0 +1,178 @@
+//! Scripts written for the course's legacy API (before Fall 2015) render correctly with
+//! `--dialect legacy`: node transforms post-multiply, so a legacy copy of a scene (each node's
+//! calls in the reverse order) renders, value for value, the image of its modern copy.
+
+mod common;
+
+use caustic::desc::{NodeId, SceneDesc};
+use caustic::lua::{Dialect, ScriptOptions, run_source_with};
+use common::{caustic, out_dir, reverse_transform_calls, run_ok};
+use glam::{DAffine3, DVec3};
+use std::path::Path;
+
+/// Runs script text named `test.lua` in `dialect` (paths resolve in `dir`) without rendering.
+fn run_in(src: &str, dir: &Path, dialect: Option<Dialect>) -> Result<SceneDesc, caustic::Error> {
+    let options = ScriptOptions {
+        dialect,
+        ..ScriptOptions::default()
+    };
+    run_source_with(
+        src.as_bytes(),
+        "test.lua",
+        dir,
+        Box::new(|_, _| Ok(())),
+        options,
+    )
+}
+
+#[test]
+fn legacy_dialect_post_multiplies_each_nodes_transforms() {
+    let src = "n = gr.node('n'); n:translate(1, 2, 3); n:rotate('z', 90); n:scale(2, 2, 2)";
+    let t = DAffine3::from_translation(DVec3::new(1.0, 2.0, 3.0));
+    let r = DAffine3::from_rotation_z(90f64.to_radians());
+    let s = DAffine3::from_scale(DVec3::splat(2.0));
+    let cases = [
+        (Some(Dialect::Legacy), t * r * s, DVec3::new(1.0, 4.0, 3.0)),
+        (Some(Dialect::Modern), s * r * t, DVec3::new(-4.0, 4.0, 6.0)),
+        (None, s * r * t, DVec3::new(-4.0, 4.0, 6.0)),
+    ];
+    for (dialect, expected, x_lands_at) in cases {
+        let desc = run_in(src, Path::new("."), dialect).unwrap();
+        let m = desc.node(NodeId(0)).transform;
+        assert!(m.abs_diff_eq(expected, 1e-12), "{dialect:?}: {m:?}");
+        // Legacy: scaled, rotated, then moved; modern: moved, rotated, then scaled.
+        let p = m.transform_point3(DVec3::X);
+        assert!(p.abs_diff_eq(x_lands_at, 1e-12), "{dialect:?}: {p}");
+    }
+}
+
+/// A legacy script of two parts for the Mitsuba subset (diffuse, physical falloff), and its modern
+/// copy (each node's calls reversed).
+const TWO_PARTS: &str = "white = gr.material({0.7, 0.7, 0.7}, {0, 0, 0}, 0)
+root = gr.node('root')
+c = gr.cube('c'); c:set_material(white); root:add_child(c)
+c:translate(1, 0, 0); c:rotate('y', 30); c:scale(2, 1, 1)
+s = gr.sphere('s'); s:set_material(white); root:add_child(s)
+s:translate(-1, 0.5, 0); s:scale(0.5, 0.5, 0.5)
+gr.render(root, 'two.png', 16, 16, {0, 0, 8}, {0, 0, -1}, {0, 1, 0}, 50, {0.2, 0.2, 0.2},
+          {gr.light({0, 5, 5}, {1, 1, 1}, {0, 0, 1})})
+";
+
+#[test]
+fn every_command_that_runs_a_script_takes_the_dialect() {
+    let out = out_dir("legacy-commands");
+    let legacy = out.join("two_legacy.lua");
+    let modern = out.join("two.lua");
+    std::fs::write(&legacy, TWO_PARTS).unwrap();
+    let (reversed, runs) = reverse_transform_calls(TWO_PARTS);
+    assert_eq!(runs, 2);
+    std::fs::write(&modern, reversed).unwrap();
+    let photons = out.join("photons.png");
+    let xml = out.join("scene.xml");
+    let commands: [&[&str]; 3] = [
+        &["info"],
+        &[
+            "photons",
+            "--photons",
+            "1000",
+            "--caustic-photons",
+            "1000",
+            "-q",
+            "-o",
+        ],
+        &["export-mitsuba", "-o"],
+    ];
+    for (command, target) in commands.iter().zip([None, Some(&photons), Some(&xml)]) {
+        for flags in [&[][..], &["--dialect", "modern"], &["--dialect", "legacy"]] {
+            let mut cmd = caustic();
+            cmd.arg(command[0]).arg(&legacy).args(&command[1..]);
+            if let Some(t) = target {
+                cmd.arg(t);
+            }
+            run_ok(cmd.args(flags));
+        }
+    }
+    // The last export read the legacy script the legacy way: it places what the modern copy does.
+    let modern_xml = out.join("modern.xml");
+    run_ok(
+        caustic()
+            .arg("export-mitsuba")
+            .arg(&modern)
+            .arg("-o")
+            .arg(&modern_xml),
+    );
+    let shapes = |p: &Path| -> Vec<String> {
+        let text = std::fs::read_to_string(p).unwrap();
+        text.lines()
+            .filter(|l| l.contains("<shape"))
+            .map(String::from)
+            .collect()
+    };
+    assert_eq!(shapes(&xml).len(), 2);
+    assert_eq!(shapes(&xml), shapes(&modern_xml));
+    let bad = caustic()
+        .args(["info", "x.lua", "--dialect", "old"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success());
+    assert!(
+        stderr.contains("--dialect") && stderr.contains("legacy"),
+        "{stderr}"
+    );
+}
+
+/// A study of the legacy script against a reference rendered from its modern copy measures no
+/// error with `--dialect legacy`, and a large one without; a setting may not choose the dialect.
+#[test]
+fn study_takes_the_dialect_for_the_whole_study() {
+    let out = out_dir("legacy-study");
+    let legacy = out.join("two_legacy.lua");
+    std::fs::write(&legacy, TWO_PARTS).unwrap();
+    let modern = out.join("two.lua");
+    std::fs::write(&modern, reverse_transform_calls(TWO_PARTS).0).unwrap();
+    let reference = out.join("ref.exr");
+    run_ok(
+        caustic()
+            .arg("render")
+            .arg(&modern)
+            .args(["--scale", "2", "--spp", "1", "-q", "-o"])
+            .arg(&reference),
+    );
+    let study = |dialect: &[&str], dir: &str| {
+        run_ok(
+            caustic()
+                .arg("study")
+                .arg(&legacy)
+                .args(dialect)
+                .arg("--reference")
+                .arg(&reference)
+                .arg("--base=--scale 2 --spp 1")
+                .arg("-o")
+                .arg(out.join(dir)),
+        );
+        let csv = std::fs::read_to_string(out.join(dir).join("study.csv")).unwrap();
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let column = header.iter().position(|h| *h == "rel_rmse").unwrap();
+        let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+        row[column].parse::<f64>().unwrap()
+    };
+    assert_eq!(study(&["--dialect", "legacy"], "legacy"), 0.0);
+    assert!(study(&[], "modern") > 0.1);
+    let setting = caustic()
+        .arg("study")
+        .arg(&legacy)
+        .arg("--reference")
+        .arg(&reference)
+        .arg("--base=--dialect legacy")
+        .arg("-o")
+        .arg(out.join("refused"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&setting.stderr);
+    assert!(!setting.status.success());
+    assert!(
+        stderr.contains("--dialect are the study's to set"),
+        "{stderr}"
+    );
+}

@@ -1,10 +1,13 @@
 //! Scripts written for the course's legacy API (before Fall 2015) render correctly with
 //! `--dialect legacy`: node transforms post-multiply, so a legacy copy of a scene (each node's
-//! calls in the reverse order) renders, value for value, the image of its modern copy.
+//! calls in the reverse order) renders, value for value, the image of its modern copy;
+//! `require('readobj')` gets a built-in OBJ reader, modules load from the script's folder, and
+//! the Lua 5.1 names work.
 
 mod common;
 
-use caustic::desc::{NodeId, SceneDesc};
+use caustic::Fault;
+use caustic::desc::{MeshSource, NodeId, SceneDesc};
 use caustic::lua::{Dialect, ScriptOptions, run_source_with};
 use common::{caustic, out_dir, reverse_transform_calls, run_ok};
 use glam::{DAffine3, DVec3};
@@ -175,4 +178,97 @@ fn study_takes_the_dialect_for_the_whole_study() {
         stderr.contains("--dialect are the study's to set"),
         "{stderr}"
     );
+}
+
+#[test]
+fn the_built_in_readobj_reads_what_gr_mesh_reads() {
+    let dir = out_dir("legacy-readobj");
+    // Comments, a quad, texture coordinates and normals, a negative index.
+    let obj = "# a pyramid\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nv 0.5 1 0.5\nvt 0 0\nvn 0 1 0\n\
+               f 1/1/1 2/1/1 3/1/1 4/1/1\nf 1 5 2\nf 2 5 3\nf 3 5 4\nf -2 -1 -5\n";
+    std::fs::write(dir.join("p.obj"), obj).unwrap();
+    let src = "require('readobj')\n\
+               a = gr.mesh('a', readobj('p.obj'))\n\
+               b = gr.mesh('b', 'p.obj')\n";
+    let desc = run_in(src, &dir, None).unwrap();
+    let parsed = caustic::io::obj::load_obj(&dir.join("p.obj")).unwrap();
+    let MeshSource::Inline { positions, faces } = &desc.meshes[0].source else {
+        panic!("readobj made no inline mesh");
+    };
+    let positions: Vec<glam::Vec3> = positions.iter().map(|p| p.as_vec3()).collect();
+    assert_eq!(positions, parsed.positions);
+    let triangles: Vec<[u32; 3]> = faces.iter().map(|f| [f[0], f[1], f[2]]).collect();
+    assert_eq!(triangles, parsed.triangles);
+    assert_eq!(triangles.len(), 6, "the quad fans into two triangles");
+    assert!(matches!(desc.meshes[1].source, MeshSource::File { .. }));
+}
+
+#[test]
+fn readobj_faults_name_the_line_and_the_file() {
+    let dir = out_dir("legacy-readobj-faults");
+    std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
+    let fails = |src: &str| run_in(src, &dir, None).unwrap_err();
+    let missing = fails("require('readobj')\nm = gr.mesh('m', readobj('nope.obj'))");
+    assert!(matches!(
+        missing,
+        caustic::Error::Script {
+            fault: Fault::NotFound,
+            ..
+        }
+    ));
+    let text = missing.to_string();
+    assert!(
+        text.starts_with("test.lua:2: mesh file 'nope.obj' not found"),
+        "{text}"
+    );
+    let broken = fails("require('readobj')\n\nm = gr.mesh('m', readobj('bad.obj'))").to_string();
+    assert!(
+        broken.starts_with("test.lua:3: readobj: cannot load mesh 'bad.obj': ")
+            && broken.contains("bad.obj:3: "),
+        "{broken}"
+    );
+    let no_name = fails("require('readobj')\nreadobj()").to_string();
+    assert_eq!(
+        no_name,
+        "test.lua:2: bad argument #1 to 'readobj' (string expected, got no value)"
+    );
+}
+
+/// A script's own readobj.lua (and any module beside it) is found in its folder before the
+/// built-in, as the course's scripts found theirs.
+#[test]
+fn require_finds_modules_in_the_scripts_folder_first() {
+    let dir = out_dir("legacy-require");
+    std::fs::write(
+        dir.join("readobj.lua"),
+        "function readobj(f) return {{0,0,0},{1,0,0},{0,1,0}}, {{0,1,2}} end\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("shapes.lua"), "ball = gr.sphere('ball')\n").unwrap();
+    let src = "require('readobj')\nrequire('shapes')\nm = gr.mesh('m', readobj('absent.obj'))";
+    let desc = run_in(src, &dir, Some(Dialect::Legacy)).unwrap();
+    assert_eq!(desc.nodes[0].name, "ball");
+    let MeshSource::Inline { positions, .. } = &desc.meshes[0].source else {
+        panic!("no inline mesh");
+    };
+    assert_eq!(positions.len(), 3, "the script's own readobj ran");
+    let missing = run_in("require('nothing_here')", &dir, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        missing.contains("module 'nothing_here' not found") && missing.contains("no built-in"),
+        "{missing}"
+    );
+}
+
+#[test]
+fn lua_51_names_work_in_both_dialects() {
+    let src = "local a, b = unpack({1, 2})\n\
+               local n = 0\n\
+               for w in string.gfind('one two three', '%a+') do n = n + 1 end\n\
+               assert(a == 1 and b == 2 and n == 3 and table.getn({4, 5, 6}) == 3)\n\
+               assert(table.unpack ~= nil and string.gmatch ~= nil)";
+    for dialect in [None, Some(Dialect::Modern), Some(Dialect::Legacy)] {
+        run_in(src, Path::new("."), dialect).unwrap_or_else(|e| panic!("{dialect:?}: {e}"));
+    }
 }

@@ -6,13 +6,15 @@
 //! - `sandbox.rs`: the Lua state and its standard library;
 //! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
 //! - [`args`]: argument checks with lauxlib's messages and the calling script line;
-//! - `legacy/`: the course's legacy API ([`Dialect`], `--dialect`).
+//! - `legacy/`: the course's legacy API ([`Dialect`], `--dialect`): the transform order and the
+//!   built-in `readobj`.
 //!
 //! This module owns what a run shares: the description being filled, path resolution and
-//! warnings. Paths (meshes, textures, output images) resolve against the working directory
-//! first, as the course does, then against the script's folder, so a corpus scene runs both from
-//! its own folder and by path from anywhere. Files are only resolved here; the scene build reads
-//! them.
+//! warnings. Paths (meshes, textures, output images, `require`d modules) resolve against the
+//! working directory first, as the course does, then against the script's folder, so a corpus
+//! scene runs both from its own folder and by path from anywhere. Files are only resolved here;
+//! the scene build reads them. One legacy case reads a file here: `readobj`, whose tables the
+//! script needs at once.
 //!
 //! ```lua
 //! m = gr.material({0.7, 0.6, 1.0}, {0.5, 0.4, 0.8}, 25)
@@ -101,8 +103,9 @@ pub fn run_source_with(
         dialect: options.dialect.unwrap_or_default(),
     }));
     let limit = options.memory_limit.unwrap_or(sandbox::MAX_LUA_MEMORY);
-    let (lua, lines) = sandbox::new_lua(limit).map_err(convert_error)?;
+    let (lua, lines) = sandbox::new_lua(limit, script_dir).map_err(convert_error)?;
     gr::install(&lua, &state).map_err(convert_error)?;
+    legacy::install(&lua, &state).map_err(convert_error)?;
     lua.load(source)
         .set_name(format!("@{name}"))
         .exec()

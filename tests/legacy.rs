@@ -86,13 +86,24 @@ fn every_command_that_runs_a_script_takes_the_dialect() {
         &["export-mitsuba", "-o"],
     ];
     for (command, target) in commands.iter().zip([None, Some(&photons), Some(&xml)]) {
-        for flags in [&[][..], &["--dialect", "modern"], &["--dialect", "legacy"]] {
+        let runs = [
+            (&[][..], true),
+            (&["--dialect", "modern"][..], false),
+            (&["--dialect", "legacy"][..], false),
+        ];
+        for (flags, warns) in runs {
             let mut cmd = caustic();
             cmd.arg(command[0]).arg(&legacy).args(&command[1..]);
             if let Some(t) = target {
                 cmd.arg(t);
             }
-            run_ok(cmd.args(flags));
+            let run = run_ok(cmd.args(flags));
+            let stderr = String::from_utf8_lossy(&run.stderr);
+            assert_eq!(
+                stderr.contains("--dialect legacy"),
+                warns,
+                "{command:?} {flags:?}: {stderr}"
+            );
         }
     }
     // The last export read the legacy script the legacy way: it places what the modern copy does.

@@ -252,7 +252,8 @@ pub struct RenderArgs {
 pub struct ScriptArgs {
     /// The era of the course's API the script is written for: modern (Fall 2015 onwards: each
     /// transform call acts in the parent's frame, in call order) or legacy (before: transforms
-    /// post-multiply, so a node's last call acts on its geometry first) [default: modern].
+    /// post-multiply, so a node's last call acts on its geometry first) [default: modern, with a
+    /// warning when the script looks legacy].
     #[arg(long, value_enum, value_name = "ERA")]
     pub dialect: Option<DialectArg>,
 }

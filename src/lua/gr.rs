@@ -18,6 +18,7 @@
 //! after each image. An unknown name (`gr.spere`) fails at the line that used it and lists the
 //! functions that exist.
 
+use super::legacy::{self, Sign};
 use super::{MAX_PIXELS, State};
 use crate::desc::{
     CameraDesc, CsgOp, LightDesc, LightId, LightShape, MaterialDesc, MaterialId, MeshDesc,
@@ -170,7 +171,10 @@ fn gr_nh_box(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
 fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let name = a.string(1)?;
     let id = match a.get(2) {
-        Some(Value::Table(_)) => inline_mesh(s, a)?,
+        Some(Value::Table(_)) => {
+            s.saw(Sign::InlineMesh, &a.loc);
+            inline_mesh(s, a)?
+        }
         _ => mesh_from_file(s, a, &a.string(2)?)?,
     };
     new_node(lua, s, a, name, NodeKind::Mesh(id))
@@ -443,6 +447,7 @@ fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         loc: a.loc.clone(),
     };
     s.desc.renders.push(render.clone());
+    legacy::before_render(s, &render);
     let State { desc, hook, .. } = s;
     hook(desc, &render).map_err(|e| match e {
         e @ (Error::Script { .. } | Error::Lua(_)) => lua_err(e),
@@ -479,6 +484,9 @@ fn compose(s: &mut State, a: &Args, t: DAffine3) -> mlua::Result<Value> {
     let node = a.node(1)?;
     let m = &mut s.desc.nodes[node.0 as usize].transform;
     *m = s.dialect.compose(*m, t);
+    if let Some(w) = &mut s.watch {
+        w.compose(node, t);
+    }
     Ok(Value::Nil)
 }
 

@@ -5,13 +5,11 @@
 //! `getuservalue`, `getregistry`, `setupvalue`, `getupvalue`, `upvaluejoin` and `upvalueid`.
 //! `require` finds modules as paths resolve: in the working directory (Lua's own `./?.lua`),
 //! then in the script's folder, so a course scene's `require('buckyball')` finds the
-//! buckyball.lua beside it however it is run. Lua 5.1 names that legacy scripts call are aliased:
+//! buckyball.lua beside it however it is run. (The Lua 5.1 names legacy scripts call are set by
+//! [`super::legacy`].)
 //!
 //! ```lua
-//! require('buckyball')                    -- ./buckyball.lua, else beside the script
-//! local a, b = unpack({1, 2})             -- table.unpack
-//! for w in string.gfind(s, '%a+') do end  -- string.gmatch
-//! n = table.getn({1, 2, 3})               -- #t
+//! require('buckyball')   -- ./buckyball.lua, else buckyball.lua in the script's folder
 //! ```
 //!
 //! The state may hold at most [`MAX_LUA_MEMORY`] (or the script options' limit): an allocation
@@ -49,8 +47,8 @@ impl LineTracker {
 }
 
 /// Returns a fresh Lua state with the standard library, the unsafe `debug` functions removed,
-/// the legacy aliases set, `require` looking in `script_dir` after the working directory and at
-/// most `memory_limit` bytes of memory, with the tracker of its running line.
+/// `require` looking in `script_dir` after the working directory and at most `memory_limit`
+/// bytes of memory, with the tracker of its running line.
 pub(super) fn new_lua(memory_limit: usize, script_dir: &Path) -> mlua::Result<(Lua, LineTracker)> {
     // SAFETY: `debug` is the only unsafe library; the functions that can corrupt mlua's
     // userdata or registry invariants are removed before any script runs.
@@ -93,15 +91,6 @@ pub(super) fn new_lua(memory_limit: usize, script_dir: &Path) -> mlua::Result<(L
     ] {
         debug.raw_set(f, Value::Nil)?;
     }
-    let table: Table = g.get("table")?;
-    if g.get::<Value>("unpack")?.is_nil() {
-        g.set("unpack", table.get::<Value>("unpack")?)?;
-    }
-    if table.get::<Value>("getn")?.is_nil() {
-        table.set("getn", lua.create_function(|_, t: Table| Ok(t.raw_len()))?)?;
-    }
-    let string: Table = g.get("string")?;
-    string.set("gfind", string.get::<Value>("gmatch")?)?;
     // Lua's path templates cannot quote `;` or `?`: a folder holding one is not searched.
     let dir = script_dir.to_string_lossy();
     if !dir.is_empty() && !dir.contains([';', '?']) {

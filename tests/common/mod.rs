@@ -319,6 +319,57 @@ pub fn run_ok(cmd: &mut Command) -> std::process::Output {
     out
 }
 
+/// Returns every `.lua` file under `dir`, sorted.
+pub fn lua_scripts(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            out.extend(lua_scripts(&path));
+        } else if path.extension().is_some_and(|e| e == "lua") {
+            out.push(path);
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Returns the ```lua blocks of the user guide (`docs/guide.md`).
+pub fn guide_examples() -> Vec<String> {
+    let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/guide.md"))
+        .expect("docs/guide.md");
+    let mut out = Vec::new();
+    let mut block: Option<String> = None;
+    for line in guide.lines() {
+        match (&mut block, line.trim()) {
+            (None, "```lua") => block = Some(String::new()),
+            (Some(_), "```") => out.push(block.take().unwrap()),
+            (Some(b), _) => {
+                b.push_str(line);
+                b.push('\n');
+            }
+            (None, _) => {}
+        }
+    }
+    out
+}
+
+/// Returns a fresh folder under `target/test-output/` holding the files the guide's examples
+/// name (`tri.obj`, `tiles.png`).
+pub fn guide_dir(name: &str) -> PathBuf {
+    let dir = out_dir(name);
+    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let tiles = image::RgbImage::from_fn(8, 8, |x, y| {
+        if (x / 4 + y / 4) % 2 == 0 {
+            image::Rgb([230, 230, 230])
+        } else {
+            image::Rgb([40, 60, 90])
+        }
+    });
+    tiles.save(dir.join("tiles.png")).unwrap();
+    dir
+}
+
 /// Returns a transform call statement's variable (`n` of `n:rotate('y', 30)`), or `None` for any
 /// other statement.
 fn transform_call(statement: &str) -> Option<&str> {

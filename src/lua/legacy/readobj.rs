@@ -15,6 +15,7 @@
 //! cow = gr.mesh('cow', readobj('cow.obj'))   -- the triangles of gr.mesh('cow', 'cow.obj')
 //! ```
 
+use super::Sign;
 use crate::error::Fault;
 use crate::lua::State;
 use crate::lua::args::Args;
@@ -57,6 +58,7 @@ pub(in crate::lua) fn install(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Re
 /// `readobj(file)`: returns the vertex and face tables of an OBJ file.
 fn read(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<MultiValue> {
     let given = a.string(1)?;
+    s.saw(Sign::Readobj, &a.loc);
     let Some(path) = s.resolve_input(&given) else {
         return Err(a.fault(Fault::NotFound, s.not_found("mesh file", &given)));
     };

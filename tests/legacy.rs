@@ -1,6 +1,7 @@
 //! Scripts written for the course's legacy API (before Fall 2015) render correctly with
 //! `--dialect legacy`: node transforms post-multiply, so a legacy copy of a scene (each node's
-//! calls in the reverse order) renders, value for value, the image of its modern copy;
+//! calls in the reverse order, as the two eras' copies of the course's scenes are) renders,
+//! value for value, the image of its modern copy;
 //! `require('readobj')` gets a built-in OBJ reader, modules load from the script's folder, and
 //! the Lua 5.1 names work.
 
@@ -9,9 +10,9 @@ mod common;
 use caustic::Fault;
 use caustic::desc::{MeshSource, NodeId, SceneDesc};
 use caustic::lua::{Dialect, ScriptOptions, run_source_with};
-use common::{caustic, out_dir, reverse_transform_calls, run_ok};
+use common::{a4_assets, caustic, legacy_copy, out_dir, reverse_transform_calls, run_ok};
 use glam::{DAffine3, DVec3};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Runs script text named `test.lua` in `dialect` (paths resolve in `dir`) without rendering.
 fn run_in(src: &str, dir: &Path, dialect: Option<Dialect>) -> Result<SceneDesc, caustic::Error> {
@@ -26,6 +27,21 @@ fn run_in(src: &str, dir: &Path, dialect: Option<Dialect>) -> Result<SceneDesc, 
         Box::new(|_, _| Ok(())),
         options,
     )
+}
+
+/// Returns the linear pixels of an EXR the command line wrote.
+fn exr_pixels(path: &Path) -> Vec<f32> {
+    image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb32f()
+        .into_raw()
+}
+
+/// The repository's legacy scene pair.
+fn desk(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes/legacy")
+        .join(name)
 }
 
 #[test]
@@ -47,6 +63,37 @@ fn legacy_dialect_post_multiplies_each_nodes_transforms() {
         let p = m.transform_point3(DVec3::X);
         assert!(p.abs_diff_eq(x_lands_at, 1e-12), "{dialect:?}: {p}");
     }
+}
+
+#[test]
+fn the_legacy_desk_renders_the_modern_desks_image_value_for_value() {
+    let out = out_dir("legacy-desk");
+    let render = |script: &str, flags: &[&str], exr: &str| {
+        let run = run_ok(
+            caustic()
+                .arg("render")
+                .arg(desk(script))
+                .args(["--scale", "0.5", "-q", "-o"])
+                .arg(out.join(exr))
+                .args(flags),
+        );
+        (
+            exr_pixels(&out.join(exr)),
+            String::from_utf8_lossy(&run.stderr).into_owned(),
+        )
+    };
+    let (modern, quiet) = render("desk.lua", &[], "modern.exr");
+    let (legacy, quiet_too) = render("desk_legacy.lua", &["--dialect", "legacy"], "legacy.exr");
+    let (wrong, warned) = render("desk_legacy.lua", &[], "wrong.exr");
+    assert_eq!(modern.len(), 64 * 48 * 3);
+    assert!(modern == legacy, "the two copies render different images");
+    let changed = modern.iter().zip(&wrong).filter(|(a, b)| a != b).count();
+    assert!(
+        changed > modern.len() / 10,
+        "the legacy copy read the modern way changed only {changed} values"
+    );
+    assert!(!quiet.contains("warning") && !quiet_too.contains("warning"));
+    assert!(warned.contains("--dialect legacy"), "{warned}");
 }
 
 /// A legacy script of two parts for the Mitsuba subset (diffuse, physical falloff), and its modern
@@ -189,6 +236,58 @@ fn study_takes_the_dialect_for_the_whole_study() {
         stderr.contains("--dialect are the study's to set"),
         "{stderr}"
     );
+}
+
+/// The course's A4 scenes whose transform order matters, each with its legacy copy made from it
+/// (every node's calls reversed, meshes read by readobj, `unpack`): the copy with `--dialect
+/// legacy` renders the original's image value for value (same seed, a quarter of the size), and
+/// read the modern way renders another image and warns.
+#[test]
+fn legacy_copies_of_the_a4_scenes_render_the_originals_images() {
+    if common::skip_without_corpus("legacy_copies_of_the_a4_scenes_render_the_originals_images") {
+        return;
+    }
+    let out = out_dir("legacy-a4");
+    for name in ["hier", "instance", "simple-cows", "macho-cows"] {
+        let original = a4_assets().join(format!("{name}.lua"));
+        let copy = out.join(format!("{name}-legacy.lua"));
+        std::fs::write(
+            &copy,
+            legacy_copy(&std::fs::read_to_string(&original).unwrap()),
+        )
+        .unwrap();
+        // From the scenes' folder, where the copy finds the meshes (the working directory first).
+        let render = |script: &Path, flags: &[&str], exr: &str| {
+            let run = run_ok(
+                caustic()
+                    .current_dir(a4_assets())
+                    .arg("render")
+                    .arg(script)
+                    .args(["--scale", "0.25", "--seed", "3", "-q", "-o"])
+                    .arg(out.join(exr))
+                    .args(flags),
+            );
+            (
+                exr_pixels(&out.join(exr)),
+                String::from_utf8_lossy(&run.stderr).into_owned(),
+            )
+        };
+        let (modern, _) = render(&original, &[], &format!("{name}.exr"));
+        let (legacy, quiet) = render(
+            &copy,
+            &["--dialect", "legacy"],
+            &format!("{name}-legacy.exr"),
+        );
+        let (wrong, warned) = render(&copy, &[], &format!("{name}-wrong.exr"));
+        assert_eq!(modern.len(), 64 * 64 * 3, "{name}");
+        assert!(
+            modern == legacy,
+            "{name}: the legacy copy renders another image"
+        );
+        assert!(modern != wrong, "{name}: the order changed nothing");
+        assert!(!quiet.contains("warning"), "{name}: {quiet}");
+        assert!(warned.contains("--dialect legacy"), "{name}: {warned}");
+    }
 }
 
 #[test]

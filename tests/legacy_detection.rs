@@ -294,3 +294,39 @@ fn our_scenes_and_the_guides_examples_are_not_warned_about() {
         );
     }
 }
+
+/// The legacy desk is warned about by its signs; its layout alone, with the signs removed,
+/// would be too. The modern desk has a sign too (its inline shade), but its layout speaks for
+/// the modern order: it is not warned about.
+#[test]
+fn the_legacy_desk_is_warned_about_by_signs_and_by_layout() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/legacy");
+    let src = std::fs::read_to_string(dir.join("desk_legacy.lua")).unwrap();
+    let desc = run(&src, "desk_legacy.lua", &dir, None).unwrap();
+    let w = legacy_warnings(&desc);
+    assert_eq!(w.len(), 1);
+    assert!(
+        w[0].contains("it uses the Lua 5.1 name unpack (line 43), gr.mesh with inline vertex and face tables (line 69), readobj (line 77)"),
+        "{}",
+        w[0]
+    );
+    let plain = src
+        .replace("require('readobj')", "")
+        .replace("readobj('gem.obj')", "'gem.obj'")
+        .replace("unpack(", "table.unpack(");
+    let plain = plain.replace(
+        "gr.mesh('hat', {{-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}, {0, 1, 0}},\n              {{0, 1, 2, 3}, {0, 4, 1}, {1, 4, 2}, {2, 4, 3}, {3, 4, 0}})",
+        "gr.cube('hat')",
+    );
+    let desc = run(&plain, "plain.lua", &dir, None).unwrap();
+    let w = legacy_warnings(&desc);
+    assert_eq!(w.len(), 1, "{:?}", desc.warnings);
+    assert!(
+        w[0].contains("this script's transforms look written"),
+        "{}",
+        w[0]
+    );
+    let modern = std::fs::read_to_string(dir.join("desk.lua")).unwrap();
+    assert!(modern.contains("gr.mesh('hat', {{"));
+    assert!(!warned(&modern, "desk.lua", &dir));
+}

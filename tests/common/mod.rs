@@ -445,3 +445,33 @@ pub fn reverse_transform_calls(src: &str) -> (String, usize) {
         .collect();
     (out.join("\n") + "\n", runs)
 }
+
+/// Returns the legacy copy of a modern course scene: every node's transform calls reversed
+/// ([`reverse_transform_calls`]), meshes read by `readobj` (`gr.mesh(n, 'f.obj')` becomes
+/// `gr.mesh(n, readobj('f.obj'))` after a `require('readobj')`) and `table.unpack` spelled
+/// `unpack`, as scripts of the course before Fall 2015 are written.
+pub fn legacy_copy(modern: &str) -> String {
+    let (reversed, _) = reverse_transform_calls(modern);
+    let mut out = String::from("require('readobj')\n");
+    for line in reversed.lines() {
+        let mut line = line.replace("table.unpack", "unpack");
+        if let Some(start) = line.find("gr.mesh(") {
+            // gr.mesh(name, 'file.obj') -> gr.mesh(name, readobj('file.obj'))
+            let args = &line[start + "gr.mesh(".len()..];
+            if let (Some(comma), Some(close)) = (args.find(','), args.rfind(')')) {
+                let file = args[comma + 1..close].trim();
+                if file.starts_with('\'') || file.starts_with('"') {
+                    let name = &args[..comma];
+                    line = format!(
+                        "{}gr.mesh({name}, readobj({file})){}",
+                        &line[..start],
+                        &args[close + 1..]
+                    );
+                }
+            }
+        }
+        out.push_str(&line);
+        out.push('\n');
+    }
+    out
+}

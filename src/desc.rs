@@ -11,7 +11,9 @@
 //!
 //! Transforms follow the course's convention (pre-multiplication): each `translate`, `rotate` or
 //! `scale` call on a node computes `M ← T·M`, so calls act on the geometry in call order, each in
-//! the parent's frame, and `world_from_object = M_root · … · M_parent · M_node`.
+//! the parent's frame, and `world_from_object = M_root · … · M_parent · M_node`. Scripts read with
+//! `--dialect legacy` compose `M ← M·T` instead (`lua::Dialect`); either way a node holds one
+//! `parent_from_node` matrix, and nothing below the Lua layer knows which order made it.
 
 use crate::error::Loc;
 use glam::{DAffine3, DVec3, Vec3};
@@ -87,7 +89,7 @@ pub struct NodeDesc {
     /// The name the script gave; not unique.
     pub name: String,
     pub kind: NodeKind,
-    /// `parent_from_node`, composed by pre-multiplication (see the module doc).
+    /// `parent_from_node`, composed in the script's dialect (see the module doc).
     pub transform: DAffine3,
     /// Set by `set_material`; the last call wins. Not inherited by children.
     pub material: Option<MaterialId>,

@@ -5,45 +5,16 @@ mod common;
 
 use caustic::integrator::Settings;
 use caustic::render::Sampling;
-use common::{caustic, out_dir, render_films_with};
-
-/// Returns the ```lua blocks of the guide.
-fn lua_examples(guide: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut block: Option<String> = None;
-    for line in guide.lines() {
-        match (&mut block, line.trim()) {
-            (None, "```lua") => block = Some(String::new()),
-            (Some(_), "```") => out.push(block.take().unwrap()),
-            (Some(b), _) => {
-                b.push_str(line);
-                b.push('\n');
-            }
-            (None, _) => {}
-        }
-    }
-    out
-}
+use common::{caustic, guide_dir, guide_examples, render_films_with};
 
 /// Every Lua example of the guide (at least 5) runs from a folder holding the files it names
 /// (`tri.obj`, `tiles.png`), and each of its `gr.render` calls renders (one ray per pixel, few
 /// photons) an image with no NaN and some light.
 #[test]
 fn every_lua_example_in_the_guide_runs_and_renders() {
-    let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/guide.md"))
-        .expect("docs/guide.md");
-    let examples = lua_examples(&guide);
+    let examples = guide_examples();
     assert!(examples.len() >= 5, "{} examples", examples.len());
-    let dir = out_dir("guide");
-    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
-    let tiles = image::RgbImage::from_fn(8, 8, |x, y| {
-        if (x / 4 + y / 4) % 2 == 0 {
-            image::Rgb([230, 230, 230])
-        } else {
-            image::Rgb([40, 60, 90])
-        }
-    });
-    tiles.save(dir.join("tiles.png")).unwrap();
+    let dir = guide_dir("guide");
     let mut settings = Settings {
         sampling: Sampling::Stratified { spp: 1 },
         ..Settings::default()

@@ -10,7 +10,7 @@ use caustic::integrator::{GiMode, Settings};
 use caustic::lua::run_source;
 use caustic::progress::NoProgress;
 use std::cell::RefCell;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::rc::Rc;
 
 /// Pixels along the longer side of each tiny render.
@@ -45,21 +45,6 @@ const CANNOT_RENDER: [(&str, &str); 6] = [
         "torus and hyperboloid are not the standard API",
     ),
 ];
-
-/// Returns every `.lua` file under `dir`, sorted.
-fn scripts(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            out.extend(scripts(&path));
-        } else if path.extension().is_some_and(|e| e == "lua") {
-            out.push(path);
-        }
-    }
-    out.sort();
-    out
-}
 
 /// What one render of a scene did: the non-finite pixels and the dropped samples, per mode.
 struct Outcome {
@@ -114,7 +99,7 @@ fn every_corpus_render_is_finite_in_both_integrators() {
     let root = common::corpus("");
     let mut report = Vec::new();
     let (mut rendered, mut renders) = (0, 0);
-    for script in scripts(&root) {
+    for script in common::lua_scripts(&root) {
         let rel = script
             .strip_prefix(&root)
             .unwrap()

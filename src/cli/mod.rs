@@ -15,7 +15,7 @@ use crate::integrator::plan::Effect;
 use crate::integrator::progressive::Stop;
 use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
-use crate::lua::{ScriptOptions, run_script, run_script_with};
+use crate::lua::{Dialect, ScriptOptions, run_script_with};
 use crate::metrics::Region;
 use crate::scene::build::build_scene;
 use clap::{Args, Parser, Subcommand};
@@ -84,6 +84,8 @@ pub struct DiffArgs {
 pub struct ExportArgs {
     /// The Lua scene script (its first gr.render is exported).
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub script: ScriptArgs,
     /// The XML file to write; meshes are written beside it.
     #[arg(short, long, value_name = "OUT.xml")]
     pub output: PathBuf,
@@ -99,6 +101,8 @@ pub struct ExportArgs {
 pub struct PhotonsArgs {
     /// The Lua scene script.
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub script: ScriptArgs,
     /// The picture to write (default: the script's image name with `_photons` added).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
@@ -128,6 +132,8 @@ pub struct RenderArgs {
     /// alone over these arguments' other values).
     #[arg(skip)]
     pub argv: Vec<std::ffi::OsString>,
+    #[command(flatten)]
+    pub script: ScriptArgs,
     /// Write the image here instead of the script's file name (scripts that render one image).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
@@ -246,6 +252,37 @@ pub struct RenderArgs {
     pub missing_textures: MissingTextures,
 }
 
+/// How a scene script is read: the flags of every command that runs one.
+#[derive(Clone, Copy, Debug, Args)]
+pub struct ScriptArgs {
+    /// The era of the course's API the script is written for: modern (Fall 2015 onwards: each
+    /// transform call acts in the parent's frame, in call order) or legacy (before: transforms
+    /// post-multiply, so a node's last call acts on its geometry first) [default: modern, with a
+    /// warning when the script looks legacy].
+    #[arg(long, value_enum, value_name = "ERA")]
+    pub dialect: Option<DialectArg>,
+}
+
+impl ScriptArgs {
+    /// Returns the script options these flags ask for.
+    pub fn options(&self) -> ScriptOptions {
+        ScriptOptions {
+            dialect: self.dialect.map(|d| match d {
+                DialectArg::Modern => Dialect::Modern,
+                DialectArg::Legacy => Dialect::Legacy,
+            }),
+            ..ScriptOptions::default()
+        }
+    }
+}
+
+/// The `--dialect` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum DialectArg {
+    Modern,
+    Legacy,
+}
+
 /// Parses an effect name of `--force` and `--disable`.
 fn parse_effect(name: &str) -> std::result::Result<Effect, String> {
     Effect::parse(name).ok_or_else(|| {
@@ -328,6 +365,8 @@ fn parse_crop(s: &str) -> std::result::Result<[u32; 4], String> {
 pub struct InfoArgs {
     /// The Lua scene script.
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub script: ScriptArgs,
 }
 
 impl Cli {
@@ -458,7 +497,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     });
     let options = ScriptOptions {
         missing_textures_warn: args.missing_textures == MissingTextures::Warn,
-        ..ScriptOptions::default()
+        ..args.script.options()
     };
     run_script_with(&args.scene, hook, options)?;
     if rendered.get() == 0 {
@@ -603,7 +642,7 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         );
         Ok(())
     });
-    run_script(&args.scene, hook)?;
+    run_script_with(&args.scene, hook, args.script.options())?;
     Ok(())
 }
 
@@ -615,7 +654,7 @@ fn export_command(args: ExportArgs) -> Result<()> {
             args.spp
         )));
     }
-    let desc = run_script(&args.scene, Box::new(|_, _| Ok(())))?;
+    let desc = run_script_with(&args.scene, Box::new(|_, _| Ok(())), args.script.options())?;
     let Some(r) = desc.renders.first() else {
         return Err(Error::Usage(format!(
             "{} never calls gr.render: nothing to export",
@@ -682,7 +721,7 @@ fn diff_command(args: DiffArgs) -> Result<()> {
 }
 
 fn info_command(args: InfoArgs) -> Result<()> {
-    let desc = run_script(&args.scene, Box::new(|_, _| Ok(())))?;
+    let desc = run_script_with(&args.scene, Box::new(|_, _| Ok(())), args.script.options())?;
     print!(
         "{}",
         report::describe(&args.scene.display().to_string(), &desc)?

@@ -18,6 +18,7 @@
 //! after each image. An unknown name (`gr.spere`) fails at the line that used it and lists the
 //! functions that exist.
 
+use super::legacy::{self, Sign};
 use super::{MAX_PIXELS, State};
 use crate::desc::{
     CameraDesc, CsgOp, LightDesc, LightId, LightShape, MaterialDesc, MaterialId, MeshDesc,
@@ -174,7 +175,10 @@ fn gr_nh_box(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
 fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let name = a.string(1)?;
     let id = match a.get(2) {
-        Some(Value::Table(_)) => inline_mesh(s, a)?,
+        Some(Value::Table(_)) => {
+            s.saw(Sign::InlineMesh, &a.loc);
+            inline_mesh(s, a)?
+        }
         _ => mesh_from_file(s, a, &a.string(2)?)?,
     };
     new_node(lua, s, a, name, NodeKind::Mesh(id))
@@ -460,6 +464,7 @@ fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
             .collect(),
     };
     s.desc.renders.push(render.clone());
+    legacy::before_render(s, &render);
     let State { desc, hook, .. } = s;
     hook(desc, &render).map_err(|e| match e {
         e @ (Error::Script { .. } | Error::Lua(_)) => lua_err(e),
@@ -490,23 +495,28 @@ fn gr_set_material(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     Ok(Value::Nil)
 }
 
-fn pre_multiply(s: &mut State, a: &Args, t: DAffine3) -> mlua::Result<Value> {
+/// Composes the transform `t` of one `translate`, `scale` or `rotate` call into node 1's matrix,
+/// in the script's dialect: the one place call order becomes a matrix.
+fn compose(s: &mut State, a: &Args, t: DAffine3) -> mlua::Result<Value> {
     let node = a.node(1)?;
     let m = &mut s.desc.nodes[node.0 as usize].transform;
-    *m = t * *m;
+    *m = s.dialect.compose(*m, t);
+    if let Some(w) = &mut s.watch {
+        w.compose(node, t);
+    }
     Ok(Value::Nil)
 }
 
 fn gr_translate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     a.node(1)?;
     let t = DAffine3::from_translation(a.dvec3_at(2)?);
-    pre_multiply(s, a, t)
+    compose(s, a, t)
 }
 
 fn gr_scale(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     a.node(1)?;
     let t = DAffine3::from_scale(a.dvec3_at(2)?);
-    pre_multiply(s, a, t)
+    compose(s, a, t)
 }
 
 fn gr_rotate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
@@ -522,7 +532,7 @@ fn gr_rotate(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         "z" => DAffine3::from_rotation_z(angle),
         _ => return Err(a.bad(2, "Axis must be x, y or z")),
     };
-    pre_multiply(s, a, t)
+    compose(s, a, t)
 }
 
 impl UserData for NodeRef {

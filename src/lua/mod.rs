@@ -7,13 +7,17 @@
 //! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
 //! - `generated.rs`: meshes a script generates (`gr.water_mesh`), cached as files;
 //! - [`settings`]: a scene's own render settings (`gr.settings`);
-//! - [`args`]: argument checks with lauxlib's messages and the calling script line.
+//! - [`args`]: argument checks with lauxlib's messages and the calling script line;
+//! - `legacy/`: the course's legacy API ([`Dialect`], `--dialect`): the transform order, the
+//!   built-in `readobj`, the Lua 5.1 names, and the warning when a modern run looks legacy.
 //!
 //! This module owns what a run shares: the description being filled, path resolution and
-//! warnings. Paths (meshes, textures, output images) resolve against the working directory
-//! first, as the course does, then against the script's folder, so a corpus scene runs both from
-//! its own folder and by path from anywhere. Files are only resolved here; the scene build reads
-//! them.
+//! warnings. Paths (meshes, textures, output images, `require`d modules) resolve against the
+//! working directory first, as the course does, then against the script's folder, so a corpus
+//! scene runs both from its own folder and by path from anywhere. Files are only resolved here;
+//! the scene build reads them. Two legacy cases read files here: `readobj`, whose tables the
+//! script needs at once, and the legacy warning's check, which reads mesh files' vertices for
+//! their boxes (once per run, only when the transform order matters).
 //!
 //! ```lua
 //! m = gr.material({0.7, 0.6, 1.0}, {0.5, 0.4, 0.8}, 25)
@@ -26,8 +30,11 @@
 pub mod args;
 mod generated;
 mod gr;
+mod legacy;
 mod sandbox;
 pub mod settings;
+
+pub use legacy::Dialect;
 
 use crate::desc::{MeshId, RenderDesc, SceneDesc};
 use crate::error::{Error, Loc, Result};
@@ -50,6 +57,9 @@ pub struct ScriptOptions {
     pub missing_textures_warn: bool,
     /// Most bytes the script's Lua state may hold; `None` for [`sandbox::MAX_LUA_MEMORY`].
     pub memory_limit: Option<usize>,
+    /// `--dialect`: how transforms compose. `None` (no `--dialect`) reads the script the
+    /// modern way and warns when it looks legacy (`legacy/`).
+    pub dialect: Option<Dialect>,
 }
 
 /// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
@@ -95,10 +105,13 @@ pub fn run_source_with(
         script_dir: script_dir.to_path_buf(),
         hook,
         mesh_cache: HashMap::new(),
+        dialect: options.dialect.unwrap_or_default(),
+        watch: options.dialect.is_none().then(legacy::Watch::default),
     }));
     let limit = options.memory_limit.unwrap_or(sandbox::MAX_LUA_MEMORY);
-    let (lua, lines) = sandbox::new_lua(limit).map_err(convert_error)?;
+    let (lua, lines) = sandbox::new_lua(limit, script_dir).map_err(convert_error)?;
     gr::install(&lua, &state).map_err(convert_error)?;
+    legacy::install(&lua, &state).map_err(convert_error)?;
     lua.load(source)
         .set_name(format!("@{name}"))
         .exec()
@@ -131,6 +144,10 @@ struct State {
     mesh_cache: HashMap<PathBuf, MeshId>,
     /// Missing images already warned about (`--missing-textures=warn`).
     warned_images: HashSet<String>,
+    /// How transforms compose.
+    dialect: Dialect,
+    /// The legacy signs seen so far; `None` under an explicit `--dialect`.
+    watch: Option<legacy::Watch>,
 }
 
 impl State {
@@ -156,6 +173,13 @@ impl State {
             p.to_path_buf()
         } else {
             q
+        }
+    }
+
+    /// Records a use of a legacy form at `loc` when the run is watched.
+    fn saw(&mut self, sign: legacy::Sign, loc: &Loc) {
+        if let Some(w) = &mut self.watch {
+            w.saw(sign, loc);
         }
     }
 

@@ -3,11 +3,13 @@
 //! `debug` is loaded (course scripts use `debug.traceback`) less the functions that could break
 //! mlua's userdata and registry invariants: `setmetatable`, `getmetatable`, `setuservalue`,
 //! `getuservalue`, `getregistry`, `setupvalue`, `getupvalue`, `upvaluejoin` and `upvalueid`.
-//! Lua 5.1 names that legacy scripts call are aliased:
+//! `require` finds modules as paths resolve: in the working directory (Lua's own `./?.lua`),
+//! then in the script's folder, so a course scene's `require('buckyball')` finds the
+//! buckyball.lua beside it however it is run. (The Lua 5.1 names legacy scripts call are set by
+//! [`super::legacy`].)
 //!
 //! ```lua
-//! local a, b = unpack({1, 2})             -- table.unpack
-//! for w in string.gfind(s, '%a+') do end  -- string.gmatch
+//! require('buckyball')   -- ./buckyball.lua, else buckyball.lua in the script's folder
 //! ```
 //!
 //! The state may hold at most [`MAX_LUA_MEMORY`] (or the script options' limit): an allocation
@@ -21,6 +23,7 @@
 use crate::error::Loc;
 use mlua::{HookTriggers, Lua, LuaOptions, StdLib, Table, Value, VmState};
 use std::cell::RefCell;
+use std::path::Path;
 use std::rc::Rc;
 
 /// Most memory one script's Lua state may hold: 4 GiB, far more than any scene description
@@ -44,9 +47,9 @@ impl LineTracker {
 }
 
 /// Returns a fresh Lua state with the standard library, the unsafe `debug` functions removed,
-/// the legacy aliases set and at most `memory_limit` bytes of memory, with the tracker of its
-/// running line.
-pub(super) fn new_lua(memory_limit: usize) -> mlua::Result<(Lua, LineTracker)> {
+/// `require` looking in `script_dir` after the working directory and at most `memory_limit`
+/// bytes of memory, with the tracker of its running line.
+pub(super) fn new_lua(memory_limit: usize, script_dir: &Path) -> mlua::Result<(Lua, LineTracker)> {
     // SAFETY: `debug` is the only unsafe library; the functions that can corrupt mlua's
     // userdata or registry invariants are removed before any script runs.
     let lua = unsafe { Lua::unsafe_new_with(StdLib::ALL, LuaOptions::new()) };
@@ -88,11 +91,17 @@ pub(super) fn new_lua(memory_limit: usize) -> mlua::Result<(Lua, LineTracker)> {
     ] {
         debug.raw_set(f, Value::Nil)?;
     }
-    let table: Table = g.get("table")?;
-    if g.get::<Value>("unpack")?.is_nil() {
-        g.set("unpack", table.get::<Value>("unpack")?)?;
+    // Lua's path templates cannot quote `;` or `?`: a folder holding one is not searched.
+    let dir = script_dir.to_string_lossy();
+    if !dir.is_empty() && !dir.contains([';', '?']) {
+        let package: Table = g.get("package")?;
+        let path: String = package.get("path")?;
+        let sep = std::path::MAIN_SEPARATOR;
+        let dir = dir.trim_end_matches(sep);
+        package.set(
+            "path",
+            format!("{path};{dir}{sep}?.lua;{dir}{sep}?{sep}init.lua"),
+        )?;
     }
-    let string: Table = g.get("string")?;
-    string.set("gfind", string.get::<Value>("gmatch")?)?;
     Ok((lua, tracker))
 }

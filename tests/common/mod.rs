@@ -324,3 +324,160 @@ pub fn run_ok(cmd: &mut Command) -> std::process::Output {
     );
     out
 }
+
+/// Returns every `.lua` file under `dir`, sorted.
+pub fn lua_scripts(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            out.extend(lua_scripts(&path));
+        } else if path.extension().is_some_and(|e| e == "lua") {
+            out.push(path);
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Returns the ```lua blocks of the user guide (`docs/guide.md`).
+pub fn guide_examples() -> Vec<String> {
+    let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/guide.md"))
+        .expect("docs/guide.md");
+    let mut out = Vec::new();
+    let mut block: Option<String> = None;
+    for line in guide.lines() {
+        match (&mut block, line.trim()) {
+            (None, "```lua") => block = Some(String::new()),
+            (Some(_), "```") => out.push(block.take().unwrap()),
+            (Some(b), _) => {
+                b.push_str(line);
+                b.push('\n');
+            }
+            (None, _) => {}
+        }
+    }
+    out
+}
+
+/// Returns a fresh folder under `target/test-output/` holding the files the guide's examples
+/// name (`tri.obj`, `tiles.png`).
+pub fn guide_dir(name: &str) -> PathBuf {
+    let dir = out_dir(name);
+    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let tiles = image::RgbImage::from_fn(8, 8, |x, y| {
+        if (x / 4 + y / 4) % 2 == 0 {
+            image::Rgb([230, 230, 230])
+        } else {
+            image::Rgb([40, 60, 90])
+        }
+    });
+    tiles.save(dir.join("tiles.png")).unwrap();
+    dir
+}
+
+/// Returns a transform call statement's variable (`n` of `n:rotate('y', 30)`), or `None` for any
+/// other statement.
+fn transform_call(statement: &str) -> Option<&str> {
+    let (var, call) = statement.split_once(':')?;
+    let is_name = !var.is_empty()
+        && var
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_.[]".contains(c));
+    let is_call = ["translate(", "rotate(", "scale("]
+        .iter()
+        .any(|f| call.starts_with(f))
+        && call.ends_with(')');
+    (is_name && is_call).then_some(var)
+}
+
+/// Returns `src` with every node's transform calls in the reverse order, and how many runs it
+/// reversed: each run of consecutive `v:translate`, `v:rotate` or `v:scale` statements on one
+/// variable (one a line, or several separated by `;`, across lines) is reversed in place. This
+/// is how the two eras' copies of the course's hier.lua and macho-cows.lua differ: one read in
+/// the other's order renders the other's image. Lines holding no reversed call stay as they are.
+pub fn reverse_transform_calls(src: &str) -> (String, usize) {
+    let lines: Vec<&str> = src.lines().collect();
+    let mut statements: Vec<Vec<String>> = lines
+        .iter()
+        .map(|l| match l.trim() {
+            t if t.starts_with("--") => Vec::new(),
+            t => t
+                .split(';')
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(String::from)
+                .collect(),
+        })
+        .collect();
+    let slots: Vec<(usize, usize)> = statements
+        .iter()
+        .enumerate()
+        .flat_map(|(i, s)| (0..s.len()).map(move |j| (i, j)))
+        .collect();
+    let original = statements.clone();
+    let var_at = |k: usize| transform_call(&original[slots[k].0][slots[k].1]);
+    let (mut k, mut runs) = (0, 0);
+    while k < slots.len() {
+        let Some(var) = var_at(k) else {
+            k += 1;
+            continue;
+        };
+        let mut end = k;
+        while end + 1 < slots.len() && var_at(end + 1) == Some(var) {
+            end += 1;
+        }
+        if end > k {
+            runs += 1;
+            for (slot, from) in (k..=end).zip((k..=end).rev()) {
+                let (i, j) = slots[slot];
+                let (fi, fj) = slots[from];
+                statements[i][j] = original[fi][fj].clone();
+            }
+        }
+        k = end + 1;
+    }
+    let out: Vec<String> = lines
+        .iter()
+        .zip(statements.iter().zip(&original))
+        .map(|(line, (new, old))| {
+            if new == old {
+                line.to_string()
+            } else {
+                let indent = &line[..line.len() - line.trim_start().len()];
+                format!("{indent}{}", new.join("; "))
+            }
+        })
+        .collect();
+    (out.join("\n") + "\n", runs)
+}
+
+/// Returns the legacy copy of a modern course scene: every node's transform calls reversed
+/// ([`reverse_transform_calls`]), meshes read by `readobj` (`gr.mesh(n, 'f.obj')` becomes
+/// `gr.mesh(n, readobj('f.obj'))` after a `require('readobj')`) and `table.unpack` spelled
+/// `unpack`, as scripts of the course before Fall 2015 are written.
+pub fn legacy_copy(modern: &str) -> String {
+    let (reversed, _) = reverse_transform_calls(modern);
+    let mut out = String::from("require('readobj')\n");
+    for line in reversed.lines() {
+        let mut line = line.replace("table.unpack", "unpack");
+        if let Some(start) = line.find("gr.mesh(") {
+            // gr.mesh(name, 'file.obj') -> gr.mesh(name, readobj('file.obj'))
+            let args = &line[start + "gr.mesh(".len()..];
+            if let (Some(comma), Some(close)) = (args.find(','), args.rfind(')')) {
+                let file = args[comma + 1..close].trim();
+                if file.starts_with('\'') || file.starts_with('"') {
+                    let name = &args[..comma];
+                    line = format!(
+                        "{}gr.mesh({name}, readobj({file})){}",
+                        &line[..start],
+                        &args[close + 1..]
+                    );
+                }
+            }
+        }
+        out.push_str(&line);
+        out.push('\n');
+    }
+    out
+}

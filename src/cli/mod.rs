@@ -15,7 +15,8 @@ use crate::integrator::plan::Effect;
 use crate::integrator::progressive::Stop;
 use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
-use crate::lua::{ScriptOptions, run_script, run_script_with};
+use crate::lua::globals::Global;
+use crate::lua::{ScriptOptions, run_script_with};
 use crate::metrics::Region;
 use crate::scene::build::build_scene;
 use clap::{Args, Parser, Subcommand};
@@ -59,6 +60,25 @@ pub enum Command {
     Study(study::StudyArgs),
 }
 
+/// The Lua globals `-D` sets, for every command that runs a script.
+#[derive(Debug, Args)]
+pub struct Defines {
+    /// Set the Lua global NAME to VALUE before the script runs (repeatable): an integer or a
+    /// float when VALUE reads as one, true or false, else a string.
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = Global::parse)]
+    pub define: Vec<Global>,
+}
+
+impl Defines {
+    /// Returns the options of a script run with these globals.
+    pub fn script_options(&self) -> ScriptOptions {
+        ScriptOptions {
+            globals: self.define.clone(),
+            ..ScriptOptions::default()
+        }
+    }
+}
+
 #[derive(Debug, Args)]
 pub struct DiffArgs {
     /// The image to judge (EXR for linear values; PNG and JPEG compare their 8-bit codes).
@@ -84,6 +104,8 @@ pub struct DiffArgs {
 pub struct ExportArgs {
     /// The Lua scene script (its first gr.render is exported).
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: Defines,
     /// The XML file to write; meshes are written beside it.
     #[arg(short, long, value_name = "OUT.xml")]
     pub output: PathBuf,
@@ -99,6 +121,8 @@ pub struct ExportArgs {
 pub struct PhotonsArgs {
     /// The Lua scene script.
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: Defines,
     /// The picture to write (default: the script's image name with `_photons` added).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
@@ -123,6 +147,8 @@ pub struct PhotonsArgs {
 pub struct RenderArgs {
     /// The Lua scene script.
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: Defines,
     /// Write the image here instead of the script's file name (scripts that render one image).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
@@ -323,6 +349,8 @@ fn parse_crop(s: &str) -> std::result::Result<[u32; 4], String> {
 pub struct InfoArgs {
     /// The Lua scene script.
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: Defines,
 }
 
 /// Runs the parsed command line.
@@ -391,7 +419,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     });
     let options = ScriptOptions {
         missing_textures_warn: args.missing_textures == MissingTextures::Warn,
-        ..ScriptOptions::default()
+        ..args.defines.script_options()
     };
     run_script_with(&args.scene, hook, options)?;
     if rendered.get() == 0 {
@@ -536,7 +564,7 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         );
         Ok(())
     });
-    run_script(&args.scene, hook)?;
+    run_script_with(&args.scene, hook, args.defines.script_options())?;
     Ok(())
 }
 
@@ -548,7 +576,8 @@ fn export_command(args: ExportArgs) -> Result<()> {
             args.spp
         )));
     }
-    let desc = run_script(&args.scene, Box::new(|_, _| Ok(())))?;
+    let no_render = Box::new(|_: &SceneDesc, _: &RenderDesc| Ok(()));
+    let desc = run_script_with(&args.scene, no_render, args.defines.script_options())?;
     let Some(r) = desc.renders.first() else {
         return Err(Error::Usage(format!(
             "{} never calls gr.render: nothing to export",
@@ -615,7 +644,8 @@ fn diff_command(args: DiffArgs) -> Result<()> {
 }
 
 fn info_command(args: InfoArgs) -> Result<()> {
-    let desc = run_script(&args.scene, Box::new(|_, _| Ok(())))?;
+    let no_render = Box::new(|_: &SceneDesc, _: &RenderDesc| Ok(()));
+    let desc = run_script_with(&args.scene, no_render, args.defines.script_options())?;
     print!(
         "{}",
         report::describe(&args.scene.display().to_string(), &desc)?

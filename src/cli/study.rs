@@ -18,6 +18,8 @@ use std::time::Instant;
 pub struct StudyArgs {
     /// The Lua scene script (its first gr.render is studied).
     pub scene: PathBuf,
+    #[command(flatten)]
+    pub defines: super::Defines,
     /// The reference image (EXR, linear), of the size the renders have.
     #[arg(long, value_name = "REF.exr")]
     pub reference: PathBuf,
@@ -198,7 +200,7 @@ pub fn study_command(args: StudyArgs) -> Result<()> {
         print!("{md}");
         Ok(())
     });
-    crate::lua::run_script(&args.scene, hook)?;
+    crate::lua::run_script_with(&args.scene, hook, args.defines.script_options())?;
     Ok(())
 }
 
@@ -220,9 +222,14 @@ fn parse_job(scene: &Path, flags: &[String], seed: u64) -> Result<RenderJob> {
         Error::Usage(text.lines().next().unwrap_or("bad flags").to_string())
     })?;
     let a = parsed.render;
-    if a.output.is_some() || a.crop.is_some() || a.aa_map.is_some() || a.threads.is_some() {
+    if a.output.is_some()
+        || a.crop.is_some()
+        || a.aa_map.is_some()
+        || a.threads.is_some()
+        || !a.defines.define.is_empty()
+    {
         return Err(Error::Usage(
-            "-o, --crop, --aa-map and --threads are the study's to set, not a setting's".into(),
+            "-o, --crop, --aa-map, --threads and -D are the study's to set, not a setting's".into(),
         ));
     }
     super::settings::check_scale(a.scale)?;

@@ -5,7 +5,8 @@
 //! there). The layer has three parts:
 //! - `sandbox.rs`: the Lua state and its standard library;
 //! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
-//! - [`args`]: argument checks with lauxlib's messages and the calling script line.
+//! - [`args`]: argument checks with lauxlib's messages and the calling script line;
+//! - [`globals`]: the globals set before the script runs (`-D NAME=VALUE`).
 //!
 //! This module owns what a run shares: the description being filled, path resolution and
 //! warnings. Paths (meshes, textures, output images) resolve against the working directory
@@ -22,6 +23,7 @@
 //! ```
 
 pub mod args;
+pub mod globals;
 mod gr;
 mod sandbox;
 
@@ -38,14 +40,16 @@ pub type RenderHook = Box<dyn FnMut(&SceneDesc, &RenderDesc) -> Result<()>>;
 /// Largest image `gr.render` accepts, in pixels (about 8k × 8k).
 pub use crate::film::MAX_PIXELS;
 
-/// How a script run treats recoverable problems.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How a script run treats recoverable problems, and what it is given before it runs.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ScriptOptions {
     /// `--missing-textures=warn`: a missing texture or bump image is a warning (once per file) and
     /// the material renders with `kd` instead, rather than an error.
     pub missing_textures_warn: bool,
     /// Most bytes the script's Lua state may hold; `None` for [`sandbox::MAX_LUA_MEMORY`].
     pub memory_limit: Option<usize>,
+    /// Globals set before the script runs (`-D NAME=VALUE`; see [`globals`]).
+    pub globals: Vec<globals::Global>,
 }
 
 /// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
@@ -95,6 +99,7 @@ pub fn run_source_with(
     let limit = options.memory_limit.unwrap_or(sandbox::MAX_LUA_MEMORY);
     let (lua, lines) = sandbox::new_lua(limit).map_err(convert_error)?;
     gr::install(&lua, &state).map_err(convert_error)?;
+    globals::set(&lua, &options.globals)?;
     lua.load(source)
         .set_name(format!("@{name}"))
         .exec()

@@ -81,7 +81,8 @@ impl Defines {
 
 #[derive(Debug, Args)]
 pub struct DiffArgs {
-    /// The image to judge (EXR for linear values; PNG and JPEG compare their 8-bit codes).
+    /// The image to judge (EXR, PFM or HDR for linear values; PNG and JPEG compare their 8-bit
+    /// codes).
     pub image: PathBuf,
     /// The reference.
     pub reference: PathBuf,
@@ -439,7 +440,18 @@ fn render_one(
     out: &std::path::Path,
 ) -> Result<()> {
     // Refuse an output the image cannot be written to before spending the render on it.
-    crate::io::image::output_format(out)?;
+    let format = crate::io::image::output_format(out)?;
+    if job.crop.is_some()
+        && !matches!(
+            format,
+            crate::io::image::Format::Png | crate::io::image::Format::Exr
+        )
+    {
+        return Err(Error::Usage(format!(
+            "--crop: {} cannot record the tile's place in the image; name it .png or .exr",
+            out.display()
+        )));
+    }
     crate::files::check_output(out).map_err(|message| Error::File {
         path: out.to_path_buf(),
         message,

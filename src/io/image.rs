@@ -5,10 +5,14 @@
 //!   (0.999 → 254), no gamma;
 //! - `srgb`: multiply by `2^exposure`, clamp to [0, 1], apply the sRGB transfer curve, round.
 //!
-//! PNGs are 8-bit RGB, row 0 at the top. An output path ending in `.exr` gets linear 32-bit float
-//! RGB instead (no tone mapping). Every file is written to a temporary name beside the target and
-//! renamed over it, so a failed or interrupted render never leaves a truncated image where a good
-//! one was ([`crate::files::write_replacing`]).
+//! **Formats** ([`Format`], chosen by the output's extension, any case): `.png` is 8-bit RGB
+//! through the tone map, row 0 at the top; the others are linear radiance, no tone mapping:
+//! `.exr` 32-bit float RGB OpenEXR, `.pfm` the Portable Float Map ([`super::pfm`], exact f32), and
+//! `.hdr` Radiance RGBE (a shared 8-bit exponent: about 1% relative precision, non-negative
+//! values only), for tools that read one of these and not EXR. Any other extension is an error
+//! listing these four. Every file is written to a temporary name beside the target and renamed
+//! over it, so a failed or interrupted render never leaves a truncated image where a good one was
+//! ([`crate::files::write_replacing`]).
 //!
 //! **Tiles.** A PNG of a window of an image (`--crop`) carries a `tEXt` chunk `caustic-window`
 //! with `x0 y0 x1 y1 full_width full_height`; [`stitch`] reads tiles back and assembles the full
@@ -16,6 +20,7 @@
 
 use crate::error::{Error, Result};
 use crate::film::{Film, MAX_PIXELS, Window};
+use glam::Vec3A;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -101,7 +106,14 @@ pub enum Format {
     Png,
     /// `.exr`: linear 32-bit float RGB.
     Exr,
+    /// `.pfm`: linear 32-bit float RGB, bottom row first ([`super::pfm`]).
+    Pfm,
+    /// `.hdr`: linear RGB as Radiance RGBE.
+    Hdr,
 }
+
+/// The extensions [`output_format`] accepts, for messages.
+const WRITTEN: &str = "caustic writes .png, .exr, .pfm and .hdr";
 
 /// Returns the format `path`'s extension names (case-insensitive), or an error naming the
 /// path: an unknown or missing extension is refused rather than written as PNG under that name.
@@ -112,33 +124,61 @@ pub fn output_format(path: &Path) -> Result<Format> {
     match ext.as_deref() {
         Some("png") => Ok(Format::Png),
         Some("exr") => Ok(Format::Exr),
+        Some("pfm") => Ok(Format::Pfm),
+        Some("hdr") => Ok(Format::Hdr),
         other => Err(Error::File {
             path: path.to_path_buf(),
             message: match other {
-                Some(e) => format!("unknown output format '.{e}' (caustic writes .png and .exr)"),
-                None => "the output has no extension (caustic writes .png and .exr)".into(),
+                Some(e) => format!("unknown output format '.{e}' ({WRITTEN})"),
+                None => format!("the output has no extension ({WRITTEN})"),
             },
         }),
     }
 }
 
-/// Writes `film` at `path`: PNG with `tonemap`, or linear EXR when the path ends in `.exr`;
-/// any other extension is an error ([`output_format`]). A film that is a window of a larger
-/// image records its place (PNG only).
+/// Writes `film` at `path` in the format its extension names ([`output_format`]): PNG with
+/// `tonemap`, or linear EXR, PFM or Radiance HDR. A film that is a window of a larger image
+/// records its place (PNG only).
 pub fn write_image(film: &Film, path: &Path, tonemap: Tonemap) -> Result<()> {
-    let is_exr = output_format(path)? == Format::Exr;
-    if is_exr {
+    let float_image = || {
         let data: Vec<f32> = film.pixels.iter().flat_map(|c| c.to_array()).collect();
-        let img = image::Rgb32FImage::from_raw(film.width, film.height, data).ok_or_else(|| {
-            Error::File {
-                path: path.to_path_buf(),
-                message: "internal: film size does not match its pixels".into(),
-            }
-        })?;
-        return write_atomically(path, |tmp| {
-            img.save_with_format(tmp, image::ImageFormat::OpenExr)
-                .map_err(|e| e.to_string())
-        });
+        image::Rgb32FImage::from_raw(film.width, film.height, data).ok_or_else(|| Error::File {
+            path: path.to_path_buf(),
+            message: "internal: film size does not match its pixels".into(),
+        })
+    };
+    match output_format(path)? {
+        Format::Png => {}
+        Format::Exr => {
+            let img = float_image()?;
+            return write_atomically(path, |tmp| {
+                img.save_with_format(tmp, image::ImageFormat::OpenExr)
+                    .map_err(|e| e.to_string())
+            });
+        }
+        Format::Pfm => {
+            let bytes = super::pfm::encode(film.width, film.height, &film.pixels);
+            return write_atomically(path, |tmp| {
+                std::fs::write(tmp, &bytes).map_err(|e| e.to_string())
+            });
+        }
+        Format::Hdr => {
+            // RGBE has no sign: radiance is never negative, but clamp what rounding may leave.
+            let rgb: Vec<image::Rgb<f32>> = film
+                .pixels
+                .iter()
+                .map(|c| image::Rgb(c.max(Vec3A::ZERO).to_array()))
+                .collect();
+            let (w, h) = (film.width as usize, film.height as usize);
+            return write_atomically(path, |tmp| {
+                let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+                let mut out = BufWriter::new(file);
+                image::codecs::hdr::HdrEncoder::new(&mut out)
+                    .encode(&rgb, w, h)
+                    .map_err(|e| e.to_string())?;
+                out.flush().map_err(|e| e.to_string())
+            });
+        }
     }
     let w = film.window;
     let text = (w != Window::full(film.width, film.height)).then(|| {
@@ -328,26 +368,43 @@ pub fn stitch(tiles: &[PathBuf], out: &Path) -> Result<()> {
     })
 }
 
-/// Reads the PNG, JPEG or EXR image at `path` as linear RGB for [`crate::metrics`]: EXR as
-/// stored, 8-bit formats as their codes over 255 (not sRGB-decoded, so two PNGs compare as they
-/// are written). The image crate's default limits bound the decoded size.
+/// Reads the PNG, JPEG, EXR, PFM or Radiance HDR image at `path` as linear RGB for
+/// [`crate::metrics`]: the float formats as stored, 8-bit formats as their codes over 255 (not
+/// sRGB-decoded, so two PNGs compare as they are written). The image crate's default limits, and
+/// [`MAX_PIXELS`] for PFM, bound the decoded size.
 pub fn read_rgb(path: &Path) -> Result<crate::metrics::Image> {
     let fail = |message: String| Error::File {
         path: path.to_path_buf(),
         message,
     };
+    if output_format(path).ok() == Some(Format::Pfm) {
+        // The largest PFM read: MAX_PIXELS colour pixels and a generous header.
+        let most = MAX_PIXELS * 12 + 4096;
+        let bytes = std::fs::metadata(path)
+            .and_then(|m| match m.len() {
+                n if n > most => Err(std::io::Error::other(format!(
+                    "{n} bytes is more than a PFM of {MAX_PIXELS} pixels holds"
+                ))),
+                _ => crate::files::read_regular(path),
+            })
+            .map_err(|e| fail(format!("cannot read image: {e}")))?;
+        let (width, height, pixels) =
+            super::pfm::decode(&bytes, MAX_PIXELS).map_err(|e| fail(format!("bad PFM: {e}")))?;
+        return Ok(crate::metrics::Image {
+            width,
+            height,
+            pixels,
+        });
+    }
     let img = image::ImageReader::open(path)
         .map_err(|e| fail(format!("cannot read image: {e}")))?
         .with_guessed_format()
         .map_err(|e| fail(format!("cannot read image: {e}")))?
         .decode()
-        .map_err(|e| fail(format!("not a readable PNG, JPEG or EXR image: {e}")))?
+        .map_err(|e| fail(format!("not a readable PNG, JPEG, EXR or HDR image: {e}")))?
         .to_rgb32f();
     let (width, height) = img.dimensions();
-    let pixels = img
-        .pixels()
-        .map(|p| glam::Vec3A::new(p[0], p[1], p[2]))
-        .collect();
+    let pixels = img.pixels().map(|p| Vec3A::new(p[0], p[1], p[2])).collect();
     Ok(crate::metrics::Image {
         width,
         height,

@@ -4,3 +4,4 @@ pub mod gltf;
 pub mod image;
 pub mod mitsuba;
 pub mod obj;
+pub mod pfm;

@@ -325,10 +325,10 @@ pub enum TonemapArg {
 
 #[derive(Debug, Args)]
 pub struct StitchArgs {
-    /// Tiles written by `caustic render --crop` (PNG), in any order.
+    /// Tiles written by `caustic render --crop`, all PNG or all EXR, in any order.
     #[arg(required = true)]
     pub tiles: Vec<PathBuf>,
-    /// The full image to write.
+    /// The full image to write: .png from PNG tiles; .exr, .pfm or .hdr from EXR tiles.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
 }
@@ -359,7 +359,17 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render_command(args),
         Command::Info(args) => info_command(args),
-        Command::Stitch(args) => crate::io::image::stitch(&args.tiles, &args.output),
+        Command::Stitch(args) => {
+            let s = crate::io::stitch::stitch(&args.tiles, &args.output)?;
+            eprintln!(
+                "wrote {} ({}x{} from {} tiles)",
+                args.output.display(),
+                s.width,
+                s.height,
+                s.tiles
+            );
+            Ok(())
+        }
         Command::Photons(args) => photons_command(args),
         Command::Diff(args) => diff_command(args),
         Command::ExportMitsuba(args) => export_command(args),

@@ -194,6 +194,10 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    /// On Ctrl-C (SIGINT), end at once and write nothing, instead of stopping and writing what
+    /// was rendered as NAME.partial.EXT (exit status 130 either way).
+    #[arg(long)]
+    pub no_partial: bool,
     /// Shadow-ray samples per area or sphere light at each shaded point (soft shadows).
     #[arg(long, value_name = "N", default_value_t = DEFAULT_LIGHT_SAMPLES)]
     pub light_samples: u32,
@@ -428,11 +432,23 @@ fn render_command(args: RenderArgs) -> Result<()> {
         };
         render_one(desc, r, &job, &out)
     });
+    // Ctrl-C stops the render and writes what it has (crate::interrupt), unless --no-partial.
+    if !args.no_partial {
+        crate::interrupt::catch_sigint();
+    }
     let options = ScriptOptions {
         missing_textures_warn: args.missing_textures == MissingTextures::Warn,
+        interruptible: !args.no_partial,
         ..args.defines.script_options()
     };
     run_script_with(&args.scene, hook, options)?;
+    if crate::interrupt::requested() {
+        // Ctrl-C came as the last image was being written, or after: nothing was lost, but
+        // the exit status says the run was interrupted, as it always does.
+        return Err(Error::Interrupted(
+            "after the script's last image was written; nothing was lost".into(),
+        ));
+    }
     if rendered.get() == 0 {
         eprintln!(
             "warning: {} never called gr.render; no image written",
@@ -484,6 +500,9 @@ fn render_one(
     let frame = frame::render_desc(desc, r, job.scale, job.crop, &job.settings, &progress);
     bar.finish();
     let frame = frame?;
+    if let Some(partial) = frame.stats.interrupted {
+        return Err(write_partial(&frame.film, partial, out, job.tonemap));
+    }
     for note in &frame.stats.plan.notes {
         eprintln!("{note}");
     }
@@ -520,6 +539,7 @@ fn render_one(
             Stop::Passes => "the passes asked for",
             Stop::TargetError => "--target-error",
             Stop::TimeBudget => "--time-budget",
+            Stop::Interrupted => "an interrupt",
         };
         eprintln!(
             "progressive: {} passes in {:.2} s, stopped by {why}; estimated relative RMSE {error}",
@@ -531,6 +551,29 @@ fn render_one(
         report::print_stats(&frame, r, out);
     }
     Ok(())
+}
+
+/// Writes the film of an interrupted render of `out` beside it as `NAME.partial.EXT`, marked
+/// with what it holds ([`crate::interrupt`]), and returns the error that ends the run saying
+/// what was written; nothing is written when no pixel was rendered.
+fn write_partial(
+    film: &crate::film::Film,
+    partial: crate::integrator::Partial,
+    out: &std::path::Path,
+    tonemap: Tonemap,
+) -> Error {
+    if partial.is_empty() {
+        return Error::Interrupted(format!(
+            "before any pixel of {} was rendered; nothing written",
+            out.display()
+        ));
+    }
+    let path = crate::io::image::partial_path(out);
+    let note = format!("interrupted: {partial}");
+    match crate::io::image::write_image_noted(film, &path, tonemap, Some(&note)) {
+        Ok(()) => Error::Interrupted(format!("wrote {partial} to {}", path.display())),
+        Err(e) => Error::Interrupted(format!("the image rendered so far was not written: {e}")),
+    }
 }
 
 fn photons_command(args: PhotonsArgs) -> Result<()> {

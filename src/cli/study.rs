@@ -227,9 +227,12 @@ fn parse_job(scene: &Path, flags: &[String], seed: u64) -> Result<RenderJob> {
         || a.aa_map.is_some()
         || a.threads.is_some()
         || !a.defines.define.is_empty()
+        || a.no_partial
     {
         return Err(Error::Usage(
-            "-o, --crop, --aa-map, --threads and -D are the study's to set, not a setting's".into(),
+            "-o, --crop, --aa-map, --threads, -D and --no-partial are the study's to set, not \
+             a setting's"
+                .into(),
         ));
     }
     super::settings::check_scale(a.scale)?;

@@ -28,6 +28,20 @@ use std::path::Path;
 /// The `tEXt` keyword that records a tile's place in its image.
 pub const WINDOW_KEY: &str = "caustic-window";
 
+/// The `tEXt` keyword (PNG) and header attribute (EXR) that mark the image of an interrupted
+/// render and say what it holds ([`crate::interrupt`]).
+pub const PARTIAL_KEY: &str = "caustic-partial";
+
+/// Returns where an interrupted render's image of `out` goes: `NAME.partial.EXT` beside it.
+pub fn partial_path(out: &Path) -> std::path::PathBuf {
+    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
+    let name = match out.extension() {
+        Some(ext) => format!("{stem}.partial.{}", ext.to_string_lossy()),
+        None => format!("{stem}.partial"),
+    };
+    out.with_file_name(name)
+}
+
 /// How linear radiance becomes 8-bit pixel values.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Tonemap {
@@ -142,9 +156,28 @@ pub fn output_format(path: &Path) -> Result<Format> {
 /// `tonemap`, or linear EXR, PFM or Radiance HDR. A film that is a window of a larger image
 /// records its place (PNG and EXR).
 pub fn write_image(film: &Film, path: &Path, tonemap: Tonemap) -> Result<()> {
+    write_image_noted(film, path, tonemap, None)
+}
+
+/// Writes `film` as [`write_image`] does, marked when `partial` is given as the image of an
+/// interrupted render, with that note saying what it holds: a [`PARTIAL_KEY`] `tEXt` chunk in a
+/// PNG, an attribute of that name in an EXR (PFM and HDR have no place for it).
+pub fn write_image_noted(
+    film: &Film,
+    path: &Path,
+    tonemap: Tonemap,
+    partial: Option<&str>,
+) -> Result<()> {
+    let mut text = Vec::new();
+    if let Some(note) = partial {
+        text.push((PARTIAL_KEY, note.to_string()));
+    }
     match output_format(path)? {
         Format::Png => {}
-        Format::Exr => return write_atomically(path, |tmp| super::exr::write(film, tmp, &[])),
+        Format::Exr => {
+            let text: Vec<(&str, &str)> = text.iter().map(|(k, v)| (*k, v.as_str())).collect();
+            return write_atomically(path, |tmp| super::exr::write(film, tmp, &text));
+        }
         Format::Pfm => {
             let bytes = super::pfm::encode(film.width, film.height, &film.pixels);
             return write_atomically(path, |tmp| {
@@ -170,7 +203,6 @@ pub fn write_image(film: &Film, path: &Path, tonemap: Tonemap) -> Result<()> {
         }
     }
     let w = film.window;
-    let mut text = Vec::new();
     if w != Window::full(film.width, film.height) {
         let record = format!(
             "{} {} {} {} {} {}",

@@ -9,7 +9,9 @@
 //! tiles must belong to one image size, and a mix of PNG and EXR tiles is refused, as is the
 //! marked image of an interrupted render.
 
-use super::image::{Format, WINDOW_KEY, encode_png, output_format, write_atomically, write_image};
+use super::image::{
+    Format, PARTIAL_KEY, WINDOW_KEY, encode_png, output_format, write_atomically, write_image,
+};
 use crate::error::{Error, Result};
 use crate::film::{Film, MAX_PIXELS, Window};
 use glam::Vec3A;
@@ -63,6 +65,9 @@ fn read_tile(path: &Path) -> Result<Tile> {
         Some(Format::Png) => read_png_tile(path),
         Some(Format::Exr) => {
             let t = super::exr::read(path, MAX_PIXELS).map_err(fail)?;
+            if let Some((_, note)) = t.text.iter().find(|(k, _)| k == PARTIAL_KEY) {
+                return Err(partial_tile(path, note));
+            }
             check_window(path, t.window, t.window.size())?;
             Ok(Tile {
                 path: path.to_path_buf(),
@@ -102,6 +107,14 @@ fn check_window(path: &Path, window: Window, (width, height): (u32, u32)) -> Res
     Ok(())
 }
 
+/// Returns the error about the tile at `path`, the image of an interrupted render (`note`).
+fn partial_tile(path: &Path, note: &str) -> Error {
+    tile_error(
+        path,
+        format!("is the image of an interrupted render ({note}); render the tile again"),
+    )
+}
+
 /// Reads a PNG tile: 8-bit RGB with a [`WINDOW_KEY`] record.
 fn read_png_tile(path: &Path) -> Result<Tile> {
     let fail = |message: String| tile_error(path, message);
@@ -115,16 +128,19 @@ fn read_png_tile(path: &Path) -> Result<Tile> {
     if info.color_type != png::ColorType::Rgb || info.bit_depth != png::BitDepth::Eight {
         return Err(fail("not an 8-bit RGB tile written by caustic".into()));
     }
-    let text = info
-        .uncompressed_latin1_text
-        .iter()
-        .find(|t| t.keyword == WINDOW_KEY)
-        .map(|t| t.text.clone())
-        .ok_or_else(|| {
-            fail(format!(
-                "has no '{WINDOW_KEY}' record: was it rendered with --crop?"
-            ))
-        })?;
+    let chunk = |key: &str| {
+        info.uncompressed_latin1_text
+            .iter()
+            .find(|t| t.keyword == key)
+    };
+    if let Some(t) = chunk(PARTIAL_KEY) {
+        return Err(partial_tile(path, &t.text));
+    }
+    let text = chunk(WINDOW_KEY).map(|t| t.text.clone()).ok_or_else(|| {
+        fail(format!(
+            "has no '{WINDOW_KEY}' record: was it rendered with --crop?"
+        ))
+    })?;
     let v: Vec<u32> = text
         .split_whitespace()
         .filter_map(|s| s.parse().ok())

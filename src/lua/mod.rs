@@ -50,6 +50,9 @@ pub struct ScriptOptions {
     pub memory_limit: Option<usize>,
     /// Globals set before the script runs (`-D NAME=VALUE`; see [`globals`]).
     pub globals: Vec<globals::Global>,
+    /// Stop the script with [`Error::Interrupted`] once [`crate::interrupt::requested`] (the
+    /// command line's Ctrl-C), rather than let it run to its end.
+    pub interruptible: bool,
 }
 
 /// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
@@ -97,7 +100,7 @@ pub fn run_source_with(
         mesh_cache: HashMap::new(),
     }));
     let limit = options.memory_limit.unwrap_or(sandbox::MAX_LUA_MEMORY);
-    let (lua, lines) = sandbox::new_lua(limit).map_err(convert_error)?;
+    let (lua, lines) = sandbox::new_lua(limit, options.interruptible).map_err(convert_error)?;
     gr::install(&lua, &state).map_err(convert_error)?;
     globals::set(&lua, &options.globals)?;
     lua.load(source)

@@ -72,6 +72,10 @@ pub enum Error {
     /// A problem with the command line options.
     #[error("{0}")]
     Usage(String),
+    /// The run was asked to stop (Ctrl-C, [`crate::interrupt`]); the message says what was
+    /// written. The command line exits with status 130.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
 }
 
 impl Error {
@@ -93,7 +97,7 @@ impl Error {
     pub fn fault(&self) -> Option<Fault> {
         match self {
             Error::Script { fault, .. } => Some(*fault),
-            Error::Lua(_) | Error::File { .. } | Error::Usage(_) => None,
+            Error::Lua(_) | Error::File { .. } | Error::Usage(_) | Error::Interrupted(_) => None,
         }
     }
 }

@@ -10,7 +10,8 @@
 //!   one was. A symlink is followed (the file it names is replaced, the link kept); an existing
 //!   file keeps its permissions; a special file (`/dev/null`, a FIFO) is refused, never replaced.
 //!   On SIGINT or SIGTERM the temporary files being written are removed before the process
-//!   ends as the signal would end it.
+//!   ends as the signal would end it (except a first SIGINT that [`crate::interrupt`] turns
+//!   into a request to stop).
 
 use std::io;
 use std::path::{Path, PathBuf};
@@ -135,8 +136,15 @@ pub fn write_replacing_io(
     write_replacing(path, |tmp| write(tmp).map_err(|e| e.to_string())).map_err(io::Error::other)
 }
 
+/// Installs the SIGINT and SIGTERM handlers now rather than at the first file written (for
+/// [`crate::interrupt::catch_sigint`]); installing them twice does nothing.
+pub fn install_signal_handlers() {
+    cleanup::install_once();
+}
+
 /// Removing temporary files when SIGINT or SIGTERM arrives, with libc's `sigaction` (already a
-/// dependency on Linux; the handler only unlinks and re-raises, which are async-signal-safe).
+/// dependency on Linux; the handler only unlinks and re-raises, or records a first SIGINT as
+/// [`crate::interrupt`] asks, all async-signal-safe).
 #[cfg(target_os = "linux")]
 mod cleanup {
     use std::ffi::CString;
@@ -163,10 +171,15 @@ mod cleanup {
         }
     }
 
-    /// Registers `tmp` for removal on SIGINT and SIGTERM until the guard is dropped.
-    pub fn register(tmp: &Path) -> Guard {
+    /// Installs the signal handlers, once.
+    pub fn install_once() {
         static INSTALL: Once = Once::new();
         INSTALL.call_once(install);
+    }
+
+    /// Registers `tmp` for removal on SIGINT and SIGTERM until the guard is dropped.
+    pub fn register(tmp: &Path) -> Guard {
+        install_once();
         let Ok(c) = CString::new(tmp.as_os_str().as_bytes()) else {
             return Guard(None);
         };
@@ -185,6 +198,9 @@ mod cleanup {
     }
 
     extern "C" fn on_signal(sig: libc::c_int) {
+        if crate::interrupt::absorb(sig) {
+            return;
+        }
         for slot in &PENDING {
             let p = slot.load(Ordering::SeqCst);
             if !p.is_null() {
@@ -204,10 +220,12 @@ mod cleanup {
     fn install() {
         for sig in [libc::SIGINT, libc::SIGTERM] {
             // SAFETY: a zeroed sigaction with a handler and an empty mask is valid; the
-            // handler only does async-signal-safe work.
+            // handler only does async-signal-safe work. SA_RESTART: a SIGINT the handler
+            // absorbs must not fail a read or write in progress with EINTR.
             unsafe {
                 let mut action: libc::sigaction = std::mem::zeroed();
                 action.sa_sigaction = on_signal as extern "C" fn(libc::c_int) as usize;
+                action.sa_flags = libc::SA_RESTART;
                 libc::sigemptyset(&mut action.sa_mask);
                 libc::sigaction(sig, &action, std::ptr::null_mut());
             }
@@ -227,4 +245,7 @@ mod cleanup {
     pub fn register(_tmp: &Path) -> Guard {
         Guard
     }
+
+    /// Does nothing: no signal handlers on this platform.
+    pub fn install_once() {}
 }

@@ -11,7 +11,7 @@
 //!                    ──▶ the integrator's phases (photon_map: trace photons, build maps,
 //!                        precompute irradiance; then the camera pass, render::camera_pass;
 //!                        progressive: the same per pass with shrinking radii, averaged)
-//!                    ──▶ Film + Stats ──io::image::write_image──▶ PNG or EXR on disk
+//!                    ──▶ Film + Stats ──io::image::write_image──▶ PNG, EXR, PFM or HDR on disk
 //! ```
 //!
 //! `gr.render` calls the last steps synchronously, as the course's renderer does, so a script
@@ -48,6 +48,7 @@ pub mod film;
 pub mod frame;
 pub mod geometry;
 pub mod integrator;
+pub mod interrupt;
 pub mod io;
 pub mod light;
 pub mod lua;

@@ -7,6 +7,11 @@ fn main() -> ExitCode {
     let cli = caustic::cli::Cli::from_env();
     match caustic::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
+        // 128 + SIGINT, as a shell reports a process that Ctrl-C ended.
+        Err(e @ caustic::Error::Interrupted(_)) => {
+            eprintln!("{e}");
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE

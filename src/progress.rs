@@ -12,6 +12,24 @@ pub trait Progress: Sync {
     fn snapshot(&self, passes: u32, image: &crate::film::Film) {
         let _ = (passes, image);
     }
+    /// Returns true when the phases should stop early and keep what they have (the command
+    /// line's Ctrl-C, [`crate::interrupt`]); long loops ask once per row, chunk of photons or
+    /// pass, never per ray. False unless implemented.
+    fn should_stop(&self) -> bool {
+        false
+    }
+}
+
+/// A [`Progress`] that shows nothing but stops when `0` asks to: the inner phases of a
+/// progressive pass, whose progress is counted in passes.
+pub struct StopOnly<'a>(pub &'a dyn Progress);
+
+impl Progress for StopOnly<'_> {
+    fn start(&self, _: &str, _: u64) {}
+    fn advance(&self, _: u64) {}
+    fn should_stop(&self) -> bool {
+        self.0.should_stop()
+    }
 }
 
 /// A [`Progress`] that shows nothing.

@@ -20,6 +20,9 @@ pub struct RenderStats {
     pub depth_capped: u64,
     /// Camera samples and pixels whose radiance was NaN or infinite, dropped (counted as black).
     pub nonfinite_samples: u64,
+    /// Rows of the window left black because the render was asked to stop
+    /// ([`crate::progress::Progress::should_stop`]).
+    pub rows_skipped: u64,
 }
 
 impl RenderStats {
@@ -34,6 +37,7 @@ impl RenderStats {
         self.photons_used += o.photons_used;
         self.depth_capped += o.depth_capped;
         self.nonfinite_samples += o.nonfinite_samples;
+        self.rows_skipped += o.rows_skipped;
     }
 }
 

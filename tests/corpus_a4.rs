@@ -161,7 +161,7 @@ fn info_summarises_nodes_meshes_and_render_calls() {
     );
 }
 
-/// The output format follows the extension: `.png` and `.exr` (any case) are written, anything
+/// The output format follows the extension: `.png`, `.exr`, `.pfm` and `.hdr` (any case) are written, anything
 /// else is refused before rendering with the path in the message, and nothing is written.
 /// (`-o out.jpg` used to write PNG bytes under a JPEG name.)
 #[test]
@@ -181,7 +181,7 @@ fn output_formats_follow_the_extension_and_unknown_ones_are_refused() {
             .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && err.contains(name), "{name}: {err}");
-        assert!(err.contains(".png and .exr"), "{name}: {err}");
+        assert!(err.contains(".png, .exr, .pfm and .hdr"), "{name}: {err}");
         assert!(!dir.join(name).exists(), "{name} was written");
     }
     common::run_ok(

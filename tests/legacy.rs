@@ -233,7 +233,7 @@ fn study_takes_the_dialect_for_the_whole_study() {
     let stderr = String::from_utf8_lossy(&setting.stderr);
     assert!(!setting.status.success());
     assert!(
-        stderr.contains("--dialect are the study's to set"),
+        stderr.contains("--dialect, -D and --no-partial are the study's to set"),
         "{stderr}"
     );
 }

@@ -448,3 +448,108 @@ fn not_found_names_the_folder_of_a_script_run_from_its_own_folder() {
     let folder = std::fs::canonicalize(&dir).unwrap();
     assert!(err.contains(&folder.display().to_string()), "{err}");
 }
+
+/// `-D NAME=VALUE` globals reach the script typed as Lua would read them (integer, float,
+/// boolean, string), before its first line runs.
+#[test]
+fn defined_globals_are_set_before_the_script_runs_with_their_lua_types() {
+    use caustic::lua::globals::Global;
+    use caustic::lua::{ScriptOptions, run_source_with};
+    let globals = ["n=3", "x=0.25", "b=false", "s=big.png", "e="]
+        .map(|t| Global::parse(t).unwrap())
+        .to_vec();
+    let src = "assert(math.type(n) == 'integer' and n == 3)
+        assert(math.type(x) == 'float' and x == 0.25)
+        assert(b == false and s == 'big.png' and e == '')
+        assert(unset == nil)
+        gr.node(s .. n)";
+    let options = ScriptOptions {
+        globals,
+        ..ScriptOptions::default()
+    };
+    let d = run_source_with(
+        src.as_bytes(),
+        "test.lua",
+        std::path::Path::new("."),
+        Box::new(|_, _| Ok(())),
+        options,
+    )
+    .unwrap();
+    assert_eq!(&*d.nodes[0].name, "big.png3");
+}
+
+/// A global that would hide one every script has (`math`, `print`), one given twice, and too
+/// many of them are usage errors naming `-D` and the definition.
+#[test]
+fn defined_globals_may_not_hide_builtins_repeat_or_pile_up() {
+    use caustic::lua::globals::{Global, MAX_GLOBALS};
+    use caustic::lua::{ScriptOptions, run_source_with};
+    let run = |globals: Vec<Global>| {
+        let options = ScriptOptions {
+            globals,
+            ..ScriptOptions::default()
+        };
+        let no_render = Box::new(|_: &_, _: &_| Ok(()));
+        run_source_with(b"", "test.lua", ".".as_ref(), no_render, options)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+    };
+    let g = |t: &str| Global::parse(t).unwrap();
+    let e = run(vec![g("math=3")]);
+    assert!(e.contains("-D math=3") && e.contains("hide"), "{e}");
+    let e = run(vec![g("print=x")]);
+    assert!(e.contains("-D print=x"), "{e}");
+    let e = run(vec![g("a=1"), g("a=2")]);
+    assert!(e.contains("-D a=2") && e.contains("twice"), "{e}");
+    let many = (0..=MAX_GLOBALS).map(|i| g(&format!("v{i}=1"))).collect();
+    let e = run(many);
+    assert!(e.contains("-D") && e.contains("257"), "{e}");
+    assert_eq!(run(vec![g("size=512")]), "");
+}
+
+/// On the command line, `-D` changes what `caustic info` sees, and a bad form is a usage error
+/// naming the flag, before the script runs.
+#[test]
+fn dash_d_on_the_command_line_sets_globals_and_names_itself_in_errors() {
+    let dir = common::out_dir("defines_cli");
+    std::fs::write(
+        dir.join("scene.lua"),
+        "size = size or 16
+         gr.render(gr.node('root'), name or 'out.png', size, size, {0, 0, 5}, {0, 0, -1},
+                   {0, 1, 0}, 50, {0, 0, 0}, {gr.light({0, 0, 5}, {1, 1, 1}, {1, 0, 0})})\n",
+    )
+    .unwrap();
+    let info = |extra: &[&str]| {
+        common::caustic()
+            .current_dir(&dir)
+            .args(["info", "scene.lua"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let out = info(&[]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && text.contains("16x16"), "{text}");
+    let out = info(&["-D", "size=40", "-Dname=big.png"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("40x40") && text.contains("big.png"),
+        "{text}"
+    );
+    for (bad, why) in [
+        ("foo", "no '='"),
+        ("=3", "empty"),
+        ("9lives=1", "not a Lua name"),
+        ("while=1", "keyword"),
+        ("gr=1", "scene API"),
+    ] {
+        let out = info(&["-D", bad]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "-D {bad} was accepted");
+        assert!(err.contains("-D") && err.contains(why), "-D {bad}: {err}");
+    }
+    let out = info(&["-D", "table=1"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("-D table=1"), "{err}");
+}

@@ -240,6 +240,98 @@ fn stitched_tiles_equal_the_full_render_byte_for_byte() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--crop"));
 }
 
+/// EXR tiles remember their place as OpenEXR does (the data window inside the full image's
+/// display window, so a viewer shows a tile in place), and stitch into an EXR whose every value
+/// equals the full render's, bit for bit, or into a PFM with the same values. Mixing PNG and
+/// EXR tiles, and stitching EXR tiles into a PNG, are errors naming the files.
+#[test]
+fn stitched_exr_tiles_equal_the_full_render_value_for_value() {
+    let dir = out_dir("sampling-stitch-exr");
+    std::fs::write(dir.join("flat.lua"), FLAT_SCENE).unwrap();
+    let render = |out: &str, crop: Option<&str>| {
+        let mut cmd = caustic();
+        cmd.current_dir(&dir).args([
+            "render", "flat.lua", "--scale", "0.25", "--spp", "2", "-q", "-o", out,
+        ]);
+        if let Some(c) = crop {
+            cmd.args(["--crop", c]);
+        }
+        run_ok(&mut cmd);
+    };
+    render("full.exr", None);
+    let tiles = [
+        ("a.exr", "0,0,10,7"),
+        ("b.exr", "10,0,24,7"),
+        ("c.exr", "0,7,24,18"),
+    ];
+    for (name, crop) in tiles {
+        render(name, Some(crop));
+    }
+    render("d.png", Some("0,0,10,7"));
+    // A viewer reading tile b sees the full 24x18 image with the tile's pixels in place.
+    let b = image::open(dir.join("b.exr")).unwrap().to_rgb32f();
+    assert_eq!(b.dimensions(), (24, 18));
+    assert!(b.get_pixel(0, 0).0 == [0.0; 3] && b.get_pixel(12, 3).0 != [0.0; 3]);
+    let out = run_ok(caustic().current_dir(&dir).args([
+        "stitch",
+        "c.exr",
+        "a.exr",
+        "b.exr",
+        "-o",
+        "stitched.exr",
+    ]));
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("wrote stitched.exr (24x18 from 3 tiles)"),
+        "{said}"
+    );
+    let full = caustic::io::image::read_rgb(&dir.join("full.exr")).unwrap();
+    assert!(full.pixels.iter().any(|p| p.max_element() > 0.0));
+    run_ok(caustic().current_dir(&dir).args([
+        "stitch",
+        "a.exr",
+        "b.exr",
+        "c.exr",
+        "-o",
+        "stitched.pfm",
+    ]));
+    for name in ["stitched.exr", "stitched.pfm"] {
+        let stitched = caustic::io::image::read_rgb(&dir.join(name)).unwrap();
+        assert_eq!((stitched.width, stitched.height), (24, 18));
+        let same = stitched
+            .pixels
+            .iter()
+            .zip(&full.pixels)
+            .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits));
+        assert!(same, "{name} differs from the full render");
+    }
+    let refused = |args: &[&str], what: &[&str]| {
+        let out = caustic()
+            .current_dir(&dir)
+            .arg("stitch")
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} stitched");
+        assert!(what.iter().all(|w| err.contains(w)), "{args:?}: {err}");
+    };
+    refused(
+        &["d.png", "b.exr", "c.exr", "-o", "x.exr"],
+        &["b.exr", "d.png", "one format"],
+    );
+    refused(
+        &["a.exr", "b.exr", "c.exr", "-o", "x.png"],
+        &["x.png", ".exr, .pfm or .hdr"],
+    );
+    refused(&["a.exr", "b.exr", "-o", "x.exr"], &["uncovered"]);
+    refused(
+        &["a.exr", "a.exr", "b.exr", "c.exr", "-o", "x.exr"],
+        &["overlaps"],
+    );
+    assert!(!dir.join("x.exr").exists() && !dir.join("x.png").exists());
+}
+
 /// The default pixel is an area, not its centre: a white wall whose edge crosses a column of
 /// pixels a quarter of the way in covers a quarter of each, which one centre ray per pixel
 /// (the course's sampling, and caustic's default before issue 13) renders as no wall at all.

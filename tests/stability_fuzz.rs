@@ -222,7 +222,7 @@ proptest! {
         std::fs::write(&pa, mutate(&a, &edits)).unwrap();
         std::fs::write(&pb, &b).unwrap();
         let out = dir.join(format!("o{id}.png"));
-        if let Err(e) = caustic::io::image::stitch(&[pa.clone(), pb.clone()], &out) {
+        if let Err(e) = caustic::io::stitch::stitch(&[pa.clone(), pb.clone()], &out) {
             let msg = e.to_string();
             prop_assert!(msg.contains(&format!("a{id}.png")) || msg.contains(&format!("b{id}.png")), "{msg}");
         }

@@ -4,7 +4,8 @@
 
 mod common;
 
-use caustic::io::image::{WINDOW_KEY, stitch};
+use caustic::io::image::WINDOW_KEY;
+use caustic::io::stitch::stitch;
 use common::out_dir;
 use std::path::{Path, PathBuf};
 
@@ -75,4 +76,66 @@ fn crafted_tile_headers_are_refused_naming_the_tile() {
     let img = image::open(&out).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), (8, 4));
     assert!(img.pixels().all(|p| p.0 == [128; 3]));
+}
+
+/// Writes a 4×4 grey EXR at `dir/name` whose data window starts at `at` inside a display window
+/// of `display` pixels from the origin; returns its path.
+fn exr_tile(dir: &Path, name: &str, at: (i32, i32), display: (usize, usize)) -> PathBuf {
+    use exr::prelude::*;
+    let path = dir.join(name);
+    let attributes = LayerAttributes {
+        layer_position: Vec2(at.0, at.1),
+        ..LayerAttributes::default()
+    };
+    let channels = SpecificChannels::rgb(|_: Vec2<usize>| (0.5f32, 0.5f32, 0.5f32));
+    let layer = Layer::new((4, 4), attributes, Encoding::default(), channels);
+    let image = Image::new(
+        ImageAttributes::new(IntegerBounds::from_dimensions(display)),
+        layer,
+    );
+    image.write().to_file(&path).unwrap();
+    path
+}
+
+/// Crafted EXR tiles are refused naming the tile and the fault: a data window outside the
+/// display window, a display window of 3.6e9 pixels, and bytes that are no EXR. Two good EXR
+/// tiles stitch, their values kept.
+#[test]
+fn crafted_exr_tiles_are_refused_naming_the_tile() {
+    let dir = out_dir("stability_stitch_exr");
+    let out = dir.join("out.exr");
+    let cases = [
+        (exr_tile(&dir, "outside.exr", (6, 0), (8, 4)), "not inside"),
+        (exr_tile(&dir, "before.exr", (-1, 0), (8, 4)), "not inside"),
+        (
+            exr_tile(&dir, "huge.exr", (0, 0), (60000, 60000)),
+            "larger than",
+        ),
+    ];
+    for (path, fault) in &cases {
+        let err = stitch(std::slice::from_ref(path), &out)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(&path.display().to_string()) && err.contains(fault),
+            "expected the path and '{fault}' in: {err}"
+        );
+    }
+    let junk = dir.join("junk.exr");
+    std::fs::write(&junk, b"v/1\x01not really").unwrap();
+    let err = stitch(std::slice::from_ref(&junk), &out)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("junk.exr") && err.contains("EXR"), "{err}");
+    assert!(!out.exists(), "no output from refused tiles");
+
+    let good = [
+        exr_tile(&dir, "left.exr", (0, 0), (8, 4)),
+        exr_tile(&dir, "right.exr", (4, 0), (8, 4)),
+    ];
+    let s = stitch(&good, &out).unwrap();
+    assert_eq!((s.width, s.height, s.tiles), (8, 4, 2));
+    let img = caustic::io::image::read_rgb(&out).unwrap();
+    assert_eq!((img.width, img.height), (8, 4));
+    assert!(img.pixels.iter().all(|p| p.to_array() == [0.5; 3]));
 }

@@ -15,6 +15,7 @@ use crate::integrator::plan::Effect;
 use crate::integrator::progressive::Stop;
 use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES};
 use crate::io::image::{Tonemap, write_image, write_sample_map};
+use crate::lua::globals::Global;
 use crate::lua::{Dialect, ScriptOptions, run_script_with};
 use crate::metrics::Region;
 use crate::scene::build::build_scene;
@@ -61,7 +62,8 @@ pub enum Command {
 
 #[derive(Debug, Args)]
 pub struct DiffArgs {
-    /// The image to judge (EXR for linear values; PNG and JPEG compare their 8-bit codes).
+    /// The image to judge (EXR, PFM or HDR for linear values; PNG and JPEG compare their 8-bit
+    /// codes).
     pub image: PathBuf,
     /// The reference.
     pub reference: PathBuf,
@@ -178,6 +180,10 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    /// On Ctrl-C (SIGINT), end at once and write nothing, instead of stopping and writing what
+    /// was rendered as NAME.partial.EXT (exit status 130 either way).
+    #[arg(long)]
+    pub no_partial: bool,
     /// Shadow-ray samples per area or sphere light at each shaded point (soft shadows).
     #[arg(long, value_name = "N", default_value_t = DEFAULT_LIGHT_SAMPLES)]
     pub light_samples: u32,
@@ -252,8 +258,8 @@ pub struct RenderArgs {
     pub missing_textures: MissingTextures,
 }
 
-/// How a scene script is read: the flags of every command that runs one.
-#[derive(Clone, Copy, Debug, Args)]
+/// How a scene script is read: the flags of every command that runs one (`--dialect`, `-D`).
+#[derive(Clone, Debug, Args)]
 pub struct ScriptArgs {
     /// The era of the course's API the script is written for: modern (Fall 2015 onwards: each
     /// transform call acts in the parent's frame, in call order) or legacy (before: transforms
@@ -261,6 +267,10 @@ pub struct ScriptArgs {
     /// warning when the script looks legacy].
     #[arg(long, value_enum, value_name = "ERA")]
     pub dialect: Option<DialectArg>,
+    /// Set the Lua global NAME to VALUE before the script runs (repeatable): an integer or a
+    /// float when VALUE reads as one, true or false, else a string.
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = Global::parse)]
+    pub define: Vec<Global>,
 }
 
 impl ScriptArgs {
@@ -271,6 +281,7 @@ impl ScriptArgs {
                 DialectArg::Modern => Dialect::Modern,
                 DialectArg::Legacy => Dialect::Legacy,
             }),
+            globals: self.define.clone(),
             ..ScriptOptions::default()
         }
     }
@@ -340,10 +351,10 @@ pub enum TonemapArg {
 
 #[derive(Debug, Args)]
 pub struct StitchArgs {
-    /// Tiles written by `caustic render --crop` (PNG), in any order.
+    /// Tiles written by `caustic render --crop`, all PNG or all EXR, in any order.
     #[arg(required = true)]
     pub tiles: Vec<PathBuf>,
-    /// The full image to write.
+    /// The full image to write: .png from PNG tiles; .exr, .pfm or .hdr from EXR tiles.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
 }
@@ -432,7 +443,17 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render_command(args),
         Command::Info(args) => info_command(args),
-        Command::Stitch(args) => crate::io::image::stitch(&args.tiles, &args.output),
+        Command::Stitch(args) => {
+            let s = crate::io::stitch::stitch(&args.tiles, &args.output)?;
+            eprintln!(
+                "wrote {} ({}x{} from {} tiles)",
+                args.output.display(),
+                s.width,
+                s.height,
+                s.tiles
+            );
+            Ok(())
+        }
         Command::Photons(args) => photons_command(args),
         Command::Diff(args) => diff_command(args),
         Command::ExportMitsuba(args) => export_command(args),
@@ -495,11 +516,23 @@ fn render_command(args: RenderArgs) -> Result<()> {
             None => render_one(desc, r, &job, &out),
         }
     });
+    // Ctrl-C stops the render and writes what it has (crate::interrupt), unless --no-partial.
+    if !args.no_partial {
+        crate::interrupt::catch_sigint();
+    }
     let options = ScriptOptions {
         missing_textures_warn: args.missing_textures == MissingTextures::Warn,
+        interruptible: !args.no_partial,
         ..args.script.options()
     };
     run_script_with(&args.scene, hook, options)?;
+    if crate::interrupt::requested() {
+        // Ctrl-C came as the last image was being written, or after: nothing was lost, but
+        // the exit status says the run was interrupted, as it always does.
+        return Err(Error::Interrupted(
+            "after the script's last image was written; nothing was lost".into(),
+        ));
+    }
     if rendered.get() == 0 {
         eprintln!(
             "warning: {} never called gr.render; no image written",
@@ -517,7 +550,18 @@ fn render_one(
     out: &std::path::Path,
 ) -> Result<()> {
     // Refuse an output the image cannot be written to before spending the render on it.
-    crate::io::image::output_format(out)?;
+    let format = crate::io::image::output_format(out)?;
+    if job.crop.is_some()
+        && !matches!(
+            format,
+            crate::io::image::Format::Png | crate::io::image::Format::Exr
+        )
+    {
+        return Err(Error::Usage(format!(
+            "--crop: {} cannot record the tile's place in the image; name it .png or .exr",
+            out.display()
+        )));
+    }
     crate::files::check_output(out).map_err(|message| Error::File {
         path: out.to_path_buf(),
         message,
@@ -540,6 +584,9 @@ fn render_one(
     let frame = frame::render_desc(desc, r, job.scale, job.crop, &job.settings, &progress);
     bar.finish();
     let frame = frame?;
+    if let Some(partial) = frame.stats.interrupted {
+        return Err(write_partial(&frame.film, partial, out, job.tonemap));
+    }
     for note in &frame.stats.plan.notes {
         eprintln!("{note}");
     }
@@ -576,6 +623,7 @@ fn render_one(
             Stop::Passes => "the passes asked for",
             Stop::TargetError => "--target-error",
             Stop::TimeBudget => "--time-budget",
+            Stop::Interrupted => "an interrupt",
         };
         eprintln!(
             "progressive: {} passes in {:.2} s, stopped by {why}; estimated relative RMSE {error}",
@@ -587,6 +635,29 @@ fn render_one(
         report::print_stats(&frame, r, out);
     }
     Ok(())
+}
+
+/// Writes the film of an interrupted render of `out` beside it as `NAME.partial.EXT`, marked
+/// with what it holds ([`crate::interrupt`]), and returns the error that ends the run saying
+/// what was written; nothing is written when no pixel was rendered.
+fn write_partial(
+    film: &crate::film::Film,
+    partial: crate::integrator::Partial,
+    out: &std::path::Path,
+    tonemap: Tonemap,
+) -> Error {
+    if partial.is_empty() {
+        return Error::Interrupted(format!(
+            "before any pixel of {} was rendered; nothing written",
+            out.display()
+        ));
+    }
+    let path = crate::io::image::partial_path(out);
+    let note = format!("interrupted: {partial}");
+    match crate::io::image::write_image_noted(film, &path, tonemap, Some(&note)) {
+        Ok(()) => Error::Interrupted(format!("wrote {partial} to {}", path.display())),
+        Err(e) => Error::Interrupted(format!("the image rendered so far was not written: {e}")),
+    }
 }
 
 fn photons_command(args: PhotonsArgs) -> Result<()> {

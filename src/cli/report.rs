@@ -53,6 +53,10 @@ impl Progress for Bar {
     fn advance(&self, n: u64) {
         self.bar.inc(n);
     }
+
+    fn should_stop(&self) -> bool {
+        crate::interrupt::requested()
+    }
 }
 
 /// The progress of one image: its [`Bar`], and a progressive render's running image written
@@ -70,6 +74,10 @@ impl Progress for Snapshots<'_> {
 
     fn advance(&self, n: u64) {
         self.bar.advance(n);
+    }
+
+    fn should_stop(&self) -> bool {
+        self.bar.should_stop()
     }
 
     fn snapshot(&self, passes: u32, image: &crate::film::Film) {

@@ -219,10 +219,12 @@ fn parse_job(scene: &Path, flags: &[String], seed: u64) -> Result<RenderJob> {
         || a.aa_map.is_some()
         || a.threads.is_some()
         || a.script.dialect.is_some()
+        || !a.script.define.is_empty()
+        || a.no_partial
     {
         return Err(Error::Usage(
-            "-o, --crop, --aa-map, --threads and --dialect are the study's to set, not a \
-             setting's"
+            "-o, --crop, --aa-map, --threads, --dialect, -D and --no-partial are the study's to \
+             set, not a setting's"
                 .into(),
         ));
     }

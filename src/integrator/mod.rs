@@ -104,6 +104,55 @@ pub struct Stats {
     pub photons: Option<photon_map::GiStats>,
     /// The passes, radii and estimated error of a progressive render.
     pub progressive: Option<progressive::ProgressiveStats>,
+    /// How much of the frame was done when it was asked to stop
+    /// ([`Progress::should_stop`]); `None` for a finished frame.
+    pub interrupted: Option<Partial>,
+}
+
+/// What an interrupted frame's film holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Partial {
+    /// The camera pass rendered `done` of the window's `rows` rows; the others are black, with
+    /// no samples.
+    Rows { done: u32, rows: u32 },
+    /// A progressive render finished `done` passes (of at most `planned`); the film is their
+    /// mean, every pixel rendered.
+    Passes { done: u32, planned: u32 },
+}
+
+impl Partial {
+    /// Returns what the film of a camera pass that skipped `stats.rows_skipped` of its `rows`
+    /// rows holds, or `None` when it skipped none.
+    pub fn of_rows(stats: &RenderStats, rows: u32) -> Option<Partial> {
+        (stats.rows_skipped > 0).then(|| Partial::Rows {
+            done: rows.saturating_sub(stats.rows_skipped as u32),
+            rows,
+        })
+    }
+
+    /// Returns true when the film holds no rendered pixel at all.
+    pub fn is_empty(&self) -> bool {
+        match *self {
+            Partial::Rows { done, .. } | Partial::Passes { done, .. } => done == 0,
+        }
+    }
+}
+
+impl std::fmt::Display for Partial {
+    /// Writes what the film holds: `37% of rows (37 of 100; the others black)` or `the mean of
+    /// 12 passes (of at most 64)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Partial::Rows { done, rows } => write!(
+                f,
+                "{}% of rows ({done} of {rows}; the others black)",
+                (100 * done as u64) / rows.max(1) as u64
+            ),
+            Partial::Passes { done, planned } => {
+                write!(f, "the mean of {done} passes (of at most {planned})")
+            }
+        }
+    }
 }
 
 impl Integrator {
@@ -118,8 +167,10 @@ impl Integrator {
         plan: Plan,
         progress: &dyn Progress,
     ) -> (Film, Stats) {
-        let stats = |plan, render, photons| Stats {
+        let rows = window.size().1;
+        let stats = |plan, render: RenderStats, photons| Stats {
             plan,
+            interrupted: Partial::of_rows(&render, rows),
             render,
             photons,
             progressive: None,
@@ -164,5 +215,5 @@ fn camera_pass(
         timing: settings.timing,
     };
     progress.start("rendering rows", window.size().1 as u64);
-    crate::render::camera_pass(camera, &tracer, &opts, &|| progress.advance(1))
+    crate::render::camera_pass(camera, &tracer, &opts, progress)
 }

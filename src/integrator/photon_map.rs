@@ -346,10 +346,15 @@ impl Gi {
                     progress.advance(j as u64 % 1024 + 1);
                 }
                 let ph = map.get(id);
-                let e = FOUND.with_borrow_mut(|found| {
-                    let d2 = map.knn_where(ph.position, k, r2, others, found);
-                    self.kernel_sum(map, found, d2, ph.normal, false)
-                });
+                // Asked to stop: the points left carry nothing (the frame is dropped).
+                let e = if progress.should_stop() {
+                    Vec3A::ZERO
+                } else {
+                    FOUND.with_borrow_mut(|found| {
+                        let d2 = map.knn_where(ph.position, k, r2, others, found);
+                        self.kernel_sum(map, found, d2, ph.normal, false)
+                    })
+                };
                 Photon {
                     position: ph.position,
                     power: e * thinning,

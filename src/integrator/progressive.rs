@@ -46,11 +46,11 @@
 
 use super::eye::DiffuseTerm;
 use super::photon_map::{Gi, GiSettings, GiStats};
-use super::{Plan, Settings, Stats, camera_pass};
+use super::{Partial, Plan, Settings, Stats, camera_pass};
 use crate::camera::Camera;
 use crate::film::{Film, Window};
 use crate::photon::PhotonMap;
-use crate::progress::{NoProgress, Progress};
+use crate::progress::{Progress, StopOnly};
 use crate::render::Sampling;
 use crate::scene::Scene;
 use crate::stats::RenderStats;
@@ -119,6 +119,9 @@ pub enum Stop {
     TargetError,
     /// Another pass would have ended after the time budget.
     TimeBudget,
+    /// The render was asked to stop ([`Progress::should_stop`]): the pass under way is
+    /// dropped, unless it is the first.
+    Interrupted,
 }
 
 /// What a progressive render reports, for `--stats`.
@@ -152,6 +155,10 @@ pub fn render(
     let (mut render_stats, mut photon_stats) = (RenderStats::default(), GiStats::default());
     let (mut first_radii, mut radii) = ((0.0, 0.0), (0.0, 0.0));
     progress.start("progressive passes", prog.passes as u64);
+    // A pass's phases report nothing (progress counts passes) but stop when asked.
+    let inner = StopOnly(progress);
+    // The first pass's rows, when the render is stopped before it ends.
+    let mut first_rows = None;
     let stop = loop {
         let pass = acc.passes;
         let gi_settings = GiSettings {
@@ -159,7 +166,7 @@ pub fn render(
             precompute: false,
             ..super::photon_map::planned(&settings.photons, &plan)
         };
-        let gi = Gi::build_with(scene, &gi_settings, &NoProgress);
+        let gi = Gi::build_with(scene, &gi_settings, &inner);
         if pass == 0 {
             first_radii = first_pass_radii(scene, &gi, &prog);
             radii = first_radii;
@@ -171,10 +178,17 @@ pub fn render(
             ..settings.clone()
         };
         let diffuse = DiffuseTerm::Photons(&gi);
-        let (film, rs) = camera_pass(scene, camera, diffuse, window, &pass_settings, &NoProgress);
+        let (film, rs) = camera_pass(scene, camera, diffuse, window, &pass_settings, &inner);
         render_stats.add(&rs);
         add_photon_stats(&mut photon_stats, &gi.stats);
         drop(gi);
+        if rs.rows_skipped > 0 {
+            // Stopped within this pass: keep the passes finished, or the first pass's rows.
+            if acc.passes == 0 {
+                first_rows = Some(film);
+            }
+            break Stop::Interrupted;
+        }
         acc.add(&film);
         drop(film);
         crate::mem::release_free_memory();
@@ -188,6 +202,9 @@ pub fn render(
         if let Some(stop) = should_stop(&prog, &acc, elapsed) {
             break stop;
         }
+        if progress.should_stop() {
+            break Stop::Interrupted;
+        }
         radii = shrink(radii, acc.passes, prog.alpha);
     };
     render_stats.time = start.elapsed();
@@ -199,13 +216,22 @@ pub fn render(
         last_radii: radii,
         time: start.elapsed(),
     };
+    let interrupted = match (&first_rows, stop) {
+        (Some(_), _) => Partial::of_rows(&render_stats, window.size().1),
+        (None, Stop::Interrupted) => Some(Partial::Passes {
+            done: acc.passes,
+            planned: prog.passes.min(MAX_PASSES),
+        }),
+        (None, _) => None,
+    };
     let stats = Stats {
         plan,
         render: render_stats,
         photons: Some(photon_stats),
         progressive: Some(progressive),
+        interrupted,
     };
-    (acc.mean(), stats)
+    (first_rows.unwrap_or_else(|| acc.mean()), stats)
 }
 
 /// Returns the seed of pass `pass`'s streams under `seed`.

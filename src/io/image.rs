@@ -5,22 +5,42 @@
 //!   (0.999 → 254), no gamma;
 //! - `srgb`: multiply by `2^exposure`, clamp to [0, 1], apply the sRGB transfer curve, round.
 //!
-//! PNGs are 8-bit RGB, row 0 at the top. An output path ending in `.exr` gets linear 32-bit float
-//! RGB instead (no tone mapping). Every file is written to a temporary name beside the target and
-//! renamed over it, so a failed or interrupted render never leaves a truncated image where a good
-//! one was ([`crate::files::write_replacing`]).
+//! **Formats** ([`Format`], chosen by the output's extension, any case): `.png` is 8-bit RGB
+//! through the tone map, row 0 at the top; the others are linear radiance, no tone mapping:
+//! `.exr` 32-bit float RGB OpenEXR, `.pfm` the Portable Float Map ([`super::pfm`], exact f32), and
+//! `.hdr` Radiance RGBE (a shared 8-bit exponent: about 1% relative precision, non-negative
+//! values only), for tools that read one of these and not EXR. Any other extension is an error
+//! listing these four. Every file is written to a temporary name beside the target and renamed
+//! over it, so a failed or interrupted render never leaves a truncated image where a good one was
+//! ([`crate::files::write_replacing`]).
 //!
 //! **Tiles.** A PNG of a window of an image (`--crop`) carries a `tEXt` chunk `caustic-window`
-//! with `x0 y0 x1 y1 full_width full_height`; [`stitch`] reads tiles back and assembles the full
-//! image, which is byte-identical to the PNG of a full render.
+//! with `x0 y0 x1 y1 full_width full_height`; an EXR records its data window in the full image's
+//! display window ([`super::exr`]). [`super::stitch`] reads tiles back and assembles the full
+//! image, byte-identical to a full render's.
 
 use crate::error::{Error, Result};
 use crate::film::{Film, MAX_PIXELS, Window};
+use glam::Vec3A;
 use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The `tEXt` keyword that records a tile's place in its image.
 pub const WINDOW_KEY: &str = "caustic-window";
+
+/// The `tEXt` keyword (PNG) and header attribute (EXR) that mark the image of an interrupted
+/// render and say what it holds ([`crate::interrupt`]).
+pub const PARTIAL_KEY: &str = "caustic-partial";
+
+/// Returns where an interrupted render's image of `out` goes: `NAME.partial.EXT` beside it.
+pub fn partial_path(out: &Path) -> std::path::PathBuf {
+    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
+    let name = match out.extension() {
+        Some(ext) => format!("{stem}.partial.{}", ext.to_string_lossy()),
+        None => format!("{stem}.partial"),
+    };
+    out.with_file_name(name)
+}
 
 /// How linear radiance becomes 8-bit pixel values.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,7 +79,7 @@ pub fn to_rgb8(film: &Film, tonemap: Tonemap) -> Vec<u8> {
 
 /// Writes `write` to a temporary file beside `path`'s target, then renames it over the target
 /// ([`crate::files::write_replacing`]: symlinks followed, permissions kept, special files refused).
-fn write_atomically(
+pub(super) fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> std::result::Result<(), String>,
 ) -> Result<()> {
@@ -69,14 +89,15 @@ fn write_atomically(
     })
 }
 
-/// Encodes 8-bit RGB (`channels = 3`) or grey (`channels = 1`) rows as PNG, with optional text.
-fn encode_png(
+/// Encodes 8-bit RGB (`channels = 3`) or grey (`channels = 1`) rows as PNG, with `tEXt` chunks
+/// of `text` (keyword, text).
+pub(super) fn encode_png(
     out: impl Write,
     width: u32,
     height: u32,
     channels: u8,
     data: &[u8],
-    text: Option<String>,
+    text: &[(&str, String)],
 ) -> std::result::Result<(), String> {
     let mut enc = png::Encoder::new(out, width, height);
     enc.set_color(if channels == 1 {
@@ -85,8 +106,8 @@ fn encode_png(
         png::ColorType::Rgb
     });
     enc.set_depth(png::BitDepth::Eight);
-    if let Some(text) = text {
-        enc.add_text_chunk(WINDOW_KEY.to_string(), text)
+    for (keyword, text) in text {
+        enc.add_text_chunk(keyword.to_string(), text.clone())
             .map_err(|e| e.to_string())?;
     }
     let mut writer = enc.write_header().map_err(|e| e.to_string())?;
@@ -101,7 +122,14 @@ pub enum Format {
     Png,
     /// `.exr`: linear 32-bit float RGB.
     Exr,
+    /// `.pfm`: linear 32-bit float RGB, bottom row first ([`super::pfm`]).
+    Pfm,
+    /// `.hdr`: linear RGB as Radiance RGBE.
+    Hdr,
 }
+
+/// The extensions [`output_format`] accepts, for messages.
+const WRITTEN: &str = "caustic writes .png, .exr, .pfm and .hdr";
 
 /// Returns the format `path`'s extension names (case-insensitive), or an error naming the
 /// path: an unknown or missing extension is refused rather than written as PNG under that name.
@@ -112,46 +140,81 @@ pub fn output_format(path: &Path) -> Result<Format> {
     match ext.as_deref() {
         Some("png") => Ok(Format::Png),
         Some("exr") => Ok(Format::Exr),
+        Some("pfm") => Ok(Format::Pfm),
+        Some("hdr") => Ok(Format::Hdr),
         other => Err(Error::File {
             path: path.to_path_buf(),
             message: match other {
-                Some(e) => format!("unknown output format '.{e}' (caustic writes .png and .exr)"),
-                None => "the output has no extension (caustic writes .png and .exr)".into(),
+                Some(e) => format!("unknown output format '.{e}' ({WRITTEN})"),
+                None => format!("the output has no extension ({WRITTEN})"),
             },
         }),
     }
 }
 
-/// Writes `film` at `path`: PNG with `tonemap`, or linear EXR when the path ends in `.exr`;
-/// any other extension is an error ([`output_format`]). A film that is a window of a larger
-/// image records its place (PNG only).
+/// Writes `film` at `path` in the format its extension names ([`output_format`]): PNG with
+/// `tonemap`, or linear EXR, PFM or Radiance HDR. A film that is a window of a larger image
+/// records its place (PNG and EXR).
 pub fn write_image(film: &Film, path: &Path, tonemap: Tonemap) -> Result<()> {
-    let is_exr = output_format(path)? == Format::Exr;
-    if is_exr {
-        let data: Vec<f32> = film.pixels.iter().flat_map(|c| c.to_array()).collect();
-        let img = image::Rgb32FImage::from_raw(film.width, film.height, data).ok_or_else(|| {
-            Error::File {
-                path: path.to_path_buf(),
-                message: "internal: film size does not match its pixels".into(),
-            }
-        })?;
-        return write_atomically(path, |tmp| {
-            img.save_with_format(tmp, image::ImageFormat::OpenExr)
-                .map_err(|e| e.to_string())
-        });
+    write_image_noted(film, path, tonemap, None)
+}
+
+/// Writes `film` as [`write_image`] does, marked when `partial` is given as the image of an
+/// interrupted render, with that note saying what it holds: a [`PARTIAL_KEY`] `tEXt` chunk in a
+/// PNG, an attribute of that name in an EXR (PFM and HDR have no place for it).
+pub fn write_image_noted(
+    film: &Film,
+    path: &Path,
+    tonemap: Tonemap,
+    partial: Option<&str>,
+) -> Result<()> {
+    let mut text = Vec::new();
+    if let Some(note) = partial {
+        text.push((PARTIAL_KEY, note.to_string()));
+    }
+    match output_format(path)? {
+        Format::Png => {}
+        Format::Exr => {
+            let text: Vec<(&str, &str)> = text.iter().map(|(k, v)| (*k, v.as_str())).collect();
+            return write_atomically(path, |tmp| super::exr::write(film, tmp, &text));
+        }
+        Format::Pfm => {
+            let bytes = super::pfm::encode(film.width, film.height, &film.pixels);
+            return write_atomically(path, |tmp| {
+                std::fs::write(tmp, &bytes).map_err(|e| e.to_string())
+            });
+        }
+        Format::Hdr => {
+            // RGBE has no sign: radiance is never negative, but clamp what rounding may leave.
+            let rgb: Vec<image::Rgb<f32>> = film
+                .pixels
+                .iter()
+                .map(|c| image::Rgb(c.max(Vec3A::ZERO).to_array()))
+                .collect();
+            let (w, h) = (film.width as usize, film.height as usize);
+            return write_atomically(path, |tmp| {
+                let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+                let mut out = BufWriter::new(file);
+                image::codecs::hdr::HdrEncoder::new(&mut out)
+                    .encode(&rgb, w, h)
+                    .map_err(|e| e.to_string())?;
+                out.flush().map_err(|e| e.to_string())
+            });
+        }
     }
     let w = film.window;
-    let text = (w != Window::full(film.width, film.height)).then(|| {
-        format!(
+    if w != Window::full(film.width, film.height) {
+        let record = format!(
             "{} {} {} {} {} {}",
             w.x0, w.y0, w.x1, w.y1, w.full_width, w.full_height
-        )
-    });
+        );
+        text.push((WINDOW_KEY, record));
+    }
     let data = to_rgb8(film, tonemap);
     write_atomically(path, |tmp| {
         let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
         let mut out = BufWriter::new(file);
-        encode_png(&mut out, film.width, film.height, 3, &data, text)?;
+        encode_png(&mut out, film.width, film.height, 3, &data, &text)?;
         out.flush().map_err(|e| e.to_string())
     })
 }
@@ -172,7 +235,7 @@ pub fn write_sample_map(film: &Film, path: &Path) -> Result<()> {
     write_atomically(path, |tmp| {
         let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
         let mut out = BufWriter::new(file);
-        encode_png(&mut out, film.width, film.height, 1, &data, None)?;
+        encode_png(&mut out, film.width, film.height, 1, &data, &[])?;
         out.flush().map_err(|e| e.to_string())
     })
 }
@@ -183,171 +246,48 @@ pub fn write_rgb8_png(path: &Path, width: u32, height: u32, data: &[u8]) -> Resu
     write_atomically(path, |tmp| {
         let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
         let mut out = BufWriter::new(file);
-        encode_png(&mut out, width, height, 3, data, None)?;
+        encode_png(&mut out, width, height, 3, data, &[])?;
         out.flush().map_err(|e| e.to_string())
     })
 }
 
-/// A tile read back from disk: its window and 8-bit RGB pixels.
-struct Tile {
-    path: PathBuf,
-    window: Window,
-    rgb: Vec<u8>,
-}
-
-fn read_tile(path: &Path) -> Result<Tile> {
-    let fail = |message: String| Error::File {
-        path: path.to_path_buf(),
-        message,
-    };
-    let file = crate::files::check_regular(path)
-        .and_then(|()| std::fs::File::open(path))
-        .map_err(|e| fail(format!("cannot read tile: {e}")))?;
-    let decoder = png::Decoder::new(std::io::BufReader::new(file));
-    let mut reader = decoder
-        .read_info()
-        .map_err(|e| fail(format!("not a readable PNG: {e}")))?;
-    let info = reader.info();
-    let (width, height) = (info.width, info.height);
-    if info.color_type != png::ColorType::Rgb || info.bit_depth != png::BitDepth::Eight {
-        return Err(fail("not an 8-bit RGB tile written by caustic".into()));
-    }
-    let text = info
-        .uncompressed_latin1_text
-        .iter()
-        .find(|t| t.keyword == WINDOW_KEY)
-        .map(|t| t.text.clone())
-        .ok_or_else(|| {
-            fail(format!(
-                "has no '{WINDOW_KEY}' record: was it rendered with --crop?"
-            ))
-        })?;
-    let v: Vec<u32> = text
-        .split_whitespace()
-        .filter_map(|s| s.parse().ok())
-        .collect();
-    let window = match v[..] {
-        [x0, y0, x1, y1, full_width, full_height] => Window {
-            x0,
-            y0,
-            x1,
-            y1,
-            full_width,
-            full_height,
-        },
-        _ => return Err(fail(format!("malformed '{WINDOW_KEY}' record '{text}'"))),
-    };
-    let full_pixels = window.full_width as u64 * window.full_height as u64;
-    if full_pixels > MAX_PIXELS {
-        return Err(fail(format!(
-            "its window record '{text}' describes a {}x{} image, larger than {MAX_PIXELS} pixels",
-            window.full_width, window.full_height
-        )));
-    }
-    if !window.is_valid() || window.size() != (width, height) {
-        return Err(fail(format!(
-            "its window '{text}' does not match its {width}x{height} pixels"
-        )));
-    }
-    let mut rgb = vec![
-        0;
-        reader
-            .output_buffer_size()
-            .ok_or_else(|| fail("image too large".into()))?
-    ];
-    reader
-        .next_frame(&mut rgb)
-        .map_err(|e| fail(format!("truncated or corrupt PNG: {e}")))?;
-    rgb.truncate(width as usize * height as usize * 3);
-    Ok(Tile {
-        path: path.to_path_buf(),
-        window,
-        rgb,
-    })
-}
-
-/// Assembles tiles written with `--crop` into the full image at `out`; every pixel must be
-/// covered by exactly one tile.
-pub fn stitch(tiles: &[PathBuf], out: &Path) -> Result<()> {
-    if output_format(out)? != Format::Png {
-        return Err(Error::File {
-            path: out.to_path_buf(),
-            message: "stitch writes PNG; name the output .png".into(),
-        });
-    }
-    let tiles: Vec<Tile> = tiles.iter().map(|p| read_tile(p)).collect::<Result<_>>()?;
-    let Some(first) = tiles.first() else {
-        return Err(Error::Usage("stitch needs at least one tile".into()));
-    };
-    let (fw, fh) = (first.window.full_width, first.window.full_height);
-    let mut owner: Vec<Option<usize>> = vec![None; fw as usize * fh as usize];
-    let mut rgb = vec![0u8; fw as usize * fh as usize * 3];
-    for (k, t) in tiles.iter().enumerate() {
-        if (t.window.full_width, t.window.full_height) != (fw, fh) {
-            return Err(Error::File {
-                path: t.path.clone(),
-                message: format!(
-                    "belongs to a {}x{} image, but {} to a {fw}x{fh} one",
-                    t.window.full_width,
-                    t.window.full_height,
-                    first.path.display()
-                ),
-            });
-        }
-        let (w, _) = t.window.size();
-        for y in t.window.y0..t.window.y1 {
-            for x in t.window.x0..t.window.x1 {
-                let i = (y * fw + x) as usize;
-                if let Some(other) = owner[i] {
-                    return Err(Error::File {
-                        path: t.path.clone(),
-                        message: format!(
-                            "overlaps {} at pixel ({x}, {y})",
-                            tiles[other].path.display()
-                        ),
-                    });
-                }
-                owner[i] = Some(k);
-                let j = ((y - t.window.y0) * w + (x - t.window.x0)) as usize * 3;
-                rgb[i * 3..i * 3 + 3].copy_from_slice(&t.rgb[j..j + 3]);
-            }
-        }
-    }
-    if let Some(i) = owner.iter().position(Option::is_none) {
-        return Err(Error::Usage(format!(
-            "the tiles leave pixel ({}, {}) of the {fw}x{fh} image uncovered",
-            i as u32 % fw,
-            i as u32 / fw
-        )));
-    }
-    write_atomically(out, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
-        let mut w = BufWriter::new(file);
-        encode_png(&mut w, fw, fh, 3, &rgb, None)?;
-        w.flush().map_err(|e| e.to_string())
-    })
-}
-
-/// Reads the PNG, JPEG or EXR image at `path` as linear RGB for [`crate::metrics`]: EXR as
-/// stored, 8-bit formats as their codes over 255 (not sRGB-decoded, so two PNGs compare as they
-/// are written). The image crate's default limits bound the decoded size.
+/// Reads the PNG, JPEG, EXR, PFM or Radiance HDR image at `path` as linear RGB for
+/// [`crate::metrics`]: the float formats as stored, 8-bit formats as their codes over 255 (not
+/// sRGB-decoded, so two PNGs compare as they are written). The image crate's default limits, and
+/// [`MAX_PIXELS`] for PFM, bound the decoded size.
 pub fn read_rgb(path: &Path) -> Result<crate::metrics::Image> {
     let fail = |message: String| Error::File {
         path: path.to_path_buf(),
         message,
     };
+    if output_format(path).ok() == Some(Format::Pfm) {
+        // The largest PFM read: MAX_PIXELS colour pixels and a generous header.
+        let most = MAX_PIXELS * 12 + 4096;
+        let bytes = std::fs::metadata(path)
+            .and_then(|m| match m.len() {
+                n if n > most => Err(std::io::Error::other(format!(
+                    "{n} bytes is more than a PFM of {MAX_PIXELS} pixels holds"
+                ))),
+                _ => crate::files::read_regular(path),
+            })
+            .map_err(|e| fail(format!("cannot read image: {e}")))?;
+        let (width, height, pixels) =
+            super::pfm::decode(&bytes, MAX_PIXELS).map_err(|e| fail(format!("bad PFM: {e}")))?;
+        return Ok(crate::metrics::Image {
+            width,
+            height,
+            pixels,
+        });
+    }
     let img = image::ImageReader::open(path)
         .map_err(|e| fail(format!("cannot read image: {e}")))?
         .with_guessed_format()
         .map_err(|e| fail(format!("cannot read image: {e}")))?
         .decode()
-        .map_err(|e| fail(format!("not a readable PNG, JPEG or EXR image: {e}")))?
+        .map_err(|e| fail(format!("not a readable PNG, JPEG, EXR or HDR image: {e}")))?
         .to_rgb32f();
     let (width, height) = img.dimensions();
-    let pixels = img
-        .pixels()
-        .map(|p| glam::Vec3A::new(p[0], p[1], p[2]))
-        .collect();
+    let pixels = img.pixels().map(|p| Vec3A::new(p[0], p[1], p[2])).collect();
     Ok(crate::metrics::Image {
         width,
         height,

@@ -467,7 +467,7 @@ fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     legacy::before_render(s, &render);
     let State { desc, hook, .. } = s;
     hook(desc, &render).map_err(|e| match e {
-        e @ (Error::Script { .. } | Error::Lua(_)) => lua_err(e),
+        e @ (Error::Script { .. } | Error::Lua(_) | Error::Interrupted(_)) => lua_err(e),
         other => a.fail(other.to_string()),
     })?;
     Ok(Value::Nil)

@@ -10,6 +10,7 @@
 //! - [`args`]: argument checks with lauxlib's messages and the calling script line;
 //! - `legacy/`: the course's legacy API ([`Dialect`], `--dialect`): the transform order, the
 //!   built-in `readobj`, the Lua 5.1 names, and the warning when a modern run looks legacy.
+//! - [`globals`]: the globals set before the script runs (`-D NAME=VALUE`).
 //!
 //! This module owns what a run shares: the description being filled, path resolution and
 //! warnings. Paths (meshes, textures, output images, `require`d modules) resolve against the
@@ -29,6 +30,7 @@
 
 pub mod args;
 mod generated;
+pub mod globals;
 mod gr;
 mod legacy;
 mod sandbox;
@@ -49,8 +51,8 @@ pub type RenderHook = Box<dyn FnMut(&SceneDesc, &RenderDesc) -> Result<()>>;
 /// Largest image `gr.render` accepts, in pixels (about 8k × 8k).
 pub use crate::film::MAX_PIXELS;
 
-/// How a script run treats recoverable problems.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How a script run treats recoverable problems, and what it is given before it runs.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ScriptOptions {
     /// `--missing-textures=warn`: a missing texture or bump image is a warning (once per file) and
     /// the material renders with `kd` instead, rather than an error.
@@ -60,6 +62,11 @@ pub struct ScriptOptions {
     /// `--dialect`: how transforms compose. `None` (no `--dialect`) reads the script the
     /// modern way and warns when it looks legacy (`legacy/`).
     pub dialect: Option<Dialect>,
+    /// Globals set before the script runs (`-D NAME=VALUE`; see [`globals`]).
+    pub globals: Vec<globals::Global>,
+    /// Stop the script with [`Error::Interrupted`] once [`crate::interrupt::requested`] (the
+    /// command line's Ctrl-C), rather than let it run to its end.
+    pub interruptible: bool,
 }
 
 /// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
@@ -109,9 +116,11 @@ pub fn run_source_with(
         watch: options.dialect.is_none().then(legacy::Watch::default),
     }));
     let limit = options.memory_limit.unwrap_or(sandbox::MAX_LUA_MEMORY);
-    let (lua, lines) = sandbox::new_lua(limit, script_dir).map_err(convert_error)?;
+    let (lua, lines) =
+        sandbox::new_lua(limit, script_dir, options.interruptible).map_err(convert_error)?;
     gr::install(&lua, &state).map_err(convert_error)?;
     legacy::install(&lua, &state).map_err(convert_error)?;
+    globals::set(&lua, &options.globals)?;
     lua.load(source)
         .set_name(format!("@{name}"))
         .exec()

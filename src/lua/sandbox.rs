@@ -20,7 +20,7 @@
 //! t = {} for i = 1, math.huge do t[i] = i end  -- test.lua:1: not enough memory: ...
 //! ```
 
-use crate::error::Loc;
+use crate::error::{Error, Loc};
 use mlua::{HookTriggers, Lua, LuaOptions, StdLib, Table, Value, VmState};
 use std::cell::RefCell;
 use std::path::Path;
@@ -48,8 +48,14 @@ impl LineTracker {
 
 /// Returns a fresh Lua state with the standard library, the unsafe `debug` functions removed,
 /// `require` looking in `script_dir` after the working directory and at most `memory_limit`
-/// bytes of memory, with the tracker of its running line.
-pub(super) fn new_lua(memory_limit: usize, script_dir: &Path) -> mlua::Result<(Lua, LineTracker)> {
+/// bytes of memory, with the tracker of its running line. When `interruptible`, the script
+/// stops with [`Error::Interrupted`] within [`LINE_SAMPLE`] instructions of a Ctrl-C
+/// ([`crate::interrupt::requested`]).
+pub(super) fn new_lua(
+    memory_limit: usize,
+    script_dir: &Path,
+    interruptible: bool,
+) -> mlua::Result<(Lua, LineTracker)> {
     // SAFETY: `debug` is the only unsafe library; the functions that can corrupt mlua's
     // userdata or registry invariants are removed before any script runs.
     let lua = unsafe { Lua::unsafe_new_with(StdLib::ALL, LuaOptions::new()) };
@@ -59,6 +65,15 @@ pub(super) fn new_lua(memory_limit: usize, script_dir: &Path) -> mlua::Result<(L
     lua.set_hook(
         HookTriggers::new().every_nth_instruction(LINE_SAMPLE),
         move |_, debug| {
+            if interruptible && crate::interrupt::requested() {
+                let at = seen
+                    .borrow()
+                    .as_ref()
+                    .map_or(String::new(), |l| format!(" near {l}"));
+                return Err(mlua::Error::external(Error::Interrupted(format!(
+                    "the script stopped{at}; no later gr.render ran"
+                ))));
+            }
             let (Some(line), Some(source)) = (debug.current_line(), debug.source().source) else {
                 return Ok(VmState::Continue);
             };

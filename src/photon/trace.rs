@@ -309,6 +309,10 @@ pub fn trace_map_with(
             .into_par_iter()
             .map(|c| {
                 let (mut photons, mut on_specular) = (Vec::new(), 0);
+                // Asked to stop: the chunks left are not traced (the frame is dropped).
+                if progress.should_stop() {
+                    return (photons, on_specular);
+                }
                 for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
                     let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
                     let mut rng = Rng::new(seed, Pass::Photon, key);

@@ -21,11 +21,13 @@ pub mod aa;
 use crate::camera::Camera;
 use crate::film::{Film, Window};
 use crate::geometry::Ray;
+use crate::progress::Progress;
 use crate::sampling::Rng;
 use crate::stats::{RayCounts, RenderStats};
 use glam::Vec3A;
 use rayon::prelude::*;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 /// What an integrator answers for the camera pass: the radiance arriving along a camera ray.
@@ -60,18 +62,21 @@ pub struct PassOptions {
 }
 
 /// Renders the window `opts.window` of the image through `camera`, asking `integrator` for each
-/// camera ray; `row_done` is called once per finished row.
+/// camera ray; `progress` advances once per finished row. Once `progress` asks to stop, rows
+/// not yet started are left black, with no samples, and counted in
+/// [`RenderStats::rows_skipped`].
 pub fn camera_pass(
     camera: &Camera,
     integrator: &dyn Radiance,
     opts: &PassOptions,
-    row_done: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> (Film, RenderStats) {
     let start = Instant::now();
     let win = opts.window;
     let (w, h) = win.size();
     // Rows add their counts once each (a lock per row costs nothing next to a row of pixels).
     let totals = Mutex::new(RayCounts::default());
+    let skipped = AtomicU64::new(0);
     let mut pixels = vec![Vec3A::ZERO; w as usize * h as usize];
     let mut samples = vec![0u32; w as usize * h as usize];
     let sampler = aa::PixelSampler::new(camera, integrator, opts);
@@ -80,6 +85,10 @@ pub fn camera_pass(
         .zip(samples.par_chunks_mut(w as usize))
         .enumerate()
         .for_each(|(row, (px_row, count_row))| {
+            if progress.should_stop() {
+                skipped.fetch_add(1, Ordering::Relaxed);
+                return;
+            }
             let y = win.y0 + row as u32;
             let mut counts = RayCounts {
                 timing: opts.timing,
@@ -95,7 +104,7 @@ pub fn camera_pass(
                 .lock()
                 .unwrap_or_else(|e| e.into_inner())
                 .add(&counts);
-            row_done();
+            progress.advance(1);
         });
     let mut t = totals.into_inner().unwrap_or_else(|e| e.into_inner());
     t.add(&sampler.corner_counts());
@@ -108,6 +117,7 @@ pub fn camera_pass(
         photons_used: t.photons_used,
         depth_capped: t.depth_capped,
         nonfinite_samples: t.nonfinite,
+        rows_skipped: skipped.into_inner(),
         time: start.elapsed(),
     };
     let film = Film {

@@ -1,0 +1,143 @@
+//! OpenEXR out and tiles back in, through the `exr` crate: linear 32-bit float RGB, lossless
+//! (`exr`'s fast lossless encoding, RLE).
+//!
+//! **Windows.** OpenEXR says where a file's pixels sit in the image it belongs to: the *display
+//! window* is the whole image, the *data window* the pixels the file holds. A film that is a
+//! window of a larger image (`--crop`) is written with the full image as its display window and
+//! the tile as its data window, so viewers (tev, Nuke, OpenImageIO) show it in place and
+//! [`crate::io::stitch`] needs no record of its own. A full frame has the two equal, as before.
+//! Text attributes (the note an interrupted render's image carries) go in the header.
+
+use crate::film::{Film, Window};
+use exr::prelude::*;
+use glam::Vec3A;
+use std::path::Path;
+
+/// An EXR file read back: its place in its image, its pixels (row-major, row 0 at the top of the
+/// data window) and its header's text attributes.
+pub struct ExrTile {
+    pub window: Window,
+    pub pixels: Vec<Vec3A>,
+    pub text: Vec<(String, String)>,
+}
+
+/// Writes `film` as an EXR file at `path`, its window as the data window in the full image's
+/// display window, with the text attributes `text` (ASCII keys and values).
+pub fn write(film: &Film, path: &Path, text: &[(&str, &str)]) -> std::result::Result<(), String> {
+    let (w, h) = (film.width as usize, film.height as usize);
+    if film.pixels.len() != w * h {
+        return Err("internal: film size does not match its pixels".into());
+    }
+    let win = film.window;
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let c = film.pixels[p.y() * w + p.x()];
+        (c.x, c.y, c.z)
+    });
+    let mut attributes = LayerAttributes {
+        layer_position: Vec2(to_i32(win.x0)?, to_i32(win.y0)?),
+        ..LayerAttributes::default()
+    };
+    for (key, value) in text {
+        let ascii = |s: &str| Text::new_or_none(s).ok_or_else(|| format!("'{s}' is not ASCII"));
+        attributes
+            .other
+            .insert(ascii(key)?, AttributeValue::Text(ascii(value)?));
+    }
+    let layer = Layer::new((w, h), attributes, Encoding::default(), channels);
+    let display =
+        IntegerBounds::from_dimensions((win.full_width as usize, win.full_height as usize));
+    Image::new(ImageAttributes::new(display), layer)
+        .write()
+        .to_file(path)
+        .map_err(|e| e.to_string())
+}
+
+/// Returns `v` as an EXR coordinate.
+fn to_i32(v: u32) -> std::result::Result<i32, String> {
+    i32::try_from(v).map_err(|_| format!("coordinate {v} is too large for OpenEXR"))
+}
+
+/// Reads the EXR file at `path` as a tile: its window (the data window's place in the display
+/// window), RGB pixels and text attributes; a message says what is wrong otherwise. Files whose
+/// windows hold more than `max_pixels` are refused before their pixels are read.
+pub fn read(path: &Path, max_pixels: u64) -> std::result::Result<ExrTile, String> {
+    let meta =
+        MetaData::read_from_file(path, false).map_err(|e| format!("not a readable EXR: {e}"))?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| "an EXR with no layer".to_string())?;
+    let display = header.shared_attributes.display_window;
+    let data = (header.own_attributes.layer_position, header.layer_size);
+    for (what, size) in [("display", display.size), ("data", data.1)] {
+        if size.area() as u64 > max_pixels {
+            return Err(format!(
+                "its {what} window is {}x{}, larger than {max_pixels} pixels",
+                size.width(),
+                size.height()
+            ));
+        }
+    }
+    let window = place(display, data).ok_or_else(|| {
+        format!(
+            "its data window ({}, {}) {}x{} is not inside its display window ({}, {}) {}x{}",
+            data.0.x(),
+            data.0.y(),
+            data.1.width(),
+            data.1.height(),
+            display.position.x(),
+            display.position.y(),
+            display.size.width(),
+            display.size.height()
+        )
+    })?;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |size, _| (size.width(), vec![Vec3A::ZERO; size.area()]),
+            |(w, px): &mut (usize, Vec<Vec3A>), p, (r, g, b): (f32, f32, f32)| {
+                px[p.y() * *w + p.x()] = Vec3A::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| format!("cannot read its RGB pixels: {e}"))?;
+    let layer = image.layer_data;
+    if layer.size != data.1 || layer.attributes.layer_position != data.0 {
+        return Err("its RGB layer is not its first layer".into());
+    }
+    let text = layer
+        .attributes
+        .other
+        .iter()
+        .chain(&image.attributes.other)
+        .filter_map(|(k, v)| match v {
+            AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect();
+    Ok(ExrTile {
+        window,
+        pixels: layer.channel_data.pixels.1,
+        text,
+    })
+}
+
+/// Returns the window the data window `(position, size)` is in `display`, or `None` when it is
+/// empty or not inside it.
+fn place(display: IntegerBounds, (position, size): (Vec2<i32>, Vec2<usize>)) -> Option<Window> {
+    let offset = |p: i32, d: i32| u32::try_from(p as i64 - d as i64).ok();
+    let x0 = offset(position.x(), display.position.x())?;
+    let y0 = offset(position.y(), display.position.y())?;
+    let window = Window {
+        x0,
+        y0,
+        x1: x0.checked_add(u32::try_from(size.width()).ok()?)?,
+        y1: y0.checked_add(u32::try_from(size.height()).ok()?)?,
+        full_width: u32::try_from(display.size.width()).ok()?,
+        full_height: u32::try_from(display.size.height()).ok()?,
+    };
+    window.is_valid().then_some(window)
+}

@@ -1,7 +1,8 @@
 //! The gallery, `scenes/gallery/`: every scene renders through the command line at a quarter of
 //! its size (48 to 64 pixels wide) into a finite, non-uniform image, and the scenes that show an
 //! effect show it: the caustic, the penumbra, the adaptive sampler's extra rays at edges, the
-//! colour bleeding, the file materials, the instanced mesh stored once.
+//! colour bleeding, the file materials, the instanced mesh stored once; and `docs/gallery.md`
+//! shows them all.
 //!
 //! Regions are fractions of the image `[x0, x1, y0, y1]`, read off the scenes' thumbnails; a scene
 //! whose composition changes must update its region here.
@@ -352,4 +353,22 @@ fn imported_meshes_wear_their_files_materials() {
     let gltf = render("gltf_import", &dir).image;
     let [r, g, b] = mean_rgb(&gltf, [0.46, 0.54, 0.46, 0.54]);
     assert!(b > 2.0 * r && b > 1.5 * g, "vase {r} {g} {b}");
+}
+
+/// `docs/gallery.md` (written by `tools/gallery.sh`) shows every scene: it names each one's
+/// thumbnail, which exists and is at most 256 pixels wide, and its render command.
+#[test]
+fn gallery_page_shows_every_scene() {
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs");
+    let page = std::fs::read_to_string(docs.join("gallery.md")).unwrap();
+    for name in scene_names() {
+        let thumbnail = format!("gallery/{name}.png");
+        let command = format!("caustic render scenes/gallery/{name}.lua");
+        assert!(
+            page.contains(&thumbnail) && page.contains(&command),
+            "docs/gallery.md lacks {name}: run `bash tools/gallery.sh`"
+        );
+        let (w, _) = image::image_dimensions(docs.join(&thumbnail)).unwrap();
+        assert!(w <= 256, "{thumbnail} is {w} pixels wide");
+    }
 }

@@ -196,3 +196,36 @@ fn bad_scene_settings_are_errors_naming_the_setting() {
         "{stderr}"
     );
 }
+
+/// `caustic info` prints the plan and budgets a render would use: under the scene's
+/// `gr.settings` where it has them (it printed the defaults, 200000 and 2000000, for the final
+/// scene that asks for 400000 and 4000000).
+#[test]
+fn info_prints_the_plan_under_the_scenes_settings() {
+    let dir = out_dir("scene-settings-info");
+    let info = |settings: &str| {
+        let script = dir.join("info.lua");
+        std::fs::write(&script, SCENE.replace("SETTINGS", settings)).unwrap();
+        let out = caustic().arg("info").arg(&script).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let own = info("gr.settings{photons = 1234, caustic_photons = 5678, gi = 'on'}");
+    assert!(
+        own.contains("plan of render 1 (the scene's gr.settings):"),
+        "{own}"
+    );
+    assert!(own.contains("global photons: 1234"), "{own}");
+    let plain = info("");
+    assert!(
+        plain.contains("plan of render 1 (default settings):"),
+        "{plain}"
+    );
+    assert!(plain.contains("global photons: 200000"), "{plain}");
+    let off = info("gr.settings{gi = 'off'}");
+    assert!(off.contains("photon-maps: off"), "{off}");
+}

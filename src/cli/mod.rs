@@ -797,12 +797,22 @@ fn info_command(args: InfoArgs) -> Result<()> {
         "{}",
         report::describe(&args.scene.display().to_string(), &desc)?
     );
-    // The plan each render would follow at the default settings, with the photon budgets.
-    let settings = crate::integrator::Settings::default();
+    // The plan each render would follow at the default settings, or under the scene's own
+    // gr.settings, with the photon budgets.
     for (i, r) in desc.renders.iter().enumerate() {
+        let (settings, which) = if r.settings.is_empty() {
+            (crate::integrator::Settings::default(), "default settings")
+        } else {
+            let base = RenderLine::try_parse_from([args.scene.as_os_str()])
+                .map_err(|e| Error::Usage(e.to_string()))?;
+            let job = RenderJob::from_args(&base.render)?;
+            let scene_job = job_with_settings(&job, &[], &args.scene, r)?;
+            let settings = scene_job.map_or(job.settings, |j| j.settings);
+            (settings, "the scene's gr.settings")
+        };
         let scene = build_scene(&desc, r)?;
         let plan = crate::integrator::plan(&scene, settings.gi);
-        println!("  plan of render {} (default settings):", i + 1);
+        println!("  plan of render {} ({which}):", i + 1);
         for line in plan.lines() {
             println!("    {line}");
         }

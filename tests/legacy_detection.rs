@@ -249,13 +249,21 @@ fn our_scenes_and_the_guides_examples_are_not_warned_about() {
     // The copies are written to a tree of their own, where the validation scenes' shared
     // lib/box.lua (which they load from beside themselves) is reversed too.
     let tree = out_dir("legacy-detection-scenes");
-    // The final scene's textures, beside its copy; its water at 17 x 17 (WATER_N), not 2M
-    // triangles: the transforms are what is judged.
-    std::fs::create_dir_all(tree.join("textures")).unwrap();
-    for entry in std::fs::read_dir(root.join("textures")).unwrap() {
-        let path = entry.unwrap().path();
-        std::fs::copy(&path, tree.join("textures").join(path.file_name().unwrap())).unwrap();
+    // Every file the scenes read (textures, the gallery's meshes) beside the copies; the final
+    // scene's water at 17 x 17 (WATER_N), not 2M triangles: the transforms are what is judged.
+    fn copy_assets(from: &Path, to: &Path) {
+        for entry in std::fs::read_dir(from).unwrap() {
+            let path = entry.unwrap().path();
+            let target = to.join(path.file_name().unwrap());
+            if path.is_dir() {
+                std::fs::create_dir_all(&target).unwrap();
+                copy_assets(&path, &target);
+            } else if path.extension().is_none_or(|e| e != "lua") {
+                std::fs::copy(&path, &target).unwrap();
+            }
+        }
     }
+    copy_assets(&root, &tree);
     let light = |src: String| format!("WATER_N = 17\n{src}");
     let mut judged = 0;
     for script in lua_scripts(&root) {
@@ -274,19 +282,33 @@ fn our_scenes_and_the_guides_examples_are_not_warned_about() {
         assert!(!warned(&src, &name, script.parent().unwrap()), "{name}");
         judged += 1;
     }
-    // Judged once the whole tree, lib/box.lua included, is written.
+    // Judged once the whole tree, lib/box.lua included, is written. Every copy of the project's
+    // scenes is warned about; of the gallery's small scenes, where a single node's order may be
+    // all that differs (the heuristic's documented miss), most are.
+    let (mut gallery, mut gallery_warned, mut missed) = (0, 0, Vec::new());
     for script in lua_scripts(&tree) {
         if script.to_string_lossy().contains("/lib/") {
             continue;
         }
         let src = light(std::fs::read_to_string(&script).unwrap());
         let name = script.display().to_string();
-        assert!(
-            warned(&src, &name, script.parent().unwrap()),
-            "{name}'s legacy copy"
-        );
+        let w = warned(&src, &name, script.parent().unwrap());
+        if script.to_string_lossy().contains("/gallery/") {
+            gallery += 1;
+            gallery_warned += usize::from(w);
+            if !w {
+                missed.push(name);
+            }
+        } else {
+            assert!(w, "{name}'s legacy copy");
+        }
     }
-    assert_eq!(judged, 7);
+    println!("gallery copies warned about: {gallery_warned} of {gallery}; missed: {missed:?}");
+    assert!(
+        2 * gallery_warned >= gallery,
+        "only {gallery_warned} of {gallery} gallery copies warned about: {missed:?}"
+    );
+    assert_eq!(judged, 20, "7 project scenes and 13 gallery scenes");
     // The guide's one legacy example says so in its first line, and is the one warned about.
     let dir = guide_dir("legacy-detection-guide");
     for (i, src) in guide_examples().iter().enumerate() {

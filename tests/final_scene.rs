@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{caustic, mesh_cache, out_dir};
+use common::{caustic, out_dir};
 use std::path::Path;
 
 /// Renders the final scene at 128 × 128 with `flags` and returns its linear RGB values.
@@ -12,7 +12,6 @@ fn render(dir: &Path, name: &str, flags: &[&str]) -> (u32, u32, Vec<f32>) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let exr = dir.join(format!("{name}.exr"));
     let out = caustic()
-        .env("CAUSTIC_CACHE", mesh_cache())
         .arg("render")
         .arg(root.join("scenes/final.lua"))
         // A fixed caustic budget, so the spot is resolved at this size (the scene's own 4M

@@ -41,7 +41,6 @@ fn render_file(script: &Path, exr: &Path, dir: &Path, extra: &[&str]) -> Render 
     let out = run_ok(
         caustic()
             .current_dir(dir)
-            .env("CAUSTIC_CACHE", mesh_cache())
             .arg("render")
             .arg(script)
             .args(["--scale", "0.25", "-q", "-o"])

@@ -251,19 +251,7 @@ fn our_scenes_and_the_guides_examples_are_not_warned_about() {
     let tree = out_dir("legacy-detection-scenes");
     // Every file the scenes read (textures, the gallery's meshes) beside the copies; the final
     // scene's water at 17 x 17 (WATER_N), not 2M triangles: the transforms are what is judged.
-    fn copy_assets(from: &Path, to: &Path) {
-        for entry in std::fs::read_dir(from).unwrap() {
-            let path = entry.unwrap().path();
-            let target = to.join(path.file_name().unwrap());
-            if path.is_dir() {
-                std::fs::create_dir_all(&target).unwrap();
-                copy_assets(&path, &target);
-            } else if path.extension().is_none_or(|e| e != "lua") {
-                std::fs::copy(&path, &target).unwrap();
-            }
-        }
-    }
-    copy_assets(&root, &tree);
+    common::copy_assets(&root, &tree);
     let light = |src: String| format!("WATER_N = 17\n{src}");
     let mut judged = 0;
     for script in lua_scripts(&root) {

@@ -9,15 +9,7 @@ use std::path::Path;
 fn every_scene_in_scenes_renders() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let tree = out_dir("scenes");
-    std::fs::create_dir_all(tree.join("scenes/textures")).unwrap();
-    for entry in std::fs::read_dir(root.join("scenes/textures")).unwrap() {
-        let path = entry.unwrap().path();
-        std::fs::copy(
-            &path,
-            tree.join("scenes/textures").join(path.file_name().unwrap()),
-        )
-        .unwrap();
-    }
+    common::copy_assets(&root.join("scenes"), &tree.join("scenes"));
     let mut count = 0;
     for entry in std::fs::read_dir(root.join("scenes")).unwrap() {
         let path = entry.unwrap().path();
@@ -29,7 +21,6 @@ fn every_scene_in_scenes_renders() {
         let png = tree.join(format!("{}.png", name.to_string_lossy()));
         let out = caustic()
             .current_dir(&tree)
-            .env("CAUSTIC_CACHE", common::mesh_cache())
             .arg("render")
             .arg(Path::new("scenes").join(name))
             .args(["--scale", "0.1", "-q", "-o"])

@@ -61,9 +61,30 @@ pub fn mesh_cache() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-mesh-cache")
 }
 
-/// Returns a command running the built `caustic` binary.
+/// Copies every file under `from` that a scene reads (all but `.lua` scripts and hidden entries
+/// such as a `.cache/` of generated meshes) to the same place under `to`.
+pub fn copy_assets(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap();
+        if name.to_string_lossy().starts_with('.') {
+            continue;
+        }
+        if path.is_dir() {
+            copy_assets(&path, &to.join(name));
+        } else if path.extension().is_none_or(|e| e != "lua") {
+            std::fs::copy(&path, to.join(name)).unwrap();
+        }
+    }
+}
+
+/// Returns a command running the built `caustic` binary, its generated meshes in
+/// [`mesh_cache`].
 pub fn caustic() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_caustic"))
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustic"));
+    cmd.env("CAUSTIC_CACHE", mesh_cache());
+    cmd
 }
 
 /// Runs script text named `test.lua` (paths resolve in `dir`) without rendering.

@@ -5,10 +5,18 @@ mod common;
 
 use caustic::integrator::photon_map::{Gi, GiSettings, Indirect};
 use caustic::integrator::{GiMode, Integrator, Settings, plan};
+use caustic::photon::trace::{MapKind, TracedMap};
 use caustic::scene::build::build_scene;
 use common::{caustic, out_dir, run_lua, run_ok};
 use glam::Vec3A;
 use std::path::Path;
+
+/// Traces `photons` photons of map `kind` (seed `seed`) from the only light of the script `src`.
+fn trace(src: &str, photons: u64, kind: MapKind, seed: u64) -> TracedMap {
+    let d = run_lua(src).unwrap();
+    let scene = build_scene(&d, &d.renders[0]).unwrap();
+    caustic::photon::trace::trace_map(&scene, &[photons], kind, seed)
+}
 
 /// A floor (top face y = 0) under a point light at height 2, with falloff `f`.
 fn floor_scene(falloff: &str) -> caustic::scene::Scene {
@@ -395,12 +403,7 @@ fn photon_power_summed_over_bounces_is_flux_over_one_minus_albedo() {
                          {gr.light({0,0,0}, {1, 1, 1}, {0,0,1}, nil, 20000)})";
     let d = run_lua(src).unwrap();
     let scene = build_scene(&d, &d.renders[0]).unwrap();
-    let traced = caustic::photon::trace::trace_map(
-        &scene,
-        &[20_000],
-        caustic::photon::trace::MapKind::Global,
-        3,
-    );
+    let traced = caustic::photon::trace::trace_map(&scene, &[20_000], MapKind::Global, 3);
     let stored: f64 = traced
         .chunks
         .iter()
@@ -537,14 +540,7 @@ fn caustic_photons_aimed_at_a_small_specular_object_reach_it() {
                b = gr.nh_sphere('ball', {0, 1, 0}, 0.1); b:set_material(glass); root:add_child(b)\n\
                gr.render(root, 'x.png', 4, 4, {0, 2, 5}, {0, -0.3, -1}, {0, 1, 0}, 50, {0, 0, 0},\n\
                          {gr.light({0, 3, 0}, {1, 1, 1}, {0, 0, 1}, nil, 100000)})";
-    let d = run_lua(src).unwrap();
-    let scene = build_scene(&d, &d.renders[0]).unwrap();
-    let traced = caustic::photon::trace::trace_map(
-        &scene,
-        &[100_000],
-        caustic::photon::trace::MapKind::Caustic,
-        3,
-    );
+    let traced = trace(src, 100_000, MapKind::Caustic, 3);
     let c = &traced.per_light[0];
     let fraction = c.first_hit_specular as f64 / c.emitted as f64;
     let sin = 0.1f64 / 2.0;
@@ -578,15 +574,8 @@ fn caustic_photons_aim_at_a_flat_slab_through_its_box_and_store_the_fresnel_flux
                s = gr.cube('slab'); s:set_material(glass); s:scale(2, 0.01, 2); s:translate(-1, -0.01, -1); root:add_child(s)\n\
                gr.render(root, 'x.png', 4, 4, {0, 2, 5}, {0, -0.3, -1}, {0, 1, 0}, 50, {0, 0, 0},\n\
                          {gr.light({0, 1, 0}, {1, 1, 1}, {0, 0, 1}, nil, 200000)})";
-    let d = run_lua(src).unwrap();
-    let scene = build_scene(&d, &d.renders[0]).unwrap();
     let n = 200_000;
-    let traced = caustic::photon::trace::trace_map(
-        &scene,
-        &[n],
-        caustic::photon::trace::MapKind::Caustic,
-        5,
-    );
+    let traced = trace(src, n, MapKind::Caustic, 5);
     let c = &traced.per_light[0];
     let fraction = c.first_hit_specular as f64 / c.emitted as f64;
     // The slab's solid angle from the light: 4 asin(1/2) for a 2 × 2 square one unit away.

@@ -65,7 +65,8 @@ lamp = gr.area_light({0, 0.99, 0}, {3.5, 3.5, 3.5}, {0, 0, 1}, 1, nil, {0.3, 0, 
 
 -- The budgets this scene needs (the command line's flags override them): every photon that
 -- lights the floor under the water is a caustic photon, so the caustic map is large; the
--- precomputed irradiance makes 4 gather rays per sample (16 a pixel) smooth; shadow rays from
+-- irradiance cache gathers at its own records, so 4 gather rays per sample serve only the few
+-- points no record reaches; shadow rays from
 -- under the water always meet its surface, so 2 per sample suffice.
 gr.settings{caustic_photons = 4000000, photons = 400000, gather_rays = 4, light_samples = 2}
 

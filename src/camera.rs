@@ -43,6 +43,11 @@ impl Camera {
         }
     }
 
+    /// Returns the image's width and height in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width as u32, self.height as u32)
+    }
+
     /// Returns the primary ray through image-plane position `(x, y)` in pixel units (not normalised).
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let sx = (2.0 * x / self.width - 1.0) * self.half_width;

@@ -18,6 +18,8 @@ pub enum Pass {
     /// Samples keyed by an image-plane position (adaptive anti-aliasing's corner and refinement
     /// rays), so that every tile computes the same value for a shared point.
     Point = 3,
+    /// The irradiance cache's records, keyed by the pixel whose centre ray found them.
+    Cache = 4,
 }
 
 /// Returns the key of image-plane position `(x, y)` for [`Pass::Point`] streams.

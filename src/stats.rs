@@ -20,6 +20,10 @@ pub struct RenderStats {
     pub depth_capped: u64,
     /// Camera samples and pixels whose radiance was NaN or infinite, dropped (counted as black).
     pub nonfinite_samples: u64,
+    /// Diffuse points of eye paths served by the irradiance cache, and final-gather points
+    /// gathered afresh (no record served them).
+    pub cached: u64,
+    pub gathered: u64,
     /// Rows of the window left black because the render was asked to stop
     /// ([`crate::progress::Progress::should_stop`]).
     pub rows_skipped: u64,
@@ -37,6 +41,8 @@ impl RenderStats {
         self.photons_used += o.photons_used;
         self.depth_capped += o.depth_capped;
         self.nonfinite_samples += o.nonfinite_samples;
+        self.cached += o.cached;
+        self.gathered += o.gathered;
         self.rows_skipped += o.rows_skipped;
     }
 }
@@ -59,6 +65,10 @@ pub struct RayCounts {
     pub depth_capped: u64,
     /// Camera samples whose radiance was NaN or infinite, dropped (counted as black).
     pub nonfinite: u64,
+    /// Diffuse points of eye paths served by the irradiance cache, and final-gather points
+    /// gathered afresh (no record served them).
+    pub cached: u64,
+    pub gathered: u64,
 }
 
 impl RayCounts {
@@ -72,6 +82,8 @@ impl RayCounts {
         self.photons_used += o.photons_used;
         self.depth_capped += o.depth_capped;
         self.nonfinite += o.nonfinite;
+        self.cached += o.cached;
+        self.gathered += o.gathered;
     }
 }
 

@@ -3,6 +3,7 @@
 
 mod common;
 
+use caustic::integrator::irradiance_cache::CacheSettings;
 use caustic::integrator::photon_map::{Gi, GiSettings, Indirect};
 use caustic::integrator::{GiMode, Integrator, Settings, plan};
 use caustic::photon::trace::{MapKind, TracedMap};
@@ -98,12 +99,19 @@ fn closed_sphere_has_radiance_one_with_final_gathering() {
     let scene = build_scene(&d, r).unwrap();
     assert_eq!(plan(&scene, GiMode::Auto).integrator, Integrator::PhotonMap);
     let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
-    // Both ways a gather ray reads the global map: precomputed irradiance and a fresh estimate.
-    for precompute in [true, false] {
+    // Both ways a gather ray reads the global map (precomputed irradiance and a fresh
+    // estimate), and gathers at every sample or interpolated from the irradiance cache.
+    // The cache is asked for each time but not built: the image is 6 pixels wide, under
+    // `MIN_IMAGE_SIZE` (the_irradiance_cache_agrees_with_gathering_everywhere covers it).
+    for (precompute, cached) in [(true, true), (true, false), (false, false)] {
         let settings = Settings {
             photons: GiSettings {
                 indirect: Indirect::Gather { rays: 256 },
                 precompute,
+                cache: CacheSettings {
+                    enabled: cached,
+                    ..CacheSettings::default()
+                },
                 ..GiSettings::default()
             },
             ..common::centre_ray()
@@ -117,15 +125,19 @@ fn closed_sphere_has_radiance_one_with_final_gathering() {
         );
         let photons = stats.photons.expect("the plan chose photon mapping");
         assert_eq!(photons.precomputed_points > 0, precompute);
+        assert!(
+            photons.cache.is_none(),
+            "cache {cached}: a 6-pixel image built one"
+        );
         let mean = film.pixels.iter().map(|p| p.x).sum::<f32>() / film.pixels.len() as f32;
         assert!(
             (mean - 1.0).abs() < 0.025,
-            "precompute {precompute}: mean radiance {mean}"
+            "precompute {precompute}, cache {cached}: mean radiance {mean}"
         );
         for p in &film.pixels {
             assert!(
                 (p.x - 1.0).abs() < 0.06,
-                "precompute {precompute}: pixel {p}"
+                "precompute {precompute}, cache {cached}: pixel {p}"
             );
         }
     }
@@ -625,4 +637,100 @@ fn caustic_photons_aim_at_a_flat_slab_through_its_box_and_store_the_fresnel_flux
         (stored / expected - 1.0).abs() < 0.02,
         "stored {stored} against {expected}"
     );
+}
+
+/// Renders `scenes/cornell_glass.lua` at 96 × 96 (one centre ray a pixel, 100k global photons,
+/// 64 gather rays a point), the irradiance cache on or off, in `window` (default: all of it).
+fn cornell_96(cached: bool, window: Option<caustic::film::Window>) -> caustic::film::Film {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
+    let d = run_lua(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let r = &d.renders[0];
+    let scene = build_scene(&d, r).unwrap();
+    let camera = caustic::camera::Camera::new(&r.camera, 96, 96);
+    let settings = Settings {
+        photons: GiSettings {
+            photons: 100_000,
+            caustic_photons: 200_000,
+            follow_image: false,
+            indirect: Indirect::Gather { rays: 64 },
+            cache: CacheSettings {
+                enabled: cached,
+                ..CacheSettings::default()
+            },
+            ..GiSettings::default()
+        },
+        ..common::centre_ray()
+    };
+    let window = window.unwrap_or(caustic::film::Window::full(96, 96));
+    caustic::frame::render(
+        &scene,
+        &camera,
+        window,
+        &settings,
+        &caustic::progress::NoProgress,
+    )
+    .0
+}
+
+#[test]
+fn the_irradiance_cache_agrees_with_gathering_everywhere() {
+    // Gathering at every pixel is the brute force the cache stands in for. Its noise at 64 rays
+    // a pixel averages to about 1% over an 8x8 block; the cache's interpolation bias (corners,
+    // contact with the ball) must stay near that, and its mean within 1%.
+    let (cached, everywhere) = (cornell_96(true, None), cornell_96(false, None));
+    assert!(caustic::integrator::irradiance_cache::MIN_IMAGE_SIZE <= 96);
+    let mean = |f: &caustic::film::Film| {
+        f.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / f.pixels.len() as f32
+    };
+    let ratio = mean(&cached) / mean(&everywhere);
+    assert!((ratio - 1.0).abs() < 0.01, "mean ratio {ratio}");
+    let block = |f: &caustic::film::Film, bx: usize, by: usize| {
+        let mut s = 0.0;
+        for y in by * 8..by * 8 + 8 {
+            for x in bx * 8..bx * 8 + 8 {
+                s += f.pixels[y * 96 + x].element_sum();
+            }
+        }
+        s / 64.0
+    };
+    let (mut err2, mut worst) = (0.0f32, 0.0f32);
+    for by in 0..12 {
+        for bx in 0..12 {
+            let (a, b) = (block(&cached, bx, by), block(&everywhere, bx, by));
+            let rel = (a - b) / b.max(0.05 * mean(&everywhere));
+            err2 += rel * rel;
+            worst = worst.max(rel.abs());
+        }
+    }
+    let rms = (err2 / 144.0).sqrt();
+    assert!(
+        rms < 0.03 && worst < 0.12,
+        "8x8 blocks: rms {rms}, worst {worst}"
+    );
+}
+
+#[test]
+fn a_tile_rendered_with_the_irradiance_cache_is_the_full_frames() {
+    // The cache is made over the whole image whatever window is rendered, so a farm's tiles
+    // stitch into the full frame exactly.
+    let full = cornell_96(true, None);
+    let window = caustic::film::Window {
+        x0: 40,
+        y0: 24,
+        x1: 72,
+        y1: 60,
+        full_width: 96,
+        full_height: 96,
+    };
+    let tile = cornell_96(true, Some(window));
+    for y in 24..60 {
+        for x in 40..72 {
+            let (a, b) = (tile.pixels[(y - 24) * 32 + x - 40], full.pixels[y * 96 + x]);
+            assert_eq!(
+                a.to_array().map(f32::to_bits),
+                b.to_array().map(f32::to_bits),
+                "({x}, {y})"
+            );
+        }
+    }
 }

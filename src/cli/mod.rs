@@ -245,6 +245,19 @@ pub struct RenderArgs {
     /// at the hit, slower and sharper).
     #[arg(long, value_enum, default_value_t = GatherLookup::Precomputed)]
     pub gather_lookup: GatherLookup,
+    /// Final gathering interpolates an irradiance cache: on (gather at a few thousand records,
+    /// placed where the light can change, with --cache-rays each, and interpolate between them;
+    /// points no record serves are gathered as before) or off (gather at every camera sample).
+    /// The progressive integrator never caches.
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub irradiance_cache: Switch,
+    /// Irradiance cache accuracy a in (0, 1]: a record serves points within a times its mean
+    /// distance to other surfaces (smaller: more records, closer to --irradiance-cache off).
+    #[arg(long, value_name = "A", default_value_t = crate::integrator::irradiance_cache::DEFAULT_ACCURACY)]
+    pub cache_accuracy: f32,
+    /// Gather rays per irradiance-cache record.
+    #[arg(long, value_name = "N", default_value_t = crate::integrator::irradiance_cache::DEFAULT_RECORD_RAYS)]
+    pub cache_rays: u32,
     /// Nearest photons per density estimate.
     #[arg(long, value_name = "K", default_value_t = 50)]
     pub photon_k: usize,
@@ -333,6 +346,13 @@ pub enum IntegratorArg {
 pub enum IndirectArg {
     Gather,
     Direct,
+}
+
+/// An on/off choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Switch {
+    On,
+    Off,
 }
 
 /// The `--gather-lookup` choices.

@@ -211,6 +211,19 @@ fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
         "  photon lookups while rendering: {lookups}, {:.1} photons per lookup",
         used as f64 / lookups.max(1) as f64
     );
+    if let Some(c) = &s.cache {
+        let levels: Vec<String> = c.per_level.iter().map(|n| n.to_string()).collect();
+        println!(
+            "  irradiance cache: {} records ({} by level, coarse to fine) from {} probe rays and {} gather rays in {:.3} s; {} diffuse points interpolated it, {} were gathered afresh",
+            c.records,
+            levels.join(" + "),
+            c.probes,
+            c.rays.secondary,
+            c.time.as_secs_f64(),
+            rstats.cached,
+            rstats.gathered
+        );
+    }
 }
 
 /// Returns the summary `caustic info` prints for a script's description.

@@ -1,8 +1,9 @@
 //! The command line's render options turned into the library's [`Settings`], with every numeric
 //! flag checked against its range (a usage error names the flag).
 
-use super::{GatherLookup, GiArg, IndirectArg, IntegratorArg, RenderArgs, TonemapArg};
+use super::{GatherLookup, GiArg, IndirectArg, IntegratorArg, RenderArgs, Switch, TonemapArg};
 use crate::error::{Error, Result};
+use crate::integrator::irradiance_cache::CacheSettings;
 use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings, Indirect};
 use crate::integrator::plan::Overrides;
 use crate::integrator::progressive::{
@@ -101,12 +102,19 @@ impl RenderJob {
             ("--light-samples", a.light_samples as u64, 4096),
             ("--photon-k", a.photon_k as u64, 10_000),
             ("--gather-rays", a.gather_rays as u64, 65_536),
+            ("--cache-rays", a.cache_rays as u64, 65_536),
         ] {
             if !(1..=max).contains(&value) {
                 return Err(Error::Usage(format!(
                     "{name} must be in [1, {max}], got {value}"
                 )));
             }
+        }
+        if !(a.cache_accuracy > 0.0 && a.cache_accuracy <= 1.0) {
+            return Err(Error::Usage(format!(
+                "--cache-accuracy must be in (0, 1], got {}",
+                a.cache_accuracy
+            )));
         }
         let sampling = if a.adaptive {
             Sampling::Adaptive {
@@ -152,6 +160,11 @@ impl RenderJob {
                     IndirectArg::Direct => Indirect::Direct,
                 },
                 precompute: a.gather_lookup == GatherLookup::Precomputed,
+                cache: CacheSettings {
+                    enabled: a.irradiance_cache == Switch::On,
+                    accuracy: a.cache_accuracy,
+                    rays: a.cache_rays,
+                },
                 ..GiSettings::default()
             },
             progressive,

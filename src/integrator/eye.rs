@@ -25,6 +25,7 @@
 //! [`MAX_PATH_DEPTH`] is a hard safety cap; paths stopped there are counted
 //! ([`RayCounts::depth_capped`]) and reported by `--stats`.
 
+use super::irradiance_cache::Probe;
 use super::photon_map::Gi;
 use crate::camera::Camera;
 use crate::geometry::{Ray, offset_ray_origin};
@@ -126,13 +127,17 @@ pub enum DiffuseTerm<'a> {
     Ambient(Vec3A),
     /// Caustics and indirect light from photon maps (Jensen).
     Photons(&'a Gi),
+    /// No light: the irradiance cache's record pass, which only follows the eye paths to find
+    /// where final gathering happens ([`super::irradiance_cache`]).
+    Caching(&'a Probe<'a>),
 }
 
 /// Everything an eye path needs besides the ray.
 pub struct Tracer<'a> {
     pub scene: &'a Scene,
     pub camera: &'a Camera,
-    /// Shadow-ray samples per area or sphere light at each shaded point.
+    /// Shadow-ray samples per area or sphere light at each shaded point (0: no direct light,
+    /// for passes that only follow eye paths).
     pub light_samples: u32,
     pub diffuse: DiffuseTerm<'a>,
 }
@@ -201,6 +206,9 @@ impl Tracer<'_> {
     pub fn direct(&self, p: Vec3A, bsdf: &Bsdf, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
         let (n, ng) = (bsdf.n, bsdf.ng);
         let mut colour = Vec3A::ZERO;
+        if self.light_samples == 0 {
+            return colour;
+        }
         for light in &self.scene.lights {
             let samples = if light.is_area() {
                 stratified_2d(rng, self.light_samples)
@@ -248,6 +256,11 @@ impl Tracer<'_> {
             DiffuseTerm::Photons(gi) => {
                 if bsdf.kd.max_element() > 0.0 {
                     colour += gi.diffuse(self.scene, p, bsdf, &state, rng, counts);
+                }
+            }
+            DiffuseTerm::Caching(probe) => {
+                if bsdf.kd.max_element() > 0.0 {
+                    probe.visit(self.scene, p, bsdf, &state, rng, counts);
                 }
             }
         }

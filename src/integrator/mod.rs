@@ -3,7 +3,7 @@
 //!
 //! - [`whitted`]: the course's ray tracer. Phases: camera pass.
 //! - [`photon_map`]: Jensen's photon mapping. Phases: trace photons, build maps, precompute
-//!   irradiance, camera pass.
+//!   irradiance, cache irradiance ([`irradiance_cache`]), camera pass.
 //! - [`progressive`]: progressive photon mapping, the consistent reference. Phases, per pass:
 //!   trace photons, build maps, camera pass with shrinking radii; then the mean of the passes.
 //!
@@ -17,6 +17,7 @@
 //! [`Integrator::render`] and in [`plan::plan`].
 
 pub mod eye;
+pub mod irradiance_cache;
 pub mod photon_map;
 pub mod plan;
 pub mod progressive;

@@ -117,6 +117,8 @@ pub fn camera_pass(
         photons_used: t.photons_used,
         depth_capped: t.depth_capped,
         nonfinite_samples: t.nonfinite,
+        cached: t.cached,
+        gathered: t.gathered,
         rows_skipped: skipped.into_inner(),
         time: start.elapsed(),
     };

@@ -678,7 +678,7 @@ fn the_irradiance_cache_agrees_with_gathering_everywhere() {
     // a pixel averages to about 1% over an 8x8 block; the cache's interpolation bias (corners,
     // contact with the ball) must stay near that, and its mean within 1%.
     let (cached, everywhere) = (cornell_96(true, None), cornell_96(false, None));
-    assert!(caustic::integrator::irradiance_cache::MIN_IMAGE_SIZE <= 96);
+    const { assert!(caustic::integrator::irradiance_cache::MIN_IMAGE_SIZE <= 96) };
     let mean = |f: &caustic::film::Film| {
         f.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / f.pixels.len() as f32
     };

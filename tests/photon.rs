@@ -143,7 +143,9 @@ fn closed_sphere_has_radiance_one_with_final_gathering() {
     }
 }
 
-fn cornell(empty: bool) -> (caustic::scene::Scene, Gi) {
+/// Runs `scenes/cornell_glass.lua` (`EMPTY = true` when `empty`: the box without its ball) and
+/// returns its description and the scene of its render.
+fn cornell_glass(empty: bool) -> (caustic::desc::SceneDesc, caustic::scene::Scene) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
     let src = std::fs::read_to_string(&path).unwrap();
     let src = if empty {
@@ -153,6 +155,11 @@ fn cornell(empty: bool) -> (caustic::scene::Scene, Gi) {
     };
     let d = run_lua(&src).unwrap();
     let scene = build_scene(&d, &d.renders[0]).unwrap();
+    (d, scene)
+}
+
+fn cornell(empty: bool) -> (caustic::scene::Scene, Gi) {
+    let (_, scene) = cornell_glass(empty);
     let p = plan(&scene, GiMode::Auto);
     let gi = Gi::build(
         &scene,
@@ -642,11 +649,8 @@ fn caustic_photons_aim_at_a_flat_slab_through_its_box_and_store_the_fresnel_flux
 /// Renders `scenes/cornell_glass.lua` at 96 × 96 (one centre ray a pixel, 100k global photons,
 /// 64 gather rays a point), the irradiance cache on or off, in `window` (default: all of it).
 fn cornell_96(cached: bool, window: Option<caustic::film::Window>) -> caustic::film::Film {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_glass.lua");
-    let d = run_lua(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    let r = &d.renders[0];
-    let scene = build_scene(&d, r).unwrap();
-    let camera = caustic::camera::Camera::new(&r.camera, 96, 96);
+    let (d, scene) = cornell_glass(false);
+    let camera = caustic::camera::Camera::new(&d.renders[0].camera, 96, 96);
     let settings = Settings {
         photons: GiSettings {
             photons: 100_000,

@@ -319,14 +319,12 @@ impl Grid {
             return &[];
         }
         let c = (p - self.origin) * self.inv_cell;
-        let inside = c.cmpge(Vec3A::ZERO).all()
-            && (c.x as usize) < self.dims[0]
-            && (c.y as usize) < self.dims[1]
-            && (c.z as usize) < self.dims[2];
+        let cell = [c.x as usize, c.y as usize, c.z as usize];
+        let inside = c.cmpge(Vec3A::ZERO).all() && (0..3).all(|k| cell[k] < self.dims[k]);
         if !inside {
             return &[];
         }
-        let i = self.index(self.coords(p));
+        let i = self.index(cell);
         &self.items[self.start[i] as usize..self.start[i + 1] as usize]
     }
 }
@@ -352,32 +350,39 @@ impl IrradianceCache {
         self.records.is_empty()
     }
 
-    /// Returns the records.
-    pub fn records(&self) -> &[Record] {
-        &self.records
-    }
-
     /// Returns the interpolated indirect irradiance at `p` on a surface with unit geometric
     /// normal `n` and unit shading normal `ns`, or `None` when no record is valid there (see the
     /// module doc).
     pub fn lookup(&self, p: Vec3A, n: Vec3A, ns: Vec3A) -> Option<Vec3A> {
-        let a = self.accuracy;
         let (mut sum, mut weight) = (Vec3A::ZERO, 0.0f32);
-        for &i in self.grid.cell(p) {
+        for (r, w) in self.serving(p, n) {
+            sum += w * r.at(ns);
+            weight += w;
+        }
+        (weight > 0.0).then(|| (sum / weight).max(Vec3A::ZERO))
+    }
+
+    /// Returns whether some record serves `p` (unit geometric normal `n`): whether
+    /// [`IrradianceCache::lookup`] would answer there.
+    pub fn covers(&self, p: Vec3A, n: Vec3A) -> bool {
+        self.serving(p, n).next().is_some()
+    }
+
+    /// Returns the records that serve `p` (unit geometric normal `n`) with their weights
+    /// `1 − ε/a > 0`, in the order of the grid cell's list (see the module doc).
+    fn serving(&self, p: Vec3A, n: Vec3A) -> impl Iterator<Item = (&Record, f32)> {
+        let a = self.accuracy;
+        self.grid.cell(p).iter().filter_map(move |&i| {
             let r = &self.records[i as usize];
             let d = p - r.p;
             let cos = n.dot(r.n);
             if cos <= 0.0 || d.dot(n + r.n) * 0.5 < -0.1 * a * r.r {
-                continue;
+                return None;
             }
             let eps = d.length() / r.r + (1.0 - cos).max(0.0).sqrt();
             let w = 1.0 - eps / a;
-            if w > 0.0 {
-                sum += w * r.at(ns);
-                weight += w;
-            }
-        }
-        (weight > 0.0).then(|| (sum / weight).max(Vec3A::ZERO))
+            (w > 0.0).then_some((r, w))
+        })
     }
 
     /// Builds the cache of a frame of `scene` through `camera` (its whole image) with `gi`'s
@@ -485,12 +490,13 @@ impl Probe<'_> {
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) {
-        if !self.gi.gathers(state) || self.cache.lookup(p, bsdf.ng, bsdf.ng).is_some() {
+        if !self.gi.gathers(state) || self.cache.covers(p, bsdf.ng) {
             return;
         }
+        let (ng, media) = (bsdf.ng, state.media);
         let g = self
             .gi
-            .gather_record(scene, p, bsdf.ng, state, self.rays, rng, counts);
+            .gather(scene, p, ng, ng, media, self.rays, rng, counts);
         let record = Record {
             p,
             n: bsdf.ng,

@@ -475,28 +475,31 @@ impl Gi {
             && state.weight >= GATHER_MIN_WEIGHT
     }
 
-    /// Returns a cache record's gather at `p` (unit geometric normal `ng`) on an eye path in
-    /// `state`: `rays` stratified cosine rays about `ng`, summed ([`Gather`]).
+    /// Returns the final gather at `p` (unit geometric normal `ng`, in `media`): `rays`
+    /// stratified cosine-distributed rays about unit `around` (the shading normal for a point's
+    /// own gather, `ng` for a cache record), those below the surface skipped, summed
+    /// ([`Gather`]: the irradiance, its rotational gradient and `R`).
     #[allow(clippy::too_many_arguments)]
-    pub fn gather_record(
+    pub fn gather(
         &self,
         scene: &Scene,
         p: Vec3A,
+        around: Vec3A,
         ng: Vec3A,
-        state: &PathState,
+        media: MediumStack,
         rays: u32,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Gather {
-        let mut g = Gather::new(ng, rays);
+        let mut g = Gather::new(around, rays);
         for u in stratified_2d(rng, rays) {
-            let d = crate::light::cosine_around(ng, u);
+            let d = crate::light::cosine_around(around, u);
             if d.dot(ng) <= 0.0 {
                 continue;
             }
             counts.secondary += 1;
             let ray = Ray::new(offset_ray_origin(p, ng, d), d);
-            let (l, t) = self.gathered_radiance(scene, &ray, state.media, rng, counts);
+            let (l, t) = self.gathered_radiance(scene, &ray, media, rng, counts);
             g.add(d, l, t);
         }
         g
@@ -565,30 +568,18 @@ impl Gi {
         // Where a cache record serves the point, its gather stands for the indirect light of
         // every eye path, those too weak to be gathered included (they would read the map
         // directly, blotchier and slower: a 50-nearest estimate against a grid cell's records).
-        let cached = self.cache.as_ref().and_then(|c| c.lookup(p, ng, bsdf.n));
-        match self.settings.indirect {
-            _ if cached.is_some() => {
-                counts.cached += 1;
-                e += cached.unwrap_or_default();
-            }
-            Indirect::Gather { rays } if self.gathers(state) => {
-                counts.gathered += 1;
-                let mut sum = Vec3A::ZERO;
-                for u in stratified_2d(rng, rays) {
-                    let Some(d) = bsdf.sample_diffuse(u) else {
-                        continue;
-                    };
-                    counts.secondary += 1;
-                    let ray = Ray::new(offset_ray_origin(p, ng, d), d);
-                    sum += self
-                        .gathered_radiance(scene, &ray, state.media, rng, counts)
-                        .0;
-                }
-                // Cosine-distributed rays: E = π · mean(L).
-                e += sum * (std::f32::consts::PI / rays as f32);
-            }
-            _ => e += self.irradiance(&self.global, self.global_r2, p, ng, true, counts),
-        }
+        e += if let Some(cached) = self.cache.as_ref().and_then(|c| c.lookup(p, ng, bsdf.n)) {
+            counts.cached += 1;
+            cached
+        } else if let Indirect::Gather { rays } = self.settings.indirect
+            && self.gathers(state)
+        {
+            counts.gathered += 1;
+            self.gather(scene, p, bsdf.n, ng, state.media, rays, rng, counts)
+                .irradiance()
+        } else {
+            self.irradiance(&self.global, self.global_r2, p, ng, true, counts)
+        };
         bsdf.kd * FRAC_1_PI * e
     }
 

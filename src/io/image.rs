@@ -77,6 +77,34 @@ pub fn to_rgb8(film: &Film, tonemap: Tonemap) -> Vec<u8> {
         .collect()
 }
 
+/// Returns the text of a PNG tile's [`WINDOW_KEY`] record: `x0 y0 x1 y1 full_width full_height`.
+pub(super) fn window_record(w: &Window) -> String {
+    format!(
+        "{} {} {} {} {} {}",
+        w.x0, w.y0, w.x1, w.y1, w.full_width, w.full_height
+    )
+}
+
+/// Returns the window a [`WINDOW_KEY`] record's text names ([`window_record`]), or `None`
+/// unless its words that read as unsigned integers are six.
+pub(super) fn parse_window_record(text: &str) -> Option<Window> {
+    let v: Vec<u32> = text
+        .split_whitespace()
+        .filter_map(|s| s.parse().ok())
+        .collect();
+    match v[..] {
+        [x0, y0, x1, y1, full_width, full_height] => Some(Window {
+            x0,
+            y0,
+            x1,
+            y1,
+            full_width,
+            full_height,
+        }),
+        _ => None,
+    }
+}
+
 /// Writes `write` to a temporary file beside `path`'s target, then renames it over the target
 /// ([`crate::files::write_replacing`]: symlinks followed, permissions kept, special files refused).
 pub(super) fn write_atomically(
@@ -202,13 +230,8 @@ pub fn write_image_noted(
             });
         }
     }
-    let w = film.window;
-    if w != Window::full(film.width, film.height) {
-        let record = format!(
-            "{} {} {} {} {} {}",
-            w.x0, w.y0, w.x1, w.y1, w.full_width, w.full_height
-        );
-        text.push((WINDOW_KEY, record));
+    if film.window != Window::full(film.width, film.height) {
+        text.push((WINDOW_KEY, window_record(&film.window)));
     }
     let data = to_rgb8(film, tonemap);
     write_atomically(path, |tmp| {

@@ -69,7 +69,7 @@ pub fn decode(bytes: &[u8], max_pixels: u64) -> Result<(u32, u32, Vec<Vec3A>), S
             data.len()
         ));
     }
-    let factor = if scale.abs() == 1.0 { 1.0 } else { scale.abs() };
+    let factor = scale.abs();
     let value = |b: &[u8]| {
         let b = [b[0], b[1], b[2], b[3]];
         factor
@@ -83,10 +83,11 @@ pub fn decode(bytes: &[u8], max_pixels: u64) -> Result<(u32, u32, Vec<Vec3A>), S
     let mut out = Vec::with_capacity(pixels as usize);
     for row in data[..need].chunks_exact(row_bytes).rev() {
         out.extend(row.chunks_exact(channels * 4).map(|px| {
-            let c: Vec<f32> = px.chunks_exact(4).map(value).collect();
-            match c[..] {
-                [r, g, b] => Vec3A::new(r, g, b),
-                _ => Vec3A::splat(c[0]),
+            let v = |k: usize| value(&px[4 * k..4 * k + 4]);
+            if channels == 3 {
+                Vec3A::new(v(0), v(1), v(2))
+            } else {
+                Vec3A::splat(v(0))
             }
         }));
     }

@@ -10,12 +10,13 @@
 //! marked image of an interrupted render.
 
 use super::image::{
-    Format, PARTIAL_KEY, WINDOW_KEY, encode_png, output_format, write_atomically, write_image,
+    Format, PARTIAL_KEY, WINDOW_KEY, output_format, parse_window_record, window_record,
+    write_image, write_rgb8_png,
 };
 use crate::error::{Error, Result};
 use crate::film::{Film, MAX_PIXELS, Window};
 use glam::Vec3A;
-use std::io::{BufWriter, Write};
+
 use std::path::{Path, PathBuf};
 
 /// What [`stitch`] wrote: the image's size and the tiles it took.
@@ -68,7 +69,6 @@ fn read_tile(path: &Path) -> Result<Tile> {
             if let Some((_, note)) = t.text.iter().find(|(k, _)| k == PARTIAL_KEY) {
                 return Err(partial_tile(path, note));
             }
-            check_window(path, t.window, t.window.size())?;
             Ok(Tile {
                 path: path.to_path_buf(),
                 window: t.window,
@@ -85,10 +85,7 @@ fn read_tile(path: &Path) -> Result<Tile> {
 /// [`MAX_PIXELS`] and as large as the tile's `size`.
 fn check_window(path: &Path, window: Window, (width, height): (u32, u32)) -> Result<()> {
     let w = window;
-    let record = format!(
-        "{} {} {} {} {} {}",
-        w.x0, w.y0, w.x1, w.y1, w.full_width, w.full_height
-    );
+    let record = window_record(&w);
     if w.full_width as u64 * w.full_height as u64 > MAX_PIXELS {
         return Err(tile_error(
             path,
@@ -141,21 +138,8 @@ fn read_png_tile(path: &Path) -> Result<Tile> {
             "has no '{WINDOW_KEY}' record: was it rendered with --crop?"
         ))
     })?;
-    let v: Vec<u32> = text
-        .split_whitespace()
-        .filter_map(|s| s.parse().ok())
-        .collect();
-    let window = match v[..] {
-        [x0, y0, x1, y1, full_width, full_height] => Window {
-            x0,
-            y0,
-            x1,
-            y1,
-            full_width,
-            full_height,
-        },
-        _ => return Err(fail(format!("malformed '{WINDOW_KEY}' record '{text}'"))),
-    };
+    let window = parse_window_record(&text)
+        .ok_or_else(|| fail(format!("malformed '{WINDOW_KEY}' record '{text}'")))?;
     check_window(path, window, (width, height))?;
     let mut rgb = vec![
         0;
@@ -218,12 +202,7 @@ pub fn stitch(tiles: &[PathBuf], out: &Path) -> Result<Stitched> {
         .into_iter()
         .flatten()
         .collect();
-        write_atomically(out, |tmp| {
-            let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
-            let mut w = BufWriter::new(file);
-            encode_png(&mut w, fw, fh, 3, &rgb, &[])?;
-            w.flush().map_err(|e| e.to_string())
-        })?;
+        write_rgb8_png(out, fw, fh, &rgb)?;
     } else {
         let pixels = gather(&tiles, &owners, fw, |p| match p {
             Pixels::Float(v) => v,

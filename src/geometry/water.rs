@@ -183,7 +183,6 @@ pub fn wave_mesh(p: &WaveParams) -> MeshData {
         .collect();
     let field = WaveField::new(p);
     let last = (n - 1) as f64;
-    let coordinate = |k: usize| p.size as f64 * (k as f64 / last - 0.5);
     let mut mesh = MeshData {
         triangles,
         source: format!("wave mesh (n {}, seed {})", p.n, p.seed).into(),
@@ -191,16 +190,27 @@ pub fn wave_mesh(p: &WaveParams) -> MeshData {
     };
     for &g in &order {
         let (i, j) = (g % n, g / n);
-        let (x, z) = (coordinate(i), coordinate(j));
-        mesh.positions
-            .push(Vec3::new(x as f32, field.height(x, z) as f32, z as f32));
-        mesh.normals.push(field.normal(x, z));
+        mesh.positions.push(grid_position(&field, p, i, j));
+        mesh.normals
+            .push(field.normal(grid_coordinate(p, i), grid_coordinate(p, j)));
         mesh.uvs.push(Vec2::new(
             (i as f64 / last) as f32,
             (j as f64 / last) as f32,
         ));
     }
     mesh
+}
+
+/// Returns the world coordinate (x or z) of grid column or row `k` of `p`'s grid.
+fn grid_coordinate(p: &WaveParams, k: usize) -> f64 {
+    p.size as f64 * (k as f64 / (p.n as usize - 1) as f64 - 0.5)
+}
+
+/// Returns the position of grid vertex `(i, j)` of the surface of `p` on `field`, as
+/// [`wave_mesh`] stores it (and [`close_volume`] finds it again, bit for bit).
+fn grid_position(field: &WaveField, p: &WaveParams, i: usize, j: usize) -> Vec3 {
+    let (x, z) = (grid_coordinate(p, i), grid_coordinate(p, j));
+    Vec3::new(x as f32, field.height(x, z) as f32, z as f32)
 }
 
 /// Closes the surface [`wave_mesh`] made from `p` into a watertight body of water reaching
@@ -222,15 +232,9 @@ pub fn close_volume(mesh: &mut MeshData, p: &WaveParams, bottom: f32) {
     );
     let n = p.n as usize;
     // The grid's boundary, counter-clockwise seen from +y, as positions of surface vertices:
-    // found by their grid coordinates, so the sides reuse the surface's exact floats.
-    let by_xz: std::collections::HashMap<(u32, u32), Vec3> = mesh
-        .positions
-        .iter()
-        .map(|v| ((v.x.to_bits(), v.z.to_bits()), *v))
-        .collect();
-    let last = (n - 1) as f64;
-    let coordinate = |k: usize| (p.size as f64 * (k as f64 / last - 0.5)) as f32;
-    let at = |i: usize, j: usize| by_xz[&(coordinate(i).to_bits(), coordinate(j).to_bits())];
+    // computed as wave_mesh computed them, so the sides reuse the surface's exact floats.
+    let field = WaveField::new(p);
+    let at = |i: usize, j: usize| grid_position(&field, p, i, j);
     // Counter-clockwise seen from +y (x right, z towards the viewer): along z = +half (j = n-1)
     // with x rising, up x = +half with z falling, back along z = -half, down x = -half.
     let mut ring: Vec<(Vec3, Vec3)> = Vec::with_capacity(4 * (n - 1));

@@ -309,6 +309,8 @@ pub fn trace_map_with(
             .into_par_iter()
             .map(|c| {
                 let (mut photons, mut on_specular) = (Vec::new(), 0);
+                // The cones the chunk's caustic photons aim through (see `trace_one`).
+                let mut cones = Vec::new();
                 // Asked to stop: the chunks left are not traced (the frame is dropped).
                 if progress.should_stop() {
                     return (photons, on_specular);
@@ -316,7 +318,15 @@ pub fn trace_map_with(
                 for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
                     let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
                     let mut rng = Rng::new(seed, Pass::Photon, key);
-                    let hit = trace_one(scene, light, n, kind, &targets, &mut rng, &mut photons);
+                    let hit = trace_one(
+                        scene,
+                        light,
+                        n,
+                        kind,
+                        (&targets, &mut cones),
+                        &mut rng,
+                        &mut photons,
+                    );
                     on_specular += u64::from(hit == FirstHit::Specular);
                 }
                 progress.advance(CHUNK.min(n - c * CHUNK));
@@ -345,13 +355,15 @@ enum FirstHit {
 }
 
 /// Traces one photon of `light` (one of `n`), appending what it stores to `out`; returns what
-/// it met first.
+/// it met first. A caustic photon aims through the cones around `aim.0`'s targets from where
+/// it leaves the light, kept in `aim.1`: made afresh for each photon of an area or sphere light,
+/// and once for a point light, whose photons all leave from the same place.
 fn trace_one(
     scene: &Scene,
     light: &Light,
     n: u64,
     kind: MapKind,
-    targets: &[Target],
+    (targets, cones): (&[Target], &mut Vec<Cone>),
     rng: &mut Rng,
     out: &mut Vec<Photon>,
 ) -> FirstHit {
@@ -366,7 +378,10 @@ fn trace_one(
         MapKind::Global => (e.dir, light.flux() / n as f32),
         MapKind::Caustic => {
             // Aim at one specular object's cone, chosen by solid angle; weight by 1 / density.
-            let cones: Vec<Cone> = targets.iter().map(|t| Cone::around(e.origin, t)).collect();
+            if cones.is_empty() || light.is_area() {
+                cones.clear();
+                cones.extend(targets.iter().map(|t| Cone::around(e.origin, t)));
+            }
             let total: f32 = cones.iter().map(|c| c.solid_angle).sum();
             let mut pick = rng.next_f32() * total;
             let cone = cones

@@ -98,6 +98,33 @@ fn collapse(start: usize, len: usize) {
 #[cfg(not(target_os = "linux"))]
 fn collapse(_start: usize, _len: usize) {}
 
+/// Gives the whole pages inside `data` back to the system (`MADV_DONTNEED`): they stop counting
+/// as resident, and read as zeros if touched again. For a large array whose contents are done
+/// with before the array itself can be freed (a photon map's build records, copied into the
+/// map from the end). Elsewhere than Linux it does nothing.
+///
+/// # Safety
+/// Every all-zero bit pattern must be a valid `T`: the pages discarded read as zeros.
+pub unsafe fn discard<T>(data: &mut [T]) {
+    #[cfg(target_os = "linux")]
+    {
+        const PAGE: usize = 4096;
+        let begin = data.as_ptr() as usize;
+        let start = begin.next_multiple_of(PAGE);
+        let end = (begin + std::mem::size_of_val(data)) / PAGE * PAGE;
+        if end > start {
+            // SAFETY: `start..end` lies inside `data`, which the caller holds mutably, and
+            // MADV_DONTNEED on private memory only replaces its pages with zero-filled ones,
+            // which the caller says are valid values; an error leaves the pages as they were.
+            unsafe {
+                libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_DONTNEED);
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = data;
+}
+
 /// Returns the most memory the process has held resident so far, in KiB (Linux's `VmHWM`), or
 /// `None` where the system does not say.
 pub fn peak_resident_kib() -> Option<u64> {

@@ -2,6 +2,7 @@
 //! duplicated points, quantisation round trips, build determinism across thread counts, and edge
 //! cases (empty, single photon, bad positions).
 
+use caustic::photon::stream::{BLOCK, PhotonStream, Staged};
 use caustic::photon::{MAX_ANGLE_ERROR_DEG, MAX_POWER_REL_ERROR, Photon, PhotonId, PhotonMap};
 use caustic::sampling::{Pass, Rng};
 use glam::Vec3A;
@@ -201,24 +202,87 @@ fn nearest_where_equals_brute_force_on_every_point_set() {
     }
 }
 
+/// A stream of several blocks, appended in uneven pieces with photons at non-finite positions
+/// among them, becomes a map that satisfies the tree's invariants and holds exactly the finite
+/// photons, each as it was handed in (position exact, power and directions within the stored
+/// precision), whatever the block boundaries.
 #[test]
-fn a_map_from_chunks_equals_the_map_of_their_concatenation() {
-    let points = point_set("uniform");
-    let photons = photons_at(&points, 4);
-    let whole = PhotonMap::build(photons.clone());
-    let mut chunks = Vec::new();
-    let mut rest = &photons[..];
-    for len in [0, 1, 999, 0, 4096, 7] {
+fn a_map_from_a_stream_of_many_blocks_holds_exactly_its_finite_photons() {
+    let mut r = Rng::new(5, Pass::Photon, 1);
+    let n = 3 * BLOCK + 1234;
+    let positions: Vec<Vec3A> = (0..n)
+        .map(|i| match i % 5000 {
+            17 => Vec3A::new(f32::NAN, 0.0, 0.0),
+            4999 => Vec3A::new(0.0, f32::INFINITY, 0.0),
+            _ => Vec3A::new(r.next_f32(), r.next_f32(), r.next_f32()),
+        })
+        .collect();
+    let photons = photons_at(&positions, 9);
+    let staged: Vec<Staged> = photons.iter().map(Staged::new).collect();
+    let mut stream = PhotonStream::new();
+    let mut rest = &staged[..];
+    for len in [0, 1, 999, 0, BLOCK + 7, 2 * BLOCK - 3] {
         let (a, b) = rest.split_at(len.min(rest.len()));
-        chunks.push(a.to_vec());
+        stream.extend_from_slice(a);
         rest = b;
     }
-    chunks.push(rest.to_vec());
-    let parts = PhotonMap::from_chunks(&chunks);
-    assert_eq!(parts.len(), whole.len());
-    for i in 0..whole.len() as u32 {
-        assert_eq!(parts.get(PhotonId(i)), whole.get(PhotonId(i)), "photon {i}");
+    stream.extend_from_slice(rest);
+    assert_eq!(stream.len(), n);
+    let map = PhotonMap::from_stream(stream);
+    map.validate().unwrap();
+    let key = |p: Vec3A| p.to_array().map(f32::to_bits);
+    let mut want: HashMap<[u32; 3], &Photon> = HashMap::new();
+    for p in photons.iter().filter(|p| p.position.is_finite()) {
+        want.insert(key(p.position), p);
     }
+    assert_eq!(map.len(), want.len(), "finite photons kept");
+    assert!(map.len() < n, "the set holds non-finite photons");
+    for i in 0..map.len() as u32 {
+        let got = map.get(PhotonId(i));
+        let p = want
+            .remove(&key(got.position))
+            .expect("a photon handed in, once");
+        let err = (got.power - p.power).abs().max_element();
+        assert!(
+            err <= MAX_POWER_REL_ERROR * p.power.max_element(),
+            "photon {i}: power"
+        );
+        assert!(got.dir.angle_between(p.dir).to_degrees() <= MAX_ANGLE_ERROR_DEG);
+        assert!(got.normal.angle_between(p.normal).to_degrees() <= MAX_ANGLE_ERROR_DEG);
+        assert_eq!(got.direct, p.direct);
+    }
+}
+
+/// The thinned map holds exactly the photons chosen, as the full map stores them.
+#[test]
+fn a_thinned_map_holds_the_chosen_photons() {
+    let map = PhotonMap::build(photons_at(&point_set("water"), 3));
+    let keep = |id: PhotonId| id.0 % 3 == 1;
+    let thin = map.thinned(keep);
+    thin.validate().unwrap();
+    let mut want: Vec<_> = (0..map.len() as u32)
+        .map(PhotonId)
+        .filter(|&id| keep(id))
+        .map(|id| map.get(id))
+        .map(|v| {
+            (
+                v.position.to_array().map(f32::to_bits),
+                v.normal.to_array().map(f32::to_bits),
+            )
+        })
+        .collect();
+    let mut got: Vec<_> = (0..thin.len() as u32)
+        .map(|i| thin.get(PhotonId(i)))
+        .map(|v| {
+            (
+                v.position.to_array().map(f32::to_bits),
+                v.normal.to_array().map(f32::to_bits),
+            )
+        })
+        .collect();
+    want.sort_unstable();
+    got.sort_unstable();
+    assert_eq!(got, want);
 }
 
 #[test]

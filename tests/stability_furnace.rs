@@ -109,7 +109,7 @@ fn photons_in_a_coloured_furnace_never_gain_power() {
     let each = flux / emitted as f32;
     let mut sums = [0f64; 3];
     let mut stored = 0usize;
-    for p in traced.chunks.iter().flatten() {
+    for p in traced.photons.iter().map(|s| s.view()) {
         for c in 0..3 {
             assert!(
                 p.power[c] <= each[c] * (1.0 + 1e-5),

@@ -201,11 +201,12 @@ fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
     }
     let (lookups, used) = (rstats.lookups, rstats.photons_used);
     println!(
-        "  photon phases: trace {:.3} s, kd-tree build {:.3} s, irradiance precomputed at {} points in {:.3} s",
+        "  photon phases: trace {:.3} s, kd-tree build {:.3} s, precomputation points {:.3} s ({} points, {} of them estimated where gather rays read them)",
         s.trace_time.as_secs_f64(),
         s.build_time.as_secs_f64(),
-        s.precomputed_points,
         s.precompute_time.as_secs_f64(),
+        s.precomputed_points,
+        s.precomputed_evaluated,
     );
     println!(
         "  photon lookups while rendering: {lookups}, {:.1} photons per lookup",

@@ -1,7 +1,8 @@
 //! The photon-mapping integrator (Jensen): caustics and indirect diffuse light from photon maps.
 //!
-//! Phases ([`render`]): trace photons, build maps, precompute irradiance (together
-//! [`Gi::build_with`]), then the camera pass with the maps as the eye path's diffuse term.
+//! Phases ([`render`]): trace and build the global map, then the caustic map, then the map of
+//! precomputation points (together [`Gi::build_with`]), the irradiance cache, and the camera
+//! pass with the maps as the eye path's diffuse term.
 //! [`Gi::diffuse`] answers what a diffuse surface receives other than directly from the lights:
 //! - caustics: a density estimate of the caustic map at the point;
 //! - indirect diffuse light, in one of two modes ([`Indirect`]):
@@ -16,9 +17,9 @@
 //!     direct mode.
 //!
 //!     By default that estimate is not made afresh for every gather ray. Following Christensen
-//!     (*Faster photon map global illumination*, JGT 1999), [`Gi::build`] computes the
-//!     irradiance at every [`PRECOMPUTE_STRIDE`]th global photon once (in kd-tree order, so the
-//!     points are spread as the photons are), and a gather ray takes the value of the nearest
+//!     (*Faster photon map global illumination*, JGT 1999), the irradiance is estimated at a
+//!     pseudo-random one in [`PRECOMPUTE_STRIDE`] global photons, each the first time a gather
+//!     ray reads it ([`Precomputed`]), and a gather ray takes the value of the nearest
 //!     such point whose normal is within 25° of the surface's (one 1-nearest query instead of a
 //!     50-nearest estimate). Where no such point lies within the search radius (a thin wall's
 //!     back, say) it falls back to the estimate. Why: a frame has tens of millions of gather
@@ -49,8 +50,8 @@ use crate::geometry::{Ray, offset_ray_origin};
 use crate::material::bsdf::Bsdf;
 use crate::material::medium::MediumStack;
 use crate::photon::estimate::Filter;
-use crate::photon::trace::{LightCounts, MapKind, TracedMap, photon_budget, trace_map_with};
-use crate::photon::{Photon, PhotonId, PhotonMap};
+use crate::photon::trace::{LightCounts, MapKind, photon_budget, trace_map_with};
+use crate::photon::{PhotonId, PhotonMap};
 use crate::progress::{NoProgress, Progress};
 use crate::sampling::{Rng, stratified_2d};
 use crate::scene::Scene;
@@ -59,6 +60,7 @@ use crate::stats::{RayCounts, RenderStats};
 use glam::Vec3A;
 use std::cell::RefCell;
 use std::f32::consts::FRAC_1_PI;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 /// Deepest eye-path depth (specular bounces) at which final gathering is used; deeper points
@@ -94,7 +96,7 @@ pub const PRECOMPUTE_STRIDE: usize = 4;
 /// Returns whether global photon `id` is a precomputation point: a pseudo-random choice of one
 /// in [`PRECOMPUTE_STRIDE`], independent of where the photon is (ids follow the kd-tree's
 /// spatial order, so a stride over ids would pick points that are spread like the photons
-/// near them, correlated with the estimate; see `Gi::precompute_irradiance`).
+/// near them, correlated with the estimate; see `Gi::point_irradiance`).
 pub fn is_precompute_point(id: PhotonId) -> bool {
     crate::sampling::mix64(u64::from(id.0) ^ 0x9e37_79b9_7f4a_7c15)
         .is_multiple_of(PRECOMPUTE_STRIDE as u64)
@@ -137,8 +139,9 @@ pub struct GiSettings {
     pub indirect: Indirect,
     /// Whether to trace the caustic map (the effect plan turns it off without specular surfaces).
     pub caustics: bool,
-    /// Final-gather rays read irradiance precomputed at every [`PRECOMPUTE_STRIDE`]th global
-    /// photon (Christensen 1999) instead of making a density estimate where they land.
+    /// Final-gather rays read the irradiance at about one global photon in [`PRECOMPUTE_STRIDE`]
+    /// (Christensen 1999), estimated when first read, instead of making a density estimate
+    /// where they land.
     pub precompute: bool,
     /// Final gathering interpolates an irradiance cache ([`super::irradiance_cache`]).
     pub cache: CacheSettings,
@@ -191,9 +194,12 @@ pub struct GiStats {
     pub caustic_bytes: usize,
     pub trace_time: Duration,
     pub build_time: Duration,
-    /// Time to precompute irradiance (zero without), and the points it was computed at.
+    /// Time to make the map of precomputation points (zero without), and how many it holds.
     pub precompute_time: Duration,
     pub precomputed_points: usize,
+    /// How many of those points were estimated because a gather ray read them (filled in
+    /// after the camera pass, [`Precomputed`]).
+    pub precomputed_evaluated: usize,
     /// The irradiance cache's record pass, when there was one.
     pub cache: Option<CacheStats>,
 }
@@ -203,9 +209,9 @@ pub struct GiStats {
 pub struct Gi {
     pub global: PhotonMap,
     pub caustic: Option<PhotonMap>,
-    /// Irradiance precomputed at a subset of the global photons, stored as their power (see
+    /// Irradiance at a subset of the global photons, each estimated when first read (see
     /// [`GiSettings::precompute`]).
-    pub precomputed: Option<PhotonMap>,
+    pub precomputed: Option<Precomputed>,
     /// Records of final gathers that shading points interpolate ([`Gi::with_cache`]).
     pub cache: Option<IrradianceCache>,
     pub settings: GiSettings,
@@ -222,7 +228,7 @@ thread_local! {
 }
 
 /// Renders `window` of the image of `scene` through `camera` with photon maps, running the
-/// phases in turn: trace photons, build maps, precompute irradiance ([`Gi::build_with`]), then
+/// phases in turn: trace and build the maps ([`Gi::build_with`]), the irradiance cache, then
 /// the camera pass with the maps as the eye path's diffuse term.
 pub fn render(
     scene: &Scene,
@@ -236,7 +242,12 @@ pub fn render(
         .with_cache(scene, camera, progress);
     let diffuse = DiffuseTerm::Photons(&gi);
     let (film, stats) = camera_pass(scene, camera, diffuse, window, settings, progress);
-    (film, stats, gi.stats)
+    let evaluated = gi.precomputed.as_ref().map_or(0, Precomputed::evaluated);
+    let gi_stats = GiStats {
+        precomputed_evaluated: evaluated,
+        ..gi.stats
+    };
+    (film, stats, gi_stats)
 }
 
 /// Returns `settings` with the plan's choices: a caustic map or none, final gathering or the
@@ -256,28 +267,80 @@ pub fn planned(settings: &GiSettings, plan: &Plan) -> GiSettings {
     }
 }
 
-/// Phase 1: traces the global map's photons and, when asked, the caustic map's, with each
-/// light's share of the budget.
-fn trace_photons(
+/// Phases 1 and 2 for one map: traces the photons of `kind` with each light's share of the
+/// budget and builds their kd-tree; returns the map, the per-light counts and the two phases'
+/// times. One map is traced and built before the next is traced, so that only one map's
+/// photons are ever held in the tracer's form ([`crate::photon::stream`]).
+fn trace_and_build(
     scene: &Scene,
     settings: &GiSettings,
+    kind: MapKind,
     progress: &dyn Progress,
-) -> (TracedMap, Option<TracedMap>) {
-    let trace = |kind| {
-        let budget = settings.budget(&scene.lights, kind);
-        trace_map_with(scene, &budget, kind, settings.seed, progress)
-    };
-    let global = trace(MapKind::Global);
-    let caustic = settings.caustics.then(|| trace(MapKind::Caustic));
-    (global, caustic)
+) -> (PhotonMap, Vec<LightCounts>, Duration, Duration) {
+    let start = Instant::now();
+    let budget = settings.budget(&scene.lights, kind);
+    let traced = trace_map_with(scene, &budget, kind, settings.seed, progress);
+    let trace_time = start.elapsed();
+    let start = Instant::now();
+    let map = PhotonMap::from_stream(traced.photons);
+    (map, traced.per_light, trace_time, start.elapsed())
 }
 
-/// Phase 2: builds the kd-trees of the traced photons.
-fn build_maps(global: &TracedMap, caustic: Option<&TracedMap>) -> (PhotonMap, Option<PhotonMap>) {
-    (
-        PhotonMap::from_chunks(&global.chunks),
-        caustic.map(|c| PhotonMap::from_chunks(&c.chunks)),
-    )
+/// Irradiance at the precomputation points ([`is_precompute_point`]: about one global photon in
+/// [`PRECOMPUTE_STRIDE`]), each estimated the first time a gather ray reads it and kept.
+///
+/// Why lazily: a frame's gather rays land near a fraction of the points (on `room2.lua` at
+/// 128², 10^6 global photons: 1.6 M points, most of them on surfaces no gather ray from the
+/// visible points reaches), and estimating all of them up front took most of a preview's time.
+/// An estimate depends only on its point (the others' `k` nearest), so estimating on demand
+/// gives every point the value an up-front pass would, whichever thread asks first or how many
+/// ask at once; the image is the same for any thread count.
+#[derive(Debug)]
+pub struct Precomputed {
+    /// The points: the chosen global photons, as a map of their own (positions and normals).
+    pub points: PhotonMap,
+    /// Each point's irradiance as f32 bits; red is [`NOT_YET`] until the point is estimated.
+    values: Vec<[AtomicU32; 3]>,
+}
+
+/// The red channel of a point not yet estimated: a NaN pattern that no estimate produces
+/// (estimates are finite sums of finite powers).
+const NOT_YET: u32 = u32::MAX;
+
+impl Precomputed {
+    /// Returns the points of `global`'s precomputation points, none estimated yet.
+    fn new(global: &PhotonMap) -> Precomputed {
+        let points = global.thinned(is_precompute_point);
+        let values = (0..points.len())
+            .map(|_| [NOT_YET, 0, 0].map(AtomicU32::new))
+            .collect();
+        Precomputed { points, values }
+    }
+
+    /// Returns point `id`'s irradiance, computing it with `estimate` if no thread has yet.
+    fn value(&self, id: PhotonId, estimate: impl FnOnce() -> Vec3A) -> Vec3A {
+        let v = &self.values[id.0 as usize];
+        let r = v[0].load(Ordering::Acquire);
+        if r != NOT_YET {
+            let (g, b) = (v[1].load(Ordering::Relaxed), v[2].load(Ordering::Relaxed));
+            return Vec3A::new(f32::from_bits(r), f32::from_bits(g), f32::from_bits(b));
+        }
+        let e = estimate();
+        // Green and blue first, red last with release: a thread that sees red sees the others.
+        // Two threads estimating the same point at once store the same bits.
+        v[1].store(e.y.to_bits(), Ordering::Relaxed);
+        v[2].store(e.z.to_bits(), Ordering::Relaxed);
+        v[0].store(e.x.to_bits(), Ordering::Release);
+        e
+    }
+
+    /// Returns how many points have been estimated.
+    pub fn evaluated(&self) -> usize {
+        self.values
+            .iter()
+            .filter(|v| v[0].load(Ordering::Relaxed) != NOT_YET)
+            .count()
+    }
 }
 
 impl Gi {
@@ -286,21 +349,26 @@ impl Gi {
         Gi::build_with(scene, settings, &NoProgress)
     }
 
-    /// [`Gi::build`], reporting each phase to `progress`. The phases: trace photons, build
-    /// maps, precompute irradiance.
+    /// [`Gi::build`], reporting each phase to `progress`. The phases: trace and build the
+    /// global map, then the caustic map, then the map of precomputation points.
     pub fn build_with(scene: &Scene, settings: &GiSettings, progress: &dyn Progress) -> Gi {
-        let start = Instant::now();
-        let (global, caustic) = trace_photons(scene, settings, progress);
-        let trace_time = start.elapsed();
-        let start = Instant::now();
-        let (global_map, caustic_map) = build_maps(&global, caustic.as_ref());
-        let build_time = start.elapsed();
+        let (global_map, global, mut trace_time, mut build_time) =
+            trace_and_build(scene, settings, MapKind::Global, progress);
+        let (caustic_map, caustic) = if settings.caustics {
+            let (map, counts, trace, build) =
+                trace_and_build(scene, settings, MapKind::Caustic, progress);
+            trace_time += trace;
+            build_time += build;
+            (Some(map), counts)
+        } else {
+            (None, Vec::new())
+        };
         let extent = scene.extent().max(f32::MIN_POSITIVE);
         let r = settings.max_radius * extent;
         let mut gi = Gi {
             stats: GiStats {
-                global: global.per_light,
-                caustic: caustic.map(|c| c.per_light).unwrap_or_default(),
+                global,
+                caustic,
                 trace_time,
                 build_time,
                 global_bytes: global_map.bytes(),
@@ -319,17 +387,28 @@ impl Gi {
         let gathers = matches!(settings.indirect, Indirect::Gather { .. });
         if settings.precompute && gathers && !gi.global.is_empty() {
             let start = Instant::now();
-            let map = gi.precompute_irradiance(progress);
+            let pre = Precomputed::new(&gi.global);
             gi.stats.precompute_time = start.elapsed();
-            gi.stats.precomputed_points = map.len();
-            gi.precomputed = Some(map);
+            gi.stats.precomputed_points = pre.points.len();
+            gi.precomputed = Some(pre);
         }
         gi
     }
 
-    /// Phase 3: returns a map of the precomputation points ([`is_precompute_point`]: about one
-    /// global photon in [`PRECOMPUTE_STRIDE`]), each carrying as its power the irradiance
-    /// estimated there from the *other* photons only.
+    /// Returns the irradiance at precomputation point `point` (an id of
+    /// `precomputed.points`), estimating it now if no gather ray has read it yet; None
+    /// without precomputation.
+    ///
+    /// # Panics
+    /// If `point` is not below the number of points.
+    pub fn precomputed_irradiance(&self, point: PhotonId) -> Option<Vec3A> {
+        let pre = self.precomputed.as_ref()?;
+        Some(self.point_irradiance(pre, point))
+    }
+
+    /// Returns the irradiance at precomputation point `point` of `pre` (at `p`, normal `n`):
+    /// its estimate from the global photons that are *not* precomputation points, scaled for the
+    /// thinning.
     ///
     /// Why the others only: a final-gather ray reads the point nearest to where it lands, and
     /// the nearest of a set of points is most often one with a large empty cell around it, that
@@ -341,45 +420,17 @@ impl Gi {
     /// samples of the same density: which point a ray reads says nothing about that point's
     /// estimate, and the others' estimate, scaled by `STRIDE/(STRIDE−1)` for the thinning, is
     /// unbiased.
-    fn precompute_irradiance(&self, progress: &dyn Progress) -> PhotonMap {
-        use rayon::prelude::*;
-        let ids: Vec<PhotonId> = (0..self.global.len() as u32)
-            .map(PhotonId)
-            .filter(|&id| is_precompute_point(id))
-            .collect();
-        let n = ids.len();
-        progress.start("precomputing irradiance", n as u64);
-        let others = |id: PhotonId| !is_precompute_point(id);
-        let thinning = PRECOMPUTE_STRIDE as f32 / (PRECOMPUTE_STRIDE - 1) as f32;
-        let (map, k, r2) = (&self.global, self.settings.k, self.global_r2);
-        let points: Vec<Photon> = ids
-            .par_iter()
-            .enumerate()
-            .with_min_len(1024)
-            .map(|(j, &id)| {
-                if j % 1024 == 1023 || j == n - 1 {
-                    progress.advance(j as u64 % 1024 + 1);
-                }
-                let ph = map.get(id);
-                // Asked to stop: the points left carry nothing (the frame is dropped).
-                let e = if progress.should_stop() {
-                    Vec3A::ZERO
-                } else {
-                    FOUND.with_borrow_mut(|found| {
-                        let d2 = map.knn_where(ph.position, k, r2, others, found);
-                        self.kernel_sum(map, found, d2, ph.normal, false)
-                    })
-                };
-                Photon {
-                    position: ph.position,
-                    power: e * thinning,
-                    dir: ph.normal,
-                    normal: ph.normal,
-                    direct: false,
-                }
+    fn point_irradiance(&self, pre: &Precomputed, point: PhotonId) -> Vec3A {
+        pre.value(point, || {
+            let ph = pre.points.get(point);
+            let others = |id: PhotonId| !is_precompute_point(id);
+            let thinning = PRECOMPUTE_STRIDE as f32 / (PRECOMPUTE_STRIDE - 1) as f32;
+            FOUND.with_borrow_mut(|found| {
+                let (map, k, r2) = (&self.global, self.settings.k, self.global_r2);
+                let d2 = map.knn_where(ph.position, k, r2, others, found);
+                self.kernel_sum(map, found, d2, ph.normal, false) * thinning
             })
-            .collect();
-        PhotonMap::build(points)
+        })
     }
 
     /// Returns the irradiance at `p` on a surface with normal `n` (facing the side the light
@@ -541,12 +592,13 @@ impl Gi {
     pub fn gathered_irradiance(&self, p: Vec3A, n: Vec3A, counts: &mut RayCounts) -> Vec3A {
         if let Some(pre) = &self.precomputed {
             counts.lookups += 1;
-            let found = pre.nearest_where(p, self.global_r2, &mut |id| {
-                pre.normal(id).dot(n) >= PRECOMPUTED_MIN_COS
+            let points = &pre.points;
+            let found = points.nearest_where(p, self.global_r2, &mut |id| {
+                points.normal(id).dot(n) >= PRECOMPUTED_MIN_COS
             });
             if let Some((_, id)) = found {
                 counts.photons_used += 1;
-                return pre.power(id);
+                return self.point_irradiance(pre, id);
             }
         }
         self.irradiance(&self.global, self.global_r2, p, n, false, counts)

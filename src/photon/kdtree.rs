@@ -32,6 +32,7 @@
 //! distance passes the bound.
 
 use super::store::{self, AXIS_NONE, PowerCodec};
+use super::stream::{BLOCK, PhotonStream, Staged};
 use super::{Photon, PhotonId, PhotonMap};
 use glam::{BVec3A, Vec3A};
 
@@ -127,25 +128,26 @@ fn widest_axis(points: impl Iterator<Item = [f32; 3]>) -> u32 {
     best as u32
 }
 
-/// Returns, for each array index of the top-first layout (see the module doc), the in-order
-/// index of the photon stored there.
-fn top_first_order(n: usize) -> Vec<u32> {
-    let mut order = Vec::with_capacity(n);
+/// Returns the top-first layout of an `n`-photon tree (see the module doc): the in-order index
+/// of each top node's median, breadth-first, and the in-order ranges of the bottom subtrees, in
+/// order (bottom subtree `j`, in-order `lo..hi`, is stored at `lo - j + T..hi - j + T`).
+fn top_first_layout(n: usize) -> (Vec<usize>, Vec<(usize, usize)>) {
+    let mut tops = Vec::new();
     let mut level = vec![(0, n)];
     for _ in 0..top_depth(n) {
         let mut next = Vec::with_capacity(2 * level.len());
         for (lo, hi) in level {
             let m = lo + (hi - lo) / 2;
-            order.push(m as u32);
+            tops.push(m);
             next.extend([(lo, m), (m + 1, hi)]);
         }
         level = next;
     }
-    for (lo, hi) in level {
-        order.extend(lo as u32..hi as u32);
-    }
-    order
+    (tops, level)
 }
+
+/// Records copied into a map's arrays between two hand-backs of the records' pages (8 MiB).
+const RELEASE_RECORDS: usize = 1 << 19;
 
 /// Orders `recs` as a kd-subtree (see the module doc), in parallel for large ranges.
 fn build_subtree(recs: &mut [Record]) {
@@ -174,73 +176,144 @@ impl PhotonMap {
     ///
     /// Photons with a NaN or infinite position are skipped (a tracer bug: debug builds assert).
     pub fn build(photons: Vec<Photon>) -> PhotonMap {
-        PhotonMap::from_chunks(std::slice::from_ref(&photons))
+        let stream = PhotonStream::of(&photons);
+        drop(photons);
+        PhotonMap::from_stream(stream)
     }
 
-    /// Returns the map of the photons of every chunk (the tracer's per-task output), as
-    /// [`PhotonMap::build`] of their concatenation would, without concatenating them first.
-    pub fn from_chunks(chunks: &[Vec<Photon>]) -> PhotonMap {
+    /// Returns the map of the photons of `stream`, as [`PhotonMap::build`] of the same photons
+    /// in the same order would, holding at most about 28 bytes per photon while it builds (see
+    /// [`super::stream`]): the stream's blocks are converted to 20-byte records and freed in
+    /// parallel, the records are ordered as the tree in place, and they are copied into the
+    /// map's arrays from the end, their pages given back as they go.
+    pub fn from_stream(stream: PhotonStream) -> PhotonMap {
         use rayon::prelude::*;
-        // starts[c] is the index of chunk c's first photon in the concatenation.
-        let starts: Vec<usize> = chunks
-            .iter()
-            .scan(0, |n, c| {
-                let s = *n;
-                *n += c.len();
-                Some(s)
-            })
-            .collect();
-        let total = chunks.iter().map(Vec::len).sum::<usize>();
-        let photon = |i: usize| {
-            let c = starts.partition_point(|&s| s <= i) - 1;
-            &chunks[c][i - starts[c]]
-        };
-        let finite = |p: &&Photon| {
-            let ok = p.position.is_finite();
-            debug_assert!(ok, "photon at {}", p.position);
+        let blocks = stream.blocks;
+        let finite = |s: &&Staged| {
+            let ok = s.is_finite();
+            debug_assert!(ok, "photon at {:?}", s.pos);
             ok
         };
-        let max_exponent = chunks
+        let max_exponent = blocks
             .par_iter()
-            .flat_map_iter(|c| c.iter())
+            .flat_map_iter(|b| b.iter())
             .filter(finite)
-            .map(|p| store::power_exponent(p.power))
+            .map(|s| store::power_exponent(Vec3A::from_array(s.power)))
             .max()
             .unwrap_or(i32::MIN);
         let codec = PowerCodec::new(max_exponent);
-        // An indexed parallel map writes the records in place (no serial concatenation).
-        let mut recs: Vec<Record> = (0..total)
-            .into_par_iter()
-            .map(|i| {
-                let p = photon(i);
-                Record {
-                    pos: p.position.to_array(),
-                    code: store::encode_code(p.dir, p.normal, p.direct),
-                    power: codec.encode(p.power),
-                }
+        // Each block's finite photons, capped so that at most u32::MAX are kept in all.
+        let mut room = u32::MAX as usize;
+        let takes: Vec<usize> = blocks
+            .par_iter()
+            .map(|b| b.iter().filter(finite).count())
+            .collect::<Vec<_>>()
+            .into_iter()
+            .map(|k| {
+                let take = k.min(room);
+                room -= take;
+                take
             })
             .collect();
-        if chunks.par_iter().any(|c| c.iter().any(|p| !finite(&p))) {
-            recs.retain(|r| r.pos.iter().all(|x| x.is_finite()));
+        let n: usize = takes.iter().sum();
+        let mut recs: Vec<Record> = crate::mem::huge_vec(n);
+        let mut parts = Vec::with_capacity(blocks.len());
+        let mut rest = &mut recs.spare_capacity_mut()[..n];
+        for &take in &takes {
+            let (part, after) = rest.split_at_mut(take);
+            parts.push(part);
+            rest = after;
         }
-        recs.truncate(u32::MAX as usize);
+        blocks.into_par_iter().zip(parts).for_each(|(block, part)| {
+            for (slot, s) in part.iter_mut().zip(block.iter().filter(finite)) {
+                slot.write(Record {
+                    pos: s.pos,
+                    code: s.code,
+                    power: codec.encode(Vec3A::from_array(s.power)),
+                });
+            }
+            // The block is freed here, as its records are written.
+        });
+        // SAFETY: the parts cover the first n slots, and each part was written whole: a part
+        // is as long as its block's first finite photons, which the loop above wrote in order.
+        unsafe { recs.set_len(n) };
         build_subtree(&mut recs);
-        let order = top_first_order(recs.len());
-        let mut map = PhotonMap {
-            pos: order.par_iter().map(|&i| recs[i as usize].pos).collect(),
-            code: order.par_iter().map(|&i| recs[i as usize].code).collect(),
-            power: order.par_iter().map(|&i| recs[i as usize].power).collect(),
-            codec,
-            top_nodes: (1 << top_depth(recs.len())) - 1,
+        PhotonMap::from_tree(recs, codec)
+    }
+
+    /// Returns the map of the photons for which `keep` holds, taken in id order (positions,
+    /// directions and `direct` as stored; power decoded and encoded afresh for the new map).
+    pub fn thinned(&self, keep: impl Fn(PhotonId) -> bool + Sync) -> PhotonMap {
+        use rayon::prelude::*;
+        let staged = |i: usize| Staged {
+            pos: self.pos[i],
+            code: store::with_axis(self.code[i], AXIS_NONE),
+            power: self.codec.decode(self.power[i]).to_array(),
         };
-        // Collecting a handful of items may leave spare capacity; large maps are exact already.
-        map.pos.shrink_to_fit();
-        map.code.shrink_to_fit();
-        map.power.shrink_to_fit();
-        crate::mem::prefer_huge_pages(&map.pos);
-        crate::mem::prefer_huge_pages(&map.code);
-        crate::mem::prefer_huge_pages(&map.power);
-        map
+        let mut stream = PhotonStream::new();
+        for start in (0..self.len()).step_by(BLOCK) {
+            let part: Vec<Staged> = (start..(start + BLOCK).min(self.len()))
+                .into_par_iter()
+                .filter(|&i| keep(PhotonId(i as u32)))
+                .map(staged)
+                .collect();
+            stream.extend_from_slice(&part);
+        }
+        PhotonMap::from_stream(stream)
+    }
+
+    /// Returns the map of `recs`, an in-order tree ([`build_subtree`]), in the top-first layout,
+    /// giving the records' pages back to the system as they are copied.
+    fn from_tree(mut recs: Vec<Record>, codec: PowerCodec) -> PhotonMap {
+        let n = recs.len();
+        let (tops, bottoms) = top_first_layout(n);
+        let t = tops.len();
+        let mut pos: Vec<[f32; 3]> = crate::mem::huge_vec(n);
+        let mut code: Vec<u32> = crate::mem::huge_vec(n);
+        let mut power: Vec<u32> = crate::mem::huge_vec(n);
+        {
+            let (ps, cs, ws) = (
+                &mut pos.spare_capacity_mut()[..n],
+                &mut code.spare_capacity_mut()[..n],
+                &mut power.spare_capacity_mut()[..n],
+            );
+            let mut put = |at: usize, r: &Record| {
+                ps[at].write(r.pos);
+                cs[at].write(r.code);
+                ws[at].write(r.power);
+            };
+            for (j, &m) in tops.iter().enumerate() {
+                put(j, &recs[m]);
+            }
+            // From the last bottom subtree to the first, so the records left are a prefix.
+            let mut kept = n;
+            for (j, &(lo, hi)) in bottoms.iter().enumerate().rev() {
+                for (i, r) in recs[lo..hi].iter().enumerate() {
+                    put(lo + t - j + i, r);
+                }
+                if kept - lo >= RELEASE_RECORDS {
+                    // SAFETY: a Record is plain f32 and u32 fields, valid as all zeros.
+                    unsafe { crate::mem::discard(&mut recs[lo..kept]) };
+                    kept = lo;
+                }
+            }
+        }
+        // SAFETY: the top medians filled slots 0..t and bottom subtree j (lo..hi, in order)
+        // slots lo + t - j..hi + t - j; the layout's ranges tile 0..n exactly (the tops are
+        // the medians between consecutive bottom ranges), so every slot of 0..n was written.
+        unsafe {
+            pos.set_len(n);
+            code.set_len(n);
+            power.set_len(n);
+        }
+        drop(recs);
+        PhotonMap {
+            pos,
+            code,
+            power,
+            codec,
+            top_nodes: t,
+        }
     }
 
     /// Writes the k nearest photons to p with squared distance <= max_d2 to `out` (cleared first),

@@ -18,6 +18,7 @@
 //!   the maps do not depend on the thread count, and tracing runs on all cores.
 
 use super::Photon;
+use super::stream::{PhotonStream, Staged};
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::light::Light;
 use crate::material::bsdf::Lobe;
@@ -27,8 +28,10 @@ use crate::sampling::{Pass, Rng};
 use crate::scene::Scene;
 use crate::scene::interaction::Needs;
 use glam::Vec3A;
-use rayon::prelude::*;
+use std::collections::BTreeMap;
 use std::f32::consts::TAU;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Most surface interactions a photon path may have: a safety bound only. Paths end by Russian
 /// roulette on the lobe weights long before (a diffuse bounce survives with the albedo), and
@@ -59,25 +62,25 @@ pub struct LightCounts {
     pub first_hit_specular: u64,
 }
 
-/// The photons of one map, as the tracing tasks stored them (see [`PhotonMap::from_chunks`]),
-/// with per-light counts.
+/// The photons of one map in the order they were traced (see [`PhotonMap::from_stream`]), with
+/// per-light counts.
 ///
-/// [`PhotonMap::from_chunks`]: crate::photon::PhotonMap::from_chunks
+/// [`PhotonMap::from_stream`]: crate::photon::PhotonMap::from_stream
 #[derive(Clone, Debug, Default)]
 pub struct TracedMap {
-    pub chunks: Vec<Vec<Photon>>,
+    pub photons: PhotonStream,
     pub per_light: Vec<LightCounts>,
 }
 
 impl TracedMap {
     /// Returns the number of photons stored.
     pub fn len(&self) -> usize {
-        self.chunks.iter().map(Vec::len).sum()
+        self.photons.len()
     }
 
     /// Returns whether no photon was stored.
     pub fn is_empty(&self) -> bool {
-        self.chunks.iter().all(Vec::is_empty)
+        self.photons.is_empty()
     }
 }
 
@@ -305,42 +308,82 @@ pub fn trace_map_with(
     progress.start(what, budget.iter().take(scene.lights.len()).sum());
     for (l, light) in scene.lights.iter().enumerate() {
         let n = budget.get(l).copied().unwrap_or(0);
-        let traced: Vec<(Vec<Photon>, u64)> = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                let (mut photons, mut on_specular) = (Vec::new(), 0);
-                // The cones the chunk's caustic photons aim through (see `trace_one`).
-                let mut cones = Vec::new();
-                // Asked to stop: the chunks left are not traced (the frame is dropped).
-                if progress.should_stop() {
-                    return (photons, on_specular);
-                }
-                for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                    let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
-                    let mut rng = Rng::new(seed, Pass::Photon, key);
-                    let hit = trace_one(
-                        scene,
-                        light,
-                        n,
-                        kind,
-                        (&targets, &mut cones),
-                        &mut rng,
-                        &mut photons,
-                    );
-                    on_specular += u64::from(hit == FirstHit::Specular);
-                }
-                progress.advance(CHUNK.min(n - c * CHUNK));
-                (photons, on_specular)
-            })
-            .collect();
-        out.per_light.push(LightCounts {
-            emitted: n,
-            stored: traced.iter().map(|c| c.0.len() as u64).sum(),
-            first_hit_specular: traced.iter().map(|c| c.1).sum(),
+        let chunks = n.div_ceil(CHUNK);
+        // Every thread claims the next chunk in turn, and whoever finishes the chunk next in
+        // order appends it and any finished after it: the stream takes the chunks in order,
+        // and only the few chunks in flight wait outside it (see `crate::photon::stream`).
+        let next = AtomicU64::new(0);
+        let done = Mutex::new(InOrder {
+            next: 0,
+            waiting: BTreeMap::new(),
+            counts: LightCounts {
+                emitted: n,
+                ..LightCounts::default()
+            },
+            stream: std::mem::take(&mut out.photons),
         });
-        out.chunks.extend(traced.into_iter().map(|c| c.0));
+        rayon::broadcast(|_| {
+            // The cones a chunk's caustic photons aim through (see `trace_one`).
+            let mut cones = Vec::new();
+            loop {
+                let c = next.fetch_add(1, Ordering::Relaxed);
+                if c >= chunks {
+                    break;
+                }
+                let (mut photons, mut on_specular) = (Vec::new(), 0);
+                cones.clear();
+                // Asked to stop: the chunks left are not traced (the frame is dropped).
+                if !progress.should_stop() {
+                    for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                        let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
+                        let mut rng = Rng::new(seed, Pass::Photon, key);
+                        let hit = trace_one(
+                            scene,
+                            light,
+                            n,
+                            kind,
+                            (&targets, &mut cones),
+                            &mut rng,
+                            &mut photons,
+                        );
+                        on_specular += u64::from(hit == FirstHit::Specular);
+                    }
+                    progress.advance(CHUNK.min(n - c * CHUNK));
+                }
+                let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
+                done.finish(c, photons, on_specular);
+            }
+        });
+        let done = done.into_inner().unwrap_or_else(|e| e.into_inner());
+        debug_assert!(done.waiting.is_empty() && done.next == chunks);
+        out.photons = done.stream;
+        let counts = done.counts;
+        out.per_light.push(counts);
     }
     out
+}
+
+/// The chunks of one light's photons, taken into the stream in chunk order as they finish.
+struct InOrder {
+    /// The chunk the stream takes next.
+    next: u64,
+    /// Chunks finished before `next`: their photons and how many met a specular surface first.
+    waiting: BTreeMap<u64, (Vec<Staged>, u64)>,
+    counts: LightCounts,
+    stream: PhotonStream,
+}
+
+impl InOrder {
+    /// Takes chunk `c`, and appends it with every waiting chunk after it once it is next.
+    fn finish(&mut self, c: u64, photons: Vec<Staged>, on_specular: u64) {
+        self.waiting.insert(c, (photons, on_specular));
+        while let Some((photons, on_specular)) = self.waiting.remove(&self.next) {
+            self.counts.stored += photons.len() as u64;
+            self.counts.first_hit_specular += on_specular;
+            self.stream.extend_from_slice(&photons);
+            self.next += 1;
+        }
+    }
 }
 
 /// What a photon met first.
@@ -365,7 +408,7 @@ fn trace_one(
     kind: MapKind,
     (targets, cones): (&[Target], &mut Vec<Cone>),
     rng: &mut Rng,
-    out: &mut Vec<Photon>,
+    out: &mut Vec<Staged>,
 ) -> FirstHit {
     let u = [
         rng.next_f32(),
@@ -452,13 +495,13 @@ fn trace_one(
             MapKind::Caustic => specular_bounced,
         };
         if store && bsdf.lobes().diffuse.max_element() > 0.0 {
-            out.push(Photon {
+            out.push(Staged::new(&Photon {
                 position: surf.p,
                 power,
                 dir: bsdf.wo,
                 normal: bsdf.ng,
                 direct: !diffuse_bounced,
-            });
+            }));
         }
         // Russian roulette over the material's lobes.
         let Some(next) = bsdf.sample(crossing.as_ref(), rng) else {

@@ -17,13 +17,15 @@
 //! ```
 
 use crate::camera::Camera;
+use crate::desc::MeshSource;
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::film::{Film, Window};
-use crate::integrator::photon_map::{Gi, GiSettings, GiStats};
+use crate::integrator::photon_map::{Gi, GiSettings, GiStats, Preloaded, planned};
 use crate::integrator::plan::plan_for;
-use crate::integrator::{GiMode, Settings, plan};
+use crate::integrator::{GiMode, Integrator, Settings, plan};
 use crate::lua::MAX_PIXELS;
+use crate::photon::file::{CountedMap, Fingerprint, Fnv, SavedMaps};
 use crate::photon::trace::{MAX_PHOTONS, MapKind};
 use crate::progress::Progress;
 use crate::scene::{Scene, build_scene};
@@ -52,7 +54,9 @@ pub fn render(
 }
 
 /// Builds the scene of the `gr.render` call `r` and renders it at `scale` times its size, or the
-/// window `crop` (`[x0, y0, x1, y1]`, end exclusive) of it.
+/// window `crop` (`[x0, y0, x1, y1]`, end exclusive) of it. With `settings.photons.maps_file`,
+/// the photon maps are read from that file ([`crate::photon::file`]) instead of traced, once
+/// the file is found to hold the maps this frame would trace.
 pub fn render_desc(
     desc: &SceneDesc,
     r: &RenderDesc,
@@ -61,6 +65,36 @@ pub fn render_desc(
     settings: &Settings,
     progress: &dyn Progress,
 ) -> Result<Frame> {
+    let (window, scene, mut settings, factor) = prepare(desc, r, scale, crop, settings)?;
+    if let Some(path) = settings.photons.maps_file.clone() {
+        let maps = read_maps(desc, r, &scene, &settings, &path)?;
+        settings.photons.preloaded = Some(maps);
+    }
+    let camera = Camera::new(&r.camera, window.full_width, window.full_height);
+    let (film, mut stats) = render(&scene, &camera, window, &settings, progress);
+    // Why the photon counts differ from the script's and the settings' (see
+    // `GiSettings::follow_image`), among the plan's notes.
+    if let Some(factor) = factor
+        && stats.photons.is_some()
+    {
+        stats.plan.notes.push(format!(
+            "photons: x{factor:.4} with the image ({}x{} of the script's {}x{}); --photons, \
+             --caustic-photons or --photon-scale fixes the count",
+            window.full_width, window.full_height, r.width, r.height
+        ));
+    }
+    Ok(Frame { scene, film, stats })
+}
+
+/// Returns the window, the scene and the settings of a frame of `r` (photon counts scaled with
+/// the image when they follow it, and checked), and the factor they were scaled by.
+fn prepare(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scale: f64,
+    crop: Option<[u32; 4]>,
+    settings: &Settings,
+) -> Result<(Window, Scene, Settings, Option<f64>)> {
     let window = window(r, scale, crop)?;
     let scene = build_scene(desc, r)?;
     let pixels = |w: u32, h: u32| w as f64 * h as f64;
@@ -71,18 +105,148 @@ pub fn render_desc(
         settings.photons.photon_scale *= factor;
     }
     check_photon_budget(desc, r, &scene, &settings)?;
-    let camera = Camera::new(&r.camera, window.full_width, window.full_height);
-    let (film, mut stats) = render(&scene, &camera, window, &settings, progress);
-    // Why the photon counts differ from the script's and the settings' (see
-    // `GiSettings::follow_image`), among the plan's notes.
-    if follow && stats.photons.is_some() {
-        stats.plan.notes.push(format!(
-            "photons: x{factor:.4} with the image ({}x{} of the script's {}x{}); --photons, \
-             --caustic-photons or --photon-scale fixes the count",
-            window.full_width, window.full_height, r.width, r.height
-        ));
+    Ok((window, scene, settings, follow.then_some(factor)))
+}
+
+/// Returns the photon-mapping settings a frame of `scene` with `settings` traces its maps with,
+/// or a usage error naming `flag` when the frame is not photon-mapped.
+fn map_settings(scene: &Scene, settings: &Settings, flag: &str) -> Result<GiSettings> {
+    let plan = plan_for(scene, settings);
+    if plan.integrator != Integrator::PhotonMap {
+        let what = match plan.integrator {
+            Integrator::Progressive => "progressively, with fresh photon maps every pass",
+            _ => "without photon maps (photon mapping is off for it: see caustic info)",
+        };
+        return Err(Error::Usage(format!(
+            "{flag}: this frame is rendered {what}, so it has no photon maps to share"
+        )));
     }
-    Ok(Frame { scene, film, stats })
+    Ok(GiSettings {
+        precompute: false,
+        maps_file: None,
+        preloaded: None,
+        ..planned(&settings.photons, &plan)
+    })
+}
+
+/// Returns the fingerprint of the maps that `gi` traces for the frame of `r` ([`file`]).
+fn fingerprint(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scene: &Scene,
+    gi: &GiSettings,
+) -> Result<Fingerprint> {
+    let mut h = Fnv::default();
+    let text = format!(
+        "{:?}",
+        (
+            &desc.nodes,
+            &desc.materials,
+            &desc.lights,
+            &desc.meshes,
+            r.root,
+            r.camera,
+            &r.lights
+        )
+    );
+    h.write(text.as_bytes());
+    let meshes = desc.meshes.iter().filter_map(|m| match &m.source {
+        MeshSource::File { path, .. } => Some(path),
+        MeshSource::Inline { .. } => None,
+    });
+    let images = desc
+        .materials
+        .iter()
+        .flat_map(|m| m.texture.iter().chain(&m.bump));
+    for path in meshes.chain(images) {
+        let bytes = crate::files::read_regular(path).map_err(|e| Error::File {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        h.write(&(bytes.len() as u64).to_le_bytes());
+        h.write(&bytes);
+    }
+    let budget = |kind| format!("{:?}", gi.budget(&scene.lights, kind));
+    let caustic = if gi.caustics {
+        budget(MapKind::Caustic)
+    } else {
+        "none".to_string()
+    };
+    Ok(Fingerprint {
+        scene: h.finish(),
+        settings: format!(
+            "caustic {}; seed {}; global photons per light {}; caustic photons per light {caustic}",
+            env!("CARGO_PKG_VERSION"),
+            gi.seed,
+            budget(MapKind::Global)
+        ),
+    })
+}
+
+/// Traces the photon maps a render of `r` at `scale` with `settings` would trace and returns
+/// them with their fingerprint, to be saved (`caustic photons --save`). Errors name the flag
+/// `--save` when the frame is not photon-mapped.
+pub fn trace_maps(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scale: f64,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<(SavedMaps, GiStats)> {
+    let (_, scene, settings, _) = prepare(desc, r, scale, None, settings)?;
+    let gi_settings = map_settings(&scene, &settings, "--save")?;
+    let fingerprint = fingerprint(desc, r, &scene, &gi_settings)?;
+    let gi = Gi::build_with(&scene, &gi_settings, progress);
+    let stats = gi.stats.clone();
+    let maps = SavedMaps {
+        fingerprint,
+        global: CountedMap {
+            map: gi.global,
+            per_light: stats.global.clone(),
+        },
+        caustic: gi_settings.caustics.then(|| CountedMap {
+            map: gi
+                .caustic
+                .unwrap_or_else(|| crate::photon::PhotonMap::build(Vec::new())),
+            per_light: stats.caustic.clone(),
+        }),
+    };
+    Ok((maps, stats))
+}
+
+/// Reads the photon maps at `path` for the frame of `r`, or returns an error naming the file
+/// and, when it holds other maps than this frame traces, what differs.
+fn read_maps(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scene: &Scene,
+    settings: &Settings,
+    path: &std::path::Path,
+) -> Result<Preloaded> {
+    let gi_settings = map_settings(scene, settings, "--photon-maps")?;
+    let want = fingerprint(desc, r, scene, &gi_settings)?;
+    let bad = |message: String| Error::File {
+        path: path.to_path_buf(),
+        message,
+    };
+    let start = std::time::Instant::now();
+    let saved = crate::photon::file::read(path).map_err(bad)?;
+    if saved.fingerprint.scene != want.scene {
+        return Err(bad(format!(
+            "these photon maps were traced for another scene (scene hash {:016x}, this one's is \
+             {:016x}: the script, a mesh or a texture differs); save them again with caustic \
+             photons --save",
+            saved.fingerprint.scene, want.scene
+        )));
+    }
+    if saved.fingerprint.settings != want.settings {
+        return Err(bad(format!(
+            "these photon maps were traced with other settings\n  saved: {}\n  this render: {}\n\
+             give caustic photons --save the flags this render has",
+            saved.fingerprint.settings, want.settings
+        )));
+    }
+    Ok(Preloaded::new(saved, start.elapsed()))
 }
 
 /// Returns an error at the light's script line when its photon count (its `num_photons` or its

@@ -10,7 +10,6 @@ use crate::camera::Camera;
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::frame;
-use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings};
 use crate::integrator::plan::Effect;
 use crate::integrator::progressive::Stop;
 use crate::integrator::{DEFAULT_GATHER_RAYS, DEFAULT_LIGHT_SAMPLES};
@@ -23,7 +22,6 @@ use clap::{Args, Parser, Subcommand};
 use report::Bar;
 use settings::RenderJob;
 use std::cell::Cell;
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::rc::Rc;
 use std::time::Instant;
@@ -101,28 +99,17 @@ pub struct ExportArgs {
 
 #[derive(Debug, Args)]
 pub struct PhotonsArgs {
-    /// The Lua scene script.
-    pub scene: PathBuf,
+    /// Write the photon maps a render with these flags would trace to FILE (versioned,
+    /// checksummed, with the scene's and the settings' fingerprint) for `caustic render
+    /// --photon-maps FILE`, instead of drawing them.
+    #[arg(long, value_name = "FILE")]
+    pub save: Option<PathBuf>,
+    /// Every `caustic render` flag, so that the maps traced are the ones a render with the
+    /// same flags traces (photon counts, --photon-scale, --seed, --scale, --force, --disable,
+    /// the scene's gr.settings); without --save, -o names the picture of the photons (default:
+    /// the script's image name with `_photons` added).
     #[command(flatten)]
-    pub script: ScriptArgs,
-    /// The picture to write (default: the script's image name with `_photons` added).
-    #[arg(short, long, value_name = "OUT")]
-    pub output: Option<PathBuf>,
-    /// Photons for the global map.
-    #[arg(long, value_name = "N", default_value_t = GLOBAL_PHOTONS)]
-    pub photons: u64,
-    /// Photons for the caustic map.
-    #[arg(long, value_name = "N", default_value_t = CAUSTIC_PHOTONS)]
-    pub caustic_photons: u64,
-    /// Seed of the photon streams.
-    #[arg(long, value_name = "S", default_value_t = 0)]
-    pub seed: u64,
-    /// Draw at this multiple of the script's image size.
-    #[arg(long, value_name = "F", default_value_t = 1.0)]
-    pub scale: f64,
-    /// No progress bar.
-    #[arg(long, short)]
-    pub quiet: bool,
+    pub render: RenderArgs,
 }
 
 #[derive(Debug, Args)]
@@ -269,6 +256,11 @@ pub struct RenderArgs {
     /// with the material rendered in its kd colour.
     #[arg(long, value_enum, default_value_t = MissingTextures::Error)]
     pub missing_textures: MissingTextures,
+    /// Read the photon maps from FILE (written by `caustic photons SCENE --save FILE` with the
+    /// same photon flags) instead of tracing them: every tile of a farm job shares one photon
+    /// pass. A file saved for another scene or other photon settings is refused.
+    #[arg(long, value_name = "FILE")]
+    pub photon_maps: Option<PathBuf>,
 }
 
 /// How a scene script is read: the flags of every command that runs one (`--dialect`, `-D`).
@@ -405,11 +397,32 @@ impl Cli {
     /// words of `caustic render` for [`RenderArgs::argv`].
     pub fn from_env() -> Cli {
         let mut cli = Cli::parse();
-        if let Command::Render(a) = &mut cli.command {
-            a.argv = std::env::args_os().skip(2).collect();
+        let argv = || std::env::args_os().skip(2).collect();
+        match &mut cli.command {
+            Command::Render(a) => a.argv = argv(),
+            // The render's words, without --save (which `caustic render` does not take).
+            Command::Photons(a) => a.render.argv = without_save(argv()),
+            _ => {}
         }
         cli
     }
+}
+
+/// Returns `caustic photons`'s words without `--save FILE` (or `--save=FILE`).
+fn without_save(words: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    let mut out = Vec::with_capacity(words.len());
+    let mut words = words.into_iter();
+    while let Some(w) = words.next() {
+        if w == "--" {
+            out.push(w);
+            out.extend(words.by_ref());
+        } else if w == "--save" {
+            words.next();
+        } else if !w.to_string_lossy().starts_with("--save=") {
+            out.push(w);
+        }
+    }
+    out
 }
 
 /// One `caustic render` command line without the binary's name, as `caustic study`'s settings
@@ -681,17 +694,38 @@ fn write_partial(
 }
 
 fn photons_command(args: PhotonsArgs) -> Result<()> {
-    settings::check_scale(args.scale)?;
+    let a = &args.render;
+    settings::check_scale(a.scale)?;
+    if let Some(n) = a.threads {
+        set_threads(n)?;
+    }
+    if a.photon_maps.is_some() {
+        return Err(Error::Usage(
+            "--photon-maps: caustic photons traces maps; it does not read them".into(),
+        ));
+    }
     let count = Rc::new(Cell::new(0u32));
     let counter = Rc::clone(&count);
-    let output = args.output.clone();
-    settings::check_photons("--photons", args.photons)?;
-    settings::check_photons("--caustic-photons", args.caustic_photons)?;
-    let (photons, caustic_photons) = (args.photons, args.caustic_photons);
-    let (seed, scale) = (args.seed, args.scale);
-    let progress = !args.quiet && std::io::stderr().is_terminal();
+    let job = RenderJob::from_args(a)?;
+    let (argv, scene, output, save) = (
+        a.argv.clone(),
+        a.scene.clone(),
+        a.output.clone(),
+        args.save.clone(),
+    );
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
         counter.set(counter.get() + 1);
+        let own = job_with_settings(&job, &argv, &scene, r)?;
+        let job = own.as_ref().unwrap_or(&job);
+        if let Some(path) = &save {
+            if counter.get() > 1 {
+                return Err(Error::at(
+                    &r.loc,
+                    "this script renders more than one image, so --save cannot hold its maps",
+                ));
+            }
+            return save_maps(desc, r, job, path);
+        }
         let out = match &output {
             Some(o) if counter.get() == 1 => o.clone(),
             Some(_) => {
@@ -709,22 +743,14 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
                 r.output.with_file_name(format!("{stem}_photons.png"))
             }
         };
-        let win = frame::window(r, scale, None)?;
+        let win = frame::window(r, job.scale, None)?;
         let size = (win.full_width, win.full_height);
         let scene = build_scene(desc, r)?;
         let camera = Camera::new(&r.camera, size.0, size.1);
-        let settings = GiSettings {
-            seed,
-            photons,
-            caustic_photons,
-            ..GiSettings::default()
-        };
-        let bar = Bar::new(progress, &out);
-        let (film, stats) = frame::photon_view(&scene, &camera, size, &settings, &bar);
+        let bar = Bar::new(job.progress, &out);
+        let (film, stats) = frame::photon_view(&scene, &camera, size, &job.settings.photons, &bar);
         bar.finish();
         write_image(&film, &out, Tonemap::Clamp)?;
-        let stored =
-            |c: &[crate::photon::trace::LightCounts]| c.iter().map(|c| c.stored).sum::<u64>();
         eprintln!(
             "wrote {} ({} global, {} caustic photons)",
             out.display(),
@@ -733,7 +759,50 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         );
         Ok(())
     });
-    run_script_with(&args.scene, hook, args.script.options())?;
+    run_script_with(&a.scene, hook, a.script.options())?;
+    Ok(())
+}
+
+/// Returns the photons stored over these lights' counts.
+fn stored(counts: &[crate::photon::trace::LightCounts]) -> u64 {
+    counts.iter().map(|c| c.stored).sum()
+}
+
+/// Traces the photon maps that `caustic render` with `job` would trace for `r` and writes them
+/// to `path` (`caustic photons --save`).
+fn save_maps(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    job: &RenderJob,
+    path: &std::path::Path,
+) -> Result<()> {
+    crate::files::check_output(path).map_err(|message| Error::File {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    let start = Instant::now();
+    let bar = Bar::new(job.progress, path);
+    let traced = frame::trace_maps(desc, r, job.scale, &job.settings, &bar);
+    bar.finish();
+    let (maps, stats) = traced?;
+    if crate::interrupt::requested() {
+        return Err(Error::Interrupted(
+            "the photon maps were not written".into(),
+        ));
+    }
+    crate::photon::file::write(path, &maps).map_err(|e| Error::File {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+    eprintln!(
+        "wrote {} ({} global, {} caustic photons, {:.1} MB) in {:.2} s",
+        path.display(),
+        stored(&stats.global),
+        stored(&stats.caustic),
+        bytes as f64 / 1e6,
+        start.elapsed().as_secs_f64()
+    );
     Ok(())
 }
 

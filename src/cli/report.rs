@@ -200,6 +200,12 @@ fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
         );
     }
     let (lookups, used) = (rstats.lookups, rstats.photons_used);
+    if let Some(read) = s.read_time {
+        println!(
+            "  photon maps: read from --photon-maps in {:.3} s (not traced)",
+            read.as_secs_f64()
+        );
+    }
     println!(
         "  photon phases: trace {:.3} s, kd-tree build {:.3} s, precomputation points {:.3} s ({} points, {} of them estimated where gather rays read them)",
         s.trace_time.as_secs_f64(),

@@ -165,6 +165,7 @@ impl RenderJob {
                     accuracy: a.cache_accuracy,
                     rays: a.cache_rays,
                 },
+                maps_file: a.photon_maps.clone(),
                 ..GiSettings::default()
             },
             progressive,

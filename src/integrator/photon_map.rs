@@ -50,6 +50,7 @@ use crate::geometry::{Ray, offset_ray_origin};
 use crate::material::bsdf::Bsdf;
 use crate::material::medium::MediumStack;
 use crate::photon::estimate::Filter;
+use crate::photon::file::SavedMaps;
 use crate::photon::trace::{LightCounts, MapKind, photon_budget, trace_map_with};
 use crate::photon::{PhotonId, PhotonMap};
 use crate::progress::{NoProgress, Progress};
@@ -61,6 +62,7 @@ use glam::Vec3A;
 use std::cell::RefCell;
 use std::f32::consts::FRAC_1_PI;
 use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// Deepest eye-path depth (specular bounces) at which final gathering is used; deeper points
@@ -145,6 +147,40 @@ pub struct GiSettings {
     pub precompute: bool,
     /// Final gathering interpolates an irradiance cache ([`super::irradiance_cache`]).
     pub cache: CacheSettings,
+    /// `--photon-maps`: read the maps from this file ([`crate::photon::file`]) instead of
+    /// tracing them; [`crate::frame::render_desc`] reads and checks it into `preloaded`.
+    pub maps_file: Option<std::path::PathBuf>,
+    /// Maps read from a file, which the next [`Gi::build_with`] takes instead of tracing.
+    pub preloaded: Option<Preloaded>,
+}
+
+/// Photon maps read from a file for one frame ([`GiSettings::preloaded`]): the first build
+/// takes them (they are moved, not copied: a map can be gigabytes).
+#[derive(Clone)]
+pub struct Preloaded(Arc<Mutex<Option<SavedMaps>>>, Duration);
+
+impl Preloaded {
+    /// Wraps maps that took `read` to read.
+    pub fn new(maps: SavedMaps, read: Duration) -> Preloaded {
+        Preloaded(Arc::new(Mutex::new(Some(maps))), read)
+    }
+
+    /// Takes the maps, if no build has yet.
+    fn take(&self) -> Option<SavedMaps> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).take()
+    }
+}
+
+impl std::fmt::Debug for Preloaded {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Preloaded(read in {:?})", self.1)
+    }
+}
+
+impl PartialEq for Preloaded {
+    fn eq(&self, other: &Preloaded) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
 }
 
 impl GiSettings {
@@ -179,6 +215,8 @@ impl Default for GiSettings {
             caustics: true,
             precompute: true,
             cache: CacheSettings::default(),
+            maps_file: None,
+            preloaded: None,
         }
     }
 }
@@ -202,6 +240,9 @@ pub struct GiStats {
     pub precomputed_evaluated: usize,
     /// The irradiance cache's record pass, when there was one.
     pub cache: Option<CacheStats>,
+    /// The time to read the maps when they came from a file (`--photon-maps`) instead of
+    /// being traced.
+    pub read_time: Option<Duration>,
 }
 
 /// The photon maps of one render and how shading uses them.
@@ -352,6 +393,19 @@ impl Gi {
     /// [`Gi::build`], reporting each phase to `progress`. The phases: trace and build the
     /// global map, then the caustic map, then the map of precomputation points.
     pub fn build_with(scene: &Scene, settings: &GiSettings, progress: &dyn Progress) -> Gi {
+        let preloaded = settings.preloaded.as_ref();
+        if let Some(saved) = preloaded.and_then(Preloaded::take) {
+            let caustic = saved.caustic.map(|c| (c.map, c.per_light));
+            let (caustic_map, caustic) = caustic.unzip();
+            let mut gi = Gi::of_maps(
+                scene,
+                settings,
+                (saved.global.map, saved.global.per_light),
+                (caustic_map, caustic.unwrap_or_default()),
+            );
+            gi.stats.read_time = preloaded.map(|p| p.1);
+            return gi;
+        }
         let (global_map, global, mut trace_time, mut build_time) =
             trace_and_build(scene, settings, MapKind::Global, progress);
         let (caustic_map, caustic) = if settings.caustics {
@@ -363,14 +417,31 @@ impl Gi {
         } else {
             (None, Vec::new())
         };
+        let mut gi = Gi::of_maps(
+            scene,
+            settings,
+            (global_map, global),
+            (caustic_map, caustic),
+        );
+        gi.stats.trace_time = trace_time;
+        gi.stats.build_time = build_time;
+        gi
+    }
+
+    /// Returns the Gi of these maps and their per-light counts, with the precomputation points
+    /// when the settings ask for them.
+    fn of_maps(
+        scene: &Scene,
+        settings: &GiSettings,
+        (global_map, global): (PhotonMap, Vec<LightCounts>),
+        (caustic_map, caustic): (Option<PhotonMap>, Vec<LightCounts>),
+    ) -> Gi {
         let extent = scene.extent().max(f32::MIN_POSITIVE);
         let r = settings.max_radius * extent;
         let mut gi = Gi {
             stats: GiStats {
                 global,
                 caustic,
-                trace_time,
-                build_time,
                 global_bytes: global_map.bytes(),
                 caustic_bytes: caustic_map.as_ref().map_or(0, |m| m.bytes()),
                 ..GiStats::default()

@@ -63,6 +63,7 @@
 //! ```
 
 pub mod estimate;
+pub mod file;
 pub mod kdtree;
 pub mod store;
 pub mod stream;

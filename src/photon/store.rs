@@ -212,6 +212,20 @@ impl PowerCodec {
         PowerCodec { base, scale }
     }
 
+    /// Returns the codec whose stored exponent 0 is `base` ([`PowerCodec::base`]), or None for
+    /// a base no map has (a damaged file).
+    pub(super) fn from_base(base: i32) -> Option<PowerCodec> {
+        (base == 0 || (-1000 + 40 - 31..=1000 - 31).contains(&base)).then(|| {
+            let scale = std::array::from_fn(|e| pow2(base + e as i32 - 9) as f32);
+            PowerCodec { base, scale }
+        })
+    }
+
+    /// Returns the exponent of stored exponent 0.
+    pub(super) fn base(&self) -> i32 {
+        self.base
+    }
+
     /// Returns the 32-bit code of a power (each channel rounded to nearest).
     pub(super) fn encode(&self, p: Vec3A) -> u32 {
         let c = sanitise_power(p);

@@ -1,0 +1,417 @@
+//! Photon maps as files: `caustic photons SCENE.lua --save maps.bin` writes the maps a render
+//! of the scene would trace, and `caustic render SCENE.lua --photon-maps maps.bin` reads them
+//! instead of tracing, so the tiles of a render farm share one photon pass.
+//!
+//! # Why the map itself, not its photons
+//! The file holds a map's three arrays exactly as the map holds them (kd-tree order, quantised
+//! codes) and its power format, so reading is a copy, not a rebuild, and a render from the
+//! file is bit for bit the render that traced the maps itself.
+//!
+//! # When a file is refused
+//! A file carries a [`Fingerprint`]: a 64-bit FNV-1a hash of the scene as the photons see it
+//! (the script's nodes, materials, lights and meshes with their script lines, the render's
+//! root, camera and lights, and the bytes of every mesh, texture and normal-map file they
+//! name) and, as text, the settings that shape the maps (seed, each light's photon count for
+//! each map, whether there is a caustic map, this program's version). A render whose own
+//! fingerprint differs refuses the file and says which part differs; so does a file that is
+//! truncated, fails its CRC-32, or has another format version. Editing a script, even a
+//! comment that moves a line, refuses the maps: the scene hash cannot tell which edits leave
+//! the photons alone.
+//!
+//! # Layout (little-endian)
+//! | bytes | contents |
+//! |---|---|
+//! | 8 | magic `CAUSTPM\0` |
+//! | 4 | format version ([`VERSION`]) |
+//! | 8 | scene hash |
+//! | 4 + n | settings text, UTF-8, length first (at most [`MAX_TEXT`]) |
+//! | 1 | maps: 1 (global) or 2 (global and caustic) |
+//! | per map | light count (4), then per light emitted, stored, first-hit-specular (8 each); photon count (8, at most `u32::MAX`); top nodes (8); power base exponent (4); positions (12 per photon); codes (4 per photon); powers (4 per photon) |
+//! | 4 | CRC-32 (IEEE) of everything before it |
+
+use super::store::PowerCodec;
+use super::trace::LightCounts;
+use super::{PhotonMap, kdtree};
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::path::Path;
+
+/// The file's first eight bytes.
+const MAGIC: &[u8; 8] = b"CAUSTPM\0";
+/// The format version this program reads and writes.
+pub const VERSION: u32 = 1;
+/// Longest settings text read.
+pub const MAX_TEXT: u32 = 1 << 16;
+/// Most lights a map's counts are read for.
+const MAX_LIGHTS: u32 = 1 << 20;
+/// Photons read or written between two progress reports and buffer refills.
+const CHUNK: usize = 1 << 16;
+
+/// What a pair of maps was traced for (see the module doc).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Fingerprint {
+    /// FNV-1a hash of the scene as the photons see it.
+    pub scene: u64,
+    /// The settings that shape the maps, as text.
+    pub settings: String,
+}
+
+/// A map with each light's photon counts.
+#[derive(Debug)]
+pub struct CountedMap {
+    pub map: PhotonMap,
+    pub per_light: Vec<LightCounts>,
+}
+
+/// The maps of one render, as saved.
+#[derive(Debug)]
+pub struct SavedMaps {
+    pub fingerprint: Fingerprint,
+    pub global: CountedMap,
+    pub caustic: Option<CountedMap>,
+}
+
+/// 64-bit FNV-1a, for the scene fingerprint: a fixed, documented hash whose value does not
+/// change between builds (std's `DefaultHasher` may).
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Fnv {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    /// Hashes `bytes` into the state.
+    pub fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+
+    /// Returns the hash so far.
+    pub fn finish(self) -> u64 {
+        self.0
+    }
+}
+
+/// A writer that keeps the CRC-32 of what passes through it.
+struct Crc<W> {
+    inner: W,
+    crc: crc32fast::Hasher,
+}
+
+impl<W: Write> Write for Crc<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.crc.update(&buf[..n]);
+        Ok(n)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Writes `maps` to `path`, replacing it atomically ([`crate::files::write_replacing_io`]).
+pub fn write(path: &Path, maps: &SavedMaps) -> std::io::Result<()> {
+    crate::files::write_replacing_io(path, |tmp| {
+        let file = std::fs::File::create(tmp)?;
+        let mut w = Crc {
+            inner: BufWriter::with_capacity(1 << 20, file),
+            crc: crc32fast::Hasher::new(),
+        };
+        w.write_all(MAGIC)?;
+        w.write_all(&VERSION.to_le_bytes())?;
+        w.write_all(&maps.fingerprint.scene.to_le_bytes())?;
+        let text = maps.fingerprint.settings.as_bytes();
+        w.write_all(&(text.len() as u32).to_le_bytes())?;
+        w.write_all(text)?;
+        let count = 1 + u8::from(maps.caustic.is_some());
+        w.write_all(&[count])?;
+        for m in std::iter::once(&maps.global).chain(&maps.caustic) {
+            write_map(&mut w, m)?;
+        }
+        let crc = w.crc.clone().finalize();
+        w.inner.write_all(&crc.to_le_bytes())?;
+        w.inner.flush()
+    })
+}
+
+fn write_map<W: Write>(w: &mut W, m: &CountedMap) -> std::io::Result<()> {
+    w.write_all(&(m.per_light.len() as u32).to_le_bytes())?;
+    for c in &m.per_light {
+        for v in [c.emitted, c.stored, c.first_hit_specular] {
+            w.write_all(&v.to_le_bytes())?;
+        }
+    }
+    let map = &m.map;
+    w.write_all(&(map.len() as u64).to_le_bytes())?;
+    w.write_all(&(map.top_nodes as u64).to_le_bytes())?;
+    w.write_all(&map.codec.base().to_le_bytes())?;
+    let mut buf = Vec::with_capacity(12 * CHUNK);
+    for part in map.pos.chunks(CHUNK) {
+        buf.clear();
+        buf.extend(part.iter().flatten().flat_map(|x| x.to_le_bytes()));
+        w.write_all(&buf)?;
+    }
+    for words in [&map.code, &map.power] {
+        for part in words.chunks(CHUNK) {
+            buf.clear();
+            buf.extend(part.iter().flat_map(|x| x.to_le_bytes()));
+            w.write_all(&buf)?;
+        }
+    }
+    Ok(())
+}
+
+/// A reader that keeps the CRC-32 of what it has read and names what it was reading when the
+/// file ends early.
+struct Input<R> {
+    inner: R,
+    crc: crc32fast::Hasher,
+}
+
+impl<R: Read> Input<R> {
+    fn bytes(&mut self, out: &mut [u8], what: &str) -> Result<(), String> {
+        self.inner.read_exact(out).map_err(|e| match e.kind() {
+            std::io::ErrorKind::UnexpectedEof => format!("the file ends inside {what}"),
+            _ => format!("reading {what}: {e}"),
+        })?;
+        self.crc.update(out);
+        Ok(())
+    }
+    fn u32(&mut self, what: &str) -> Result<u32, String> {
+        let mut b = [0; 4];
+        self.bytes(&mut b, what)?;
+        Ok(u32::from_le_bytes(b))
+    }
+    fn u64(&mut self, what: &str) -> Result<u64, String> {
+        let mut b = [0; 8];
+        self.bytes(&mut b, what)?;
+        Ok(u64::from_le_bytes(b))
+    }
+}
+
+/// Reads the maps saved at `path`; the error says what is wrong with the file (not what it
+/// was traced for: compare [`SavedMaps::fingerprint`] for that).
+pub fn read(path: &Path) -> Result<SavedMaps, String> {
+    crate::files::check_regular(path).map_err(|e| e.to_string())?;
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let size = file.metadata().map_err(|e| e.to_string())?.len();
+    let mut r = Input {
+        inner: BufReader::with_capacity(1 << 20, file),
+        crc: crc32fast::Hasher::new(),
+    };
+    let mut magic = [0; 8];
+    r.bytes(&mut magic, "the header")
+        .map_err(|_| "not a caustic photon-map file (too short)".to_string())?;
+    if &magic != MAGIC {
+        return Err("not a caustic photon-map file (caustic photons --save writes them)".into());
+    }
+    let version = r.u32("the header")?;
+    if version != VERSION {
+        return Err(format!(
+            "format version {version}; this caustic reads version {VERSION}: save the maps again"
+        ));
+    }
+    let scene = r.u64("the header")?;
+    let len = r.u32("the header")?;
+    if len > MAX_TEXT {
+        return Err(format!(
+            "a settings text of {len} bytes (at most {MAX_TEXT})"
+        ));
+    }
+    let mut text = vec![0; len as usize];
+    r.bytes(&mut text, "the settings text")?;
+    let settings =
+        String::from_utf8(text).map_err(|_| "the settings text is not UTF-8".to_string())?;
+    let mut count = [0];
+    r.bytes(&mut count, "the header")?;
+    if !(1..=2).contains(&count[0]) {
+        return Err(format!("{} maps (a file holds 1 or 2)", count[0]));
+    }
+    // Every photon takes 20 bytes, so the file's size bounds the counts it can honestly hold.
+    let global = read_map(&mut r, "the global map", size)?;
+    let caustic = match count[0] {
+        2 => Some(read_map(&mut r, "the caustic map", size)?),
+        _ => None,
+    };
+    let want = r.crc.clone().finalize();
+    let mut b = [0; 4];
+    r.inner
+        .read_exact(&mut b)
+        .map_err(|_| "the file ends before its checksum".to_string())?;
+    if u32::from_le_bytes(b) != want {
+        return Err("the checksum does not match: the file is damaged".into());
+    }
+    if r.inner.read(&mut b).map_err(|e| e.to_string())? != 0 {
+        return Err("bytes follow the checksum".into());
+    }
+    // A file whose checksum holds may still have been made by hand: a map that breaks the
+    // tree's invariants would answer queries wrongly, so it is refused.
+    for (m, what) in [
+        (Some(&global), "the global map"),
+        (caustic.as_ref(), "the caustic map"),
+    ] {
+        if let Some(m) = m {
+            m.map.validate().map_err(|e| format!("{what}: {e}"))?;
+        }
+    }
+    Ok(SavedMaps {
+        fingerprint: Fingerprint { scene, settings },
+        global,
+        caustic,
+    })
+}
+
+fn read_map<R: Read>(r: &mut Input<R>, what: &str, size: u64) -> Result<CountedMap, String> {
+    let lights = r.u32(what)?;
+    if lights > MAX_LIGHTS {
+        return Err(format!("{what}: {lights} lights (at most {MAX_LIGHTS})"));
+    }
+    let mut per_light = Vec::with_capacity(lights as usize);
+    for _ in 0..lights {
+        per_light.push(LightCounts {
+            emitted: r.u64(what)?,
+            stored: r.u64(what)?,
+            first_hit_specular: r.u64(what)?,
+        });
+    }
+    let n = r.u64(what)?;
+    if n > u64::from(u32::MAX) || n.saturating_mul(20) > size {
+        return Err(format!(
+            "{what}: {n} photons, more than the file's {size} bytes hold"
+        ));
+    }
+    let n = n as usize;
+    let top = r.u64(what)?;
+    if top != ((1u64 << kdtree::top_depth(n)) - 1) {
+        return Err(format!(
+            "{what}: {top} top nodes, not the layout of {n} photons"
+        ));
+    }
+    let base = r.u32(what)? as i32;
+    let codec = PowerCodec::from_base(base).ok_or_else(|| format!("{what}: power base {base}"))?;
+    let mut buf = vec![0u8; 12 * CHUNK];
+    let mut pos = crate::mem::huge_vec::<[f32; 3]>(n);
+    while pos.len() < n {
+        let k = CHUNK.min(n - pos.len());
+        r.bytes(&mut buf[..12 * k], what)?;
+        pos.extend(buf[..12 * k].chunks_exact(12).map(|p| {
+            let f = |i: usize| f32::from_le_bytes([p[i], p[i + 1], p[i + 2], p[i + 3]]);
+            [f(0), f(4), f(8)]
+        }));
+    }
+    let mut words = |r: &mut Input<R>| -> Result<Vec<u32>, String> {
+        let mut v = crate::mem::huge_vec::<u32>(n);
+        while v.len() < n {
+            let k = CHUNK.min(n - v.len());
+            r.bytes(&mut buf[..4 * k], what)?;
+            v.extend(
+                buf[..4 * k]
+                    .chunks_exact(4)
+                    .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            );
+        }
+        Ok(v)
+    };
+    let code = words(r)?;
+    let power = words(r)?;
+    let map = PhotonMap {
+        pos,
+        code,
+        power,
+        codec,
+        top_nodes: top as usize,
+    };
+    Ok(CountedMap { map, per_light })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::photon::Photon;
+    use glam::Vec3A;
+
+    fn maps(n: usize) -> SavedMaps {
+        let photon = |i: usize| Photon {
+            position: Vec3A::new((i % 97) as f32, (i % 13) as f32 * 0.5, i as f32 * 1e-3),
+            power: Vec3A::new(1.0, 0.5, 0.25) * (1.0 + (i % 7) as f32) * 1e-4,
+            dir: Vec3A::Y,
+            normal: Vec3A::Z,
+            direct: i.is_multiple_of(3),
+        };
+        let counts = |stored: usize| {
+            vec![LightCounts {
+                emitted: 1000,
+                stored: stored as u64,
+                first_hit_specular: 7,
+            }]
+        };
+        SavedMaps {
+            fingerprint: Fingerprint {
+                scene: 0x1234_5678_9abc_def0,
+                settings: "seed 0; ünïcode".into(),
+            },
+            global: CountedMap {
+                map: PhotonMap::build((0..n).map(photon).collect()),
+                per_light: counts(n),
+            },
+            caustic: Some(CountedMap {
+                map: PhotonMap::build((0..n / 3).map(photon).collect()),
+                per_light: counts(n / 3),
+            }),
+        }
+    }
+
+    fn dir(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("caustic-pm-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn a_saved_map_reads_back_identical() {
+        let path = dir("round").join("m.bin");
+        let m = maps(3 * CHUNK + 5);
+        write(&path, &m).unwrap();
+        let r = read(&path).unwrap();
+        assert_eq!(r.fingerprint, m.fingerprint);
+        assert_eq!(r.global.map, m.global.map);
+        assert_eq!(r.global.per_light, m.global.per_light);
+        let (a, b) = (r.caustic.unwrap(), m.caustic.unwrap());
+        assert_eq!((a.map, a.per_light), (b.map, b.per_light));
+        // 20 bytes a photon and a small header.
+        let photons = (3 * CHUNK + 5) + (3 * CHUNK + 5) / 3;
+        let size = std::fs::metadata(&path).unwrap().len() as usize;
+        assert!(
+            size >= 20 * photons && size < 20 * photons + 200,
+            "{size} bytes"
+        );
+    }
+
+    #[test]
+    fn a_file_with_a_good_checksum_but_a_broken_tree_is_refused() {
+        let path = dir("broken").join("m.bin");
+        let mut m = maps(5000);
+        // Swap two positions on either side of the root's split: the checksum is computed
+        // over the broken map, so only the tree's own check can find it.
+        let last = m.global.map.pos.len() - 1;
+        m.global.map.pos.swap(0, last);
+        write(&path, &m).unwrap();
+        let e = read(&path).unwrap_err();
+        assert!(e.starts_with("the global map: "), "{e}");
+    }
+
+    #[test]
+    fn fnv_matches_its_published_test_vectors() {
+        let hash = |s: &str| {
+            let mut h = Fnv::default();
+            h.write(s.as_bytes());
+            h.finish()
+        };
+        assert_eq!(hash(""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(hash("a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(hash("foobar"), 0x8594_4171_f739_67e8);
+    }
+}

@@ -27,6 +27,9 @@ pub struct RenderStats {
     /// Rows of the window left black because the render was asked to stop
     /// ([`crate::progress::Progress::should_stop`]).
     pub rows_skipped: u64,
+    /// With `heatmap`: each pixel's BVH nodes visited, triangles tested and nanoseconds of
+    /// thread time while it was shaded (row-major, the window's size), for `--heatmap`.
+    pub heat: Option<Vec<[f32; 3]>>,
 }
 
 impl RenderStats {

@@ -27,6 +27,7 @@
 //! primitives do not get zero-thickness boxes that non-conservative slab tests can miss, and the
 //! callbacks must reject `t <= tmin` themselves.
 
+pub mod counters;
 pub mod mesh;
 mod ploc;
 mod sah;

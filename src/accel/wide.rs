@@ -196,6 +196,7 @@ fn closest_with<T: NodeTest>(bvh: &WideBvh, ray: &Ray, mut leaf_fn: impl FnMut(&
             };
             loop {
                 if cur.child & LEAF == 0 {
+                    super::counters::node();
                     let node = &bvh.nodes[cur.child as usize];
                     let (mut mask, tnear) = T::enter(&pre, node, r.tmax);
                     if mask != 0 {
@@ -256,6 +257,7 @@ fn any_with<T: NodeTest>(
             let mut cur = 0;
             loop {
                 if cur & LEAF == 0 {
+                    super::counters::node();
                     let node = &bvh.nodes[cur as usize];
                     let (mut mask, _) = T::enter(&pre, node, ray.tmax);
                     if mask != 0 {

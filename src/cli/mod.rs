@@ -261,6 +261,11 @@ pub struct RenderArgs {
     /// pass. A file saved for another scene or other photon settings is refused.
     #[arg(long, value_name = "FILE")]
     pub photon_maps: Option<PathBuf>,
+    /// Also write NAME.heat-MEASURE.png beside the image: what each pixel cost in BVH nodes
+    /// visited, triangles tested or thread time (over all the rays its shading cast), with a
+    /// colour-scale legend. Counting costs nothing measurable when off (docs/profiling.md).
+    #[arg(long, value_enum, value_name = "MEASURE")]
+    pub heatmap: Option<HeatArg>,
 }
 
 /// How a scene script is read: the flags of every command that runs one (`--dialect`, `-D`).
@@ -352,6 +357,14 @@ pub enum Switch {
 pub enum GatherLookup {
     Precomputed,
     Estimate,
+}
+
+/// The `--heatmap` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum HeatArg {
+    Nodes,
+    Triangles,
+    Time,
 }
 
 /// The `--tonemap` choices.
@@ -524,6 +537,9 @@ fn parse_region(region: Option<&[u32]>, width: u32, height: u32) -> Result<Regio
 
 fn render_command(args: RenderArgs) -> Result<()> {
     settings::check_scale(args.scale)?;
+    if args.stats || args.heatmap.is_some() {
+        crate::accel::counters::enable();
+    }
     if let Some(n) = args.threads {
         set_threads(n)?;
     }
@@ -642,6 +658,10 @@ fn render_one(
     if let Some(map) = &job.aa_map {
         write_sample_map(&frame.film, map)?;
     }
+    let traversal = crate::accel::counters::enabled().then(crate::accel::counters::collect);
+    if let (Some(measure), Some(heat)) = (job.heatmap, &frame.stats.render.heat) {
+        write_heatmap(out, measure, heat, frame.film.window.size())?;
+    }
     let (fw, fh) = frame.film.window.size();
     eprintln!(
         "wrote {} ({fw}x{fh}) in {:.2} s",
@@ -665,8 +685,37 @@ fn render_one(
         );
     }
     if job.stats {
-        report::print_stats(&frame, r, out);
+        report::print_stats(&frame, r, out, traversal.as_ref());
     }
+    Ok(())
+}
+
+/// Writes the heatmap of `measure` beside `out` as `NAME.heat-MEASURE.png` and says so.
+fn write_heatmap(
+    out: &std::path::Path,
+    measure: crate::io::heatmap::Measure,
+    heat: &[[f32; 3]],
+    size: (u32, u32),
+) -> Result<()> {
+    let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned());
+    let name = format!("{}.heat-{}.png", stem.unwrap_or_default(), measure.name());
+    let path = out.with_file_name(name);
+    let (top, text) = crate::io::heatmap::write(&path, heat, size, measure)?;
+    let unit = if measure == crate::io::heatmap::Measure::Time {
+        format!("{:.1} µs", top / 1000.0)
+    } else {
+        format!("{top:.0}")
+    };
+    let legend = if text {
+        ""
+    } else {
+        " (no font found: the legend has no labels)"
+    };
+    eprintln!(
+        "wrote {} (top colour: {unit} {} per pixel and above){legend}",
+        path.display(),
+        measure.name()
+    );
     Ok(())
 }
 

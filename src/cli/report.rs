@@ -91,7 +91,12 @@ impl Progress for Snapshots<'_> {
 }
 
 /// Prints `--stats` for one frame written to `out` from the `gr.render` call `r`.
-pub fn print_stats(frame: &Frame, r: &RenderDesc, out: &Path) {
+pub fn print_stats(
+    frame: &Frame,
+    r: &RenderDesc,
+    out: &Path,
+    traversal: Option<&crate::accel::counters::ByKind>,
+) {
     let (scene, film, rstats) = (&frame.scene, &frame.film, &frame.stats.render);
     let b = &scene.stats;
     println!(
@@ -136,6 +141,27 @@ pub fn print_stats(frame: &Frame, r: &RenderDesc, out: &Path) {
         rays as f64 / secs.max(1e-9) / 1e6,
         rayon::current_num_threads()
     );
+    if let Some(by_kind) = traversal {
+        let per = |n: u64, rays: u64| n as f64 / rays.max(1) as f64;
+        let kinds: Vec<String> = crate::accel::counters::KINDS
+            .iter()
+            .zip(by_kind)
+            .filter(|(_, c)| c.rays > 0)
+            .map(|(k, c)| {
+                format!(
+                    "{} {} rays, {:.1} nodes and {:.1} triangles each",
+                    k.name(),
+                    c.rays,
+                    per(c.nodes, c.rays),
+                    per(c.triangles, c.rays)
+                )
+            })
+            .collect();
+        println!(
+            "  traversal by ray kind (every phase): {}",
+            kinds.join("; ")
+        );
+    }
     println!(
         "  eye paths stopped at the {}-bounce cap: {}; NaN or infinite samples dropped: {}",
         crate::integrator::eye::MAX_PATH_DEPTH,

@@ -1,7 +1,9 @@
 //! The command line's render options turned into the library's [`Settings`], with every numeric
 //! flag checked against its range (a usage error names the flag).
 
-use super::{GatherLookup, GiArg, IndirectArg, IntegratorArg, RenderArgs, Switch, TonemapArg};
+use super::{
+    GatherLookup, GiArg, HeatArg, IndirectArg, IntegratorArg, RenderArgs, Switch, TonemapArg,
+};
 use crate::error::{Error, Result};
 use crate::integrator::irradiance_cache::CacheSettings;
 use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings, Indirect};
@@ -10,6 +12,7 @@ use crate::integrator::progressive::{
     MAX_PASSES, PASS_CAUSTIC_PHOTONS, PASS_GLOBAL_PHOTONS, ProgressiveSettings,
 };
 use crate::integrator::{GiMode, Settings};
+use crate::io::heatmap::Measure;
 use crate::io::image::Tonemap;
 use crate::photon::trace::MAX_PHOTONS;
 use crate::render::Sampling;
@@ -50,6 +53,8 @@ pub struct RenderJob {
     pub tonemap: Tonemap,
     /// Where to write the camera-ray count image.
     pub aa_map: Option<PathBuf>,
+    /// What `--heatmap` shows.
+    pub heatmap: Option<Measure>,
     /// Print counters and timings.
     pub stats: bool,
     /// Show a progress bar.
@@ -98,6 +103,11 @@ impl RenderJob {
         }
         check_photons("--photons", photons)?;
         check_photons("--caustic-photons", caustic_photons)?;
+        if a.heatmap.is_some() && progressive.is_some() {
+            return Err(Error::Usage(
+                "--heatmap: the progressive integrator has no single camera pass to measure".into(),
+            ));
+        }
         for (name, value, max) in [
             ("--light-samples", a.light_samples as u64, 4096),
             ("--photon-k", a.photon_k as u64, 10_000),
@@ -135,6 +145,7 @@ impl RenderJob {
             sampling,
             light_samples: a.light_samples,
             timing: a.stats,
+            heatmap: a.heatmap.is_some(),
             gi: match a.gi {
                 GiArg::Auto => GiMode::Auto,
                 GiArg::On => GiMode::On,
@@ -176,6 +187,11 @@ impl RenderJob {
             crop: a.crop,
             tonemap,
             aa_map: a.aa_map.clone(),
+            heatmap: a.heatmap.map(|h| match h {
+                HeatArg::Nodes => Measure::Nodes,
+                HeatArg::Triangles => Measure::Triangles,
+                HeatArg::Time => Measure::Time,
+            }),
             stats: a.stats,
             progress: !a.quiet && std::io::stderr().is_terminal(),
         })

@@ -27,6 +27,7 @@
 
 use super::irradiance_cache::Probe;
 use super::photon_map::Gi;
+use crate::accel::counters::{self, RayKind};
 use crate::camera::Camera;
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::material::bsdf::{Bsdf, Split};
@@ -161,6 +162,7 @@ impl Tracer<'_> {
         // A loop, not recursion, across false interfaces: a hundred nested shells of index 1
         // must not take a hundred stack frames.
         loop {
+            counters::kind(RayKind::Camera);
             let hit = self.scene.intersect(&ray);
             if state.sees_emitters {
                 let tmax = hit.map_or(ray.tmax, |h| h.t);
@@ -230,6 +232,7 @@ impl Tracer<'_> {
                 let origin = offset_ray_origin(p, ng, wi);
                 let shadow = Ray::new(origin, ls.position - origin).with_tmax(1.0 - 1e-4);
                 counts.shadow += 1;
+                counters::kind(RayKind::Shadow);
                 if self.scene.occluded(&shadow) {
                     continue;
                 }

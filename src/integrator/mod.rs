@@ -62,6 +62,9 @@ pub struct Settings {
     pub progressive: Option<progressive::ProgressiveSettings>,
     /// Time material evaluation for `--stats`.
     pub timing: bool,
+    /// Record each pixel's traversal counts and time (`--heatmap`; needs
+    /// [`crate::accel::counters::enable`]).
+    pub heatmap: bool,
 }
 
 /// Camera samples per pixel by default. A pixel is an area: one centre ray (the course's, and
@@ -91,6 +94,7 @@ impl Default for Settings {
             photons: photon_map::GiSettings::default(),
             progressive: None,
             timing: false,
+            heatmap: false,
         }
     }
 }
@@ -214,6 +218,7 @@ fn camera_pass(
         sampling: settings.sampling.clone(),
         window,
         timing: settings.timing,
+        heatmap: settings.heatmap,
     };
     progress.start("rendering rows", window.size().1 as u64);
     crate::render::camera_pass(camera, &tracer, &opts, progress)

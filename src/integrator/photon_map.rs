@@ -44,6 +44,7 @@
 use super::eye::{DiffuseTerm, PathState};
 use super::irradiance_cache::{CacheSettings, CacheStats, Gather, IrradianceCache};
 use super::{Plan, Settings, camera_pass};
+use crate::accel::counters::RayKind;
 use crate::camera::Camera;
 use crate::film::{Film, Window};
 use crate::geometry::{Ray, offset_ray_origin};
@@ -724,6 +725,7 @@ impl Gi {
         let (mut ray, mut throughput, mut out) = (*ray, Vec3A::ONE, Vec3A::ZERO);
         let (mut bounces, mut first) = (0, None);
         loop {
+            crate::accel::counters::kind(RayKind::Gather);
             let Some(hit) = scene.intersect(&ray) else {
                 return (out, first.unwrap_or(f32::INFINITY));
             };

@@ -2,6 +2,7 @@
 
 pub mod exr;
 pub mod gltf;
+pub mod heatmap;
 pub mod image;
 pub mod mitsuba;
 pub mod obj;

@@ -85,13 +85,21 @@ impl PhotonStream {
         PhotonStream::default()
     }
 
-    /// Returns the stream of `photons`, in their order.
+    /// Returns the stream of `photons`, in their order (converted in parallel, a block a task).
     pub fn of(photons: &[Photon]) -> PhotonStream {
-        let mut s = PhotonStream::new();
-        for p in photons {
-            s.push(Staged::new(p));
+        use rayon::prelude::*;
+        let blocks = photons
+            .par_chunks(BLOCK)
+            .map(|c| {
+                let mut b = Vec::with_capacity(BLOCK);
+                b.extend(c.iter().map(Staged::new));
+                b
+            })
+            .collect();
+        PhotonStream {
+            blocks,
+            len: photons.len(),
         }
-        s
     }
 
     /// Returns the number of photons appended.

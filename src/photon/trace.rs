@@ -466,6 +466,7 @@ fn trace_one(
     let mut specular_bounced = false;
     let mut met = FirstHit::Nothing;
     for _ in 0..MAX_BOUNCES {
+        crate::accel::counters::kind(crate::accel::counters::RayKind::Photon);
         let Some(hit) = scene.intersect(&ray) else {
             return met;
         };

@@ -18,6 +18,7 @@
 
 pub mod aa;
 
+use crate::accel::counters;
 use crate::camera::Camera;
 use crate::film::{Film, Window};
 use crate::geometry::Ray;
@@ -59,6 +60,8 @@ pub struct PassOptions {
     pub window: Window,
     /// Time material evaluation for `--stats`.
     pub timing: bool,
+    /// Record each pixel's traversal counts and time ([`RenderStats::heat`]).
+    pub heatmap: bool,
 }
 
 /// Renders the window `opts.window` of the image through `camera`, asking `integrator` for each
@@ -80,14 +83,16 @@ pub fn camera_pass(
     let mut pixels = vec![Vec3A::ZERO; w as usize * h as usize];
     let mut samples = vec![0u32; w as usize * h as usize];
     let sampler = aa::PixelSampler::new(camera, integrator, opts);
-    pixels
+    // Each row's heat (with `heatmap`), in row order.
+    let heat_rows: Vec<Vec<[f32; 3]>> = pixels
         .par_chunks_mut(w as usize)
         .zip(samples.par_chunks_mut(w as usize))
         .enumerate()
-        .for_each(|(row, (px_row, count_row))| {
+        .map(|(row, (px_row, count_row))| {
+            let mut heat_row = opts.heatmap.then(|| vec![[0f32; 3]; px_row.len()]);
             if progress.should_stop() {
                 skipped.fetch_add(1, Ordering::Relaxed);
-                return;
+                return heat_row.unwrap_or_default();
             }
             let y = win.y0 + row as u32;
             let mut counts = RayCounts {
@@ -96,16 +101,26 @@ pub fn camera_pass(
             };
             for (i, (px, n)) in px_row.iter_mut().zip(count_row.iter_mut()).enumerate() {
                 let before = counts.primary;
+                let start = heat_row
+                    .as_ref()
+                    .map(|_| (counters::thread_total(), Instant::now()));
                 *px = sampler.pixel(win.x0 + i as u32, y, &mut counts);
                 *n = (counts.primary - before) as u32
                     + sampler.corner_rays_charged(i as u32, row as u32);
+                if let (Some(heat), Some(((nodes, tris), t))) = (heat_row.as_mut(), start) {
+                    let (nodes2, tris2) = counters::thread_total();
+                    let ns = t.elapsed().as_nanos() as f32;
+                    heat[i] = [(nodes2 - nodes) as f32, (tris2 - tris) as f32, ns];
+                }
             }
             totals
                 .lock()
                 .unwrap_or_else(|e| e.into_inner())
                 .add(&counts);
             progress.advance(1);
-        });
+            heat_row.unwrap_or_default()
+        })
+        .collect();
     let mut t = totals.into_inner().unwrap_or_else(|e| e.into_inner());
     t.add(&sampler.corner_counts());
     let stats = RenderStats {
@@ -121,6 +136,7 @@ pub fn camera_pass(
         gathered: t.gathered,
         rows_skipped: skipped.into_inner(),
         time: start.elapsed(),
+        heat: opts.heatmap.then(|| heat_rows.concat()),
     };
     let film = Film {
         width: w,

@@ -24,6 +24,7 @@ impl Scene {
     /// one or the other by the rounding of each pixel (speckle). A transparent surface's hit is
     /// ranked as if it were [`tie_slack`] further away.
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        crate::accel::counters::ray();
         let mut best = None;
         let slack = tie_slack(ray);
         self.tlas.closest(ray, |r, i| {
@@ -44,6 +45,7 @@ impl Scene {
 
     /// Returns true when anything lies on the ray within `(tmin, tmax)`.
     pub fn occluded(&self, ray: &Ray) -> bool {
+        crate::accel::counters::ray();
         self.tlas.any(ray, |r, i| {
             let inst = &self.instances[i];
             match inst.shape {

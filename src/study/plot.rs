@@ -27,10 +27,10 @@ const FONTS: [&str; 7] = [
 ];
 
 /// The family name the font is registered under.
-const FAMILY: &str = "caustic-plot";
+pub(crate) const FAMILY: &str = "caustic-plot";
 
 /// Registers the first readable font (once per process); returns whether text can be drawn.
-fn font_ready() -> bool {
+pub(crate) fn font_ready() -> bool {
     static READY: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     *READY.get_or_init(|| {
         let env = std::env::var("CAUSTIC_PLOT_FONT").ok();

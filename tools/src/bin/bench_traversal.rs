@@ -2,8 +2,11 @@
 //!
 //! ```text
 //! bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--kernel K] [--builder B]
-//!                 MESH RAYS [RAYS...]
+//!                 [--count] MESH RAYS [RAYS...]
 //! ```
+//!
+//! `--count` turns on the traversal counters that `--stats` and `--heatmap` read
+//! ([`caustic::accel::counters`]), to measure what counting costs: run with and without it.
 //!
 //! `--kernel scalar|sse2|avx2` picks the BVH node test (default: the fastest the CPU runs);
 //! `--builder sah|ploc` the BVH builder (default: `sah`, the one meshes use); the report's
@@ -52,7 +55,7 @@ struct Options {
 }
 
 const USAGE: &str = "usage: bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] \
-                     [--kernel scalar|sse2|avx2] [--builder sah|ploc] MESH RAYS [RAYS...]";
+                     [--kernel scalar|sse2|avx2] [--builder sah|ploc] [--count] MESH RAYS [RAYS...]";
 
 fn parse_args() -> Result<Options, String> {
     let mut o = Options {
@@ -93,6 +96,7 @@ fn parse_args() -> Result<Options, String> {
                     b => return Err(format!("--builder wants sah or ploc, got {b:?}")),
                 }
             }
+            "--count" => caustic::accel::counters::enable(),
             "-h" | "--help" => return Err(USAGE.into()),
             s if s.starts_with("--") => return Err(format!("unknown option {s}\n{USAGE}")),
             _ => pos.push(PathBuf::from(a)),

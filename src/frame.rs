@@ -67,7 +67,8 @@ pub fn render_desc(
 ) -> Result<Frame> {
     let (window, scene, mut settings, factor) = prepare(desc, r, scale, crop, settings)?;
     if let Some(path) = settings.photons.maps_file.clone() {
-        let maps = read_maps(desc, r, &scene, &settings, &path)?;
+        let size = (window.full_width, window.full_height);
+        let maps = read_maps(desc, r, &scene, &settings, &path, size)?;
         settings.photons.preloaded = Some(maps);
     }
     let camera = Camera::new(&r.camera, window.full_width, window.full_height);
@@ -122,19 +123,20 @@ fn map_settings(scene: &Scene, settings: &Settings, flag: &str) -> Result<GiSett
         )));
     }
     Ok(GiSettings {
-        precompute: false,
         maps_file: None,
         preloaded: None,
         ..planned(&settings.photons, &plan)
     })
 }
 
-/// Returns the fingerprint of the maps that `gi` traces for the frame of `r` ([`file`]).
+/// Returns the fingerprint of the maps that `gi` traces, and of the irradiance cache it makes,
+/// for the `w × h` frame of `r` ([`file`]).
 fn fingerprint(
     desc: &SceneDesc,
     r: &RenderDesc,
     scene: &Scene,
     gi: &GiSettings,
+    (width, height): (u32, u32),
 ) -> Result<Fingerprint> {
     let mut h = Fnv::default();
     let text = format!(
@@ -175,10 +177,18 @@ fn fingerprint(
     Ok(Fingerprint {
         scene: h.finish(),
         settings: format!(
-            "caustic {}; seed {}; global photons per light {}; caustic photons per light {caustic}",
+            "caustic {}; seed {}; global photons per light {}; caustic photons per light \
+             {caustic}; image {width}x{height}; k {}; max radius {}; {:?}; {:?}; precomputed points {}; \
+             {:?}",
             env!("CARGO_PKG_VERSION"),
             gi.seed,
-            budget(MapKind::Global)
+            budget(MapKind::Global),
+            gi.k,
+            gi.max_radius,
+            gi.filter,
+            gi.indirect,
+            gi.precompute,
+            gi.cache,
         ),
     })
 }
@@ -193,10 +203,12 @@ pub fn trace_maps(
     settings: &Settings,
     progress: &dyn Progress,
 ) -> Result<(SavedMaps, GiStats)> {
-    let (_, scene, settings, _) = prepare(desc, r, scale, None, settings)?;
+    let (window, scene, settings, _) = prepare(desc, r, scale, None, settings)?;
     let gi_settings = map_settings(&scene, &settings, "--save")?;
-    let fingerprint = fingerprint(desc, r, &scene, &gi_settings)?;
-    let gi = Gi::build_with(&scene, &gi_settings, progress);
+    let size = (window.full_width, window.full_height);
+    let fingerprint = fingerprint(desc, r, &scene, &gi_settings, size)?;
+    let camera = Camera::new(&r.camera, size.0, size.1);
+    let gi = Gi::build_with(&scene, &gi_settings, progress).with_cache(&scene, &camera, progress);
     let stats = gi.stats.clone();
     let maps = SavedMaps {
         fingerprint,
@@ -210,6 +222,7 @@ pub fn trace_maps(
                 .unwrap_or_else(|| crate::photon::PhotonMap::build(Vec::new())),
             per_light: stats.caustic.clone(),
         }),
+        cache: gi.cache,
     };
     Ok((maps, stats))
 }
@@ -222,9 +235,10 @@ fn read_maps(
     scene: &Scene,
     settings: &Settings,
     path: &std::path::Path,
+    size: (u32, u32),
 ) -> Result<Preloaded> {
     let gi_settings = map_settings(scene, settings, "--photon-maps")?;
-    let want = fingerprint(desc, r, scene, &gi_settings)?;
+    let want = fingerprint(desc, r, scene, &gi_settings, size)?;
     let bad = |message: String| Error::File {
         path: path.to_path_buf(),
         message,

@@ -75,7 +75,28 @@ fn renders_from_a_saved_map_whole_and_in_tiles_equal_the_render_that_traces_them
     let saved = run(&dir, &["photons", "ball.lua", "--save", "maps.bin"]);
     let said = String::from_utf8_lossy(&saved.stderr);
     assert!(said.contains("wrote maps.bin ("), "{said}");
-    render_from_file(&dir, "read.exr", &[]);
+    assert!(
+        !said.contains(" 0 irradiance-cache records"),
+        "no cache saved: {said}"
+    );
+    let read = run(
+        &dir,
+        &[
+            "render",
+            "ball.lua",
+            "--photon-maps",
+            "maps.bin",
+            "-o",
+            "read.exr",
+            "--stats",
+        ],
+    );
+    let stats = String::from_utf8_lossy(&read.stdout);
+    assert!(
+        stats.contains("photon maps: read from --photon-maps in ")
+            && !stats.contains("irradiance cache: "),
+        "the maps and the cache are read, not made: {stats}"
+    );
     let traced = std::fs::read(dir.join("traced.exr")).unwrap();
     assert!(
         std::fs::read(dir.join("read.exr")).unwrap() == traced,
@@ -109,7 +130,12 @@ fn a_map_file_for_other_photons_another_scene_or_damaged_is_refused() {
         fails(&dir, &args)
     };
     // Other photon settings: the message shows both.
-    for other in [&["--seed", "3"][..], &["--photon-scale", "0.5"]] {
+    for other in [
+        &["--seed", "3"][..],
+        &["--photon-scale", "0.5"],
+        &["--cache-accuracy", "0.5"],
+        &["--scale", "0.5"],
+    ] {
         let mut extra = vec!["--photon-maps", "maps.bin"];
         extra.extend_from_slice(other);
         let e = read(&extra);
@@ -135,7 +161,7 @@ fn a_map_file_for_other_photons_another_scene_or_damaged_is_refused() {
     std::fs::write(dir.join("other.bin"), b"P6\n1 1\n255\n").unwrap();
     for (file, want) in [
         ("damaged.bin", "the checksum does not match"),
-        ("short.bin", "the file ends inside the caustic map"),
+        ("short.bin", "the file ends inside the irradiance cache"),
         ("other.bin", "not a caustic photon-map file"),
         ("missing.bin", "missing.bin: No such file"),
     ] {

@@ -844,8 +844,9 @@ fn save_maps(
         message: e.to_string(),
     })?;
     let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+    let records = maps.cache.as_ref().map_or(0, |c| c.len());
     eprintln!(
-        "wrote {} ({} global, {} caustic photons, {:.1} MB) in {:.2} s",
+        "wrote {} ({} global, {} caustic photons, {records} irradiance-cache records, {:.1} MB) in {:.2} s",
         path.display(),
         stored(&stats.global),
         stored(&stats.caustic),

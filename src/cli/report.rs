@@ -228,8 +228,9 @@ fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
     let (lookups, used) = (rstats.lookups, rstats.photons_used);
     if let Some(read) = s.read_time {
         println!(
-            "  photon maps: read from --photon-maps in {:.3} s (not traced)",
-            read.as_secs_f64()
+            "  photon maps: read from --photon-maps in {:.3} s (not traced), with {} irradiance-cache records",
+            read.as_secs_f64(),
+            s.read_records
         );
     }
     println!(

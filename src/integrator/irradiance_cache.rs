@@ -330,6 +330,16 @@ impl Grid {
 }
 
 impl IrradianceCache {
+    /// Returns the records, in the order they were made.
+    pub fn records(&self) -> &[Record] {
+        &self.records
+    }
+
+    /// Returns the accuracy the records serve points with.
+    pub fn accuracy(&self) -> f32 {
+        self.accuracy
+    }
+
     /// Returns a cache of `records` with accuracy `accuracy`.
     pub fn new(records: Vec<Record>, accuracy: f32) -> IrradianceCache {
         let grid = Grid::build(&records, accuracy);

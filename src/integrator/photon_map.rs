@@ -242,8 +242,9 @@ pub struct GiStats {
     /// The irradiance cache's record pass, when there was one.
     pub cache: Option<CacheStats>,
     /// The time to read the maps when they came from a file (`--photon-maps`) instead of
-    /// being traced.
+    /// being traced, and the irradiance-cache records the file held.
     pub read_time: Option<Duration>,
+    pub read_records: usize,
 }
 
 /// The photon maps of one render and how shading uses them.
@@ -405,6 +406,10 @@ impl Gi {
                 (caustic_map, caustic.unwrap_or_default()),
             );
             gi.stats.read_time = preloaded.map(|p| p.1);
+            // The frame's cache, made over the whole image when the maps were saved: the
+            // cache `with_cache` would make (the fingerprint holds what it depends on).
+            gi.cache = saved.cache;
+            gi.stats.read_records = gi.cache.as_ref().map_or(0, |c| c.len());
             return gi;
         }
         let (global_map, global, mut trace_time, mut build_time) =
@@ -574,7 +579,8 @@ impl Gi {
         let gathers = matches!(self.settings.indirect, Indirect::Gather { .. });
         let (w, h) = camera.size();
         let small = w.max(h) < super::irradiance_cache::MIN_IMAGE_SIZE;
-        if !self.settings.cache.enabled || !gathers || self.global.is_empty() || small {
+        let read = self.cache.is_some();
+        if !self.settings.cache.enabled || !gathers || self.global.is_empty() || small || read {
             return self;
         }
         let (cache, stats) = IrradianceCache::build(

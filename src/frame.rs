@@ -208,7 +208,9 @@ pub fn trace_maps(
     let size = (window.full_width, window.full_height);
     let fingerprint = fingerprint(desc, r, &scene, &gi_settings, size)?;
     let camera = Camera::new(&r.camera, size.0, size.1);
-    let gi = Gi::build_with(&scene, &gi_settings, progress).with_cache(&scene, &camera, progress);
+    let gi = Gi::build_with(&scene, &gi_settings, progress)
+        .precompute_for(&camera)
+        .with_cache(&scene, &camera, progress);
     let stats = gi.stats.clone();
     let maps = SavedMaps {
         fingerprint,

@@ -234,7 +234,7 @@ fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
         );
     }
     println!(
-        "  photon phases: trace {:.3} s, kd-tree build {:.3} s, precomputation points {:.3} s ({} points, {} of them estimated where gather rays read them)",
+        "  photon phases: trace {:.3} s, kd-tree build {:.3} s, precomputation points {:.3} s ({} points, {} of them estimated: all up front when there are no more than the image's pixels, else where gather rays read them)",
         s.trace_time.as_secs_f64(),
         s.build_time.as_secs_f64(),
         s.precompute_time.as_secs_f64(),

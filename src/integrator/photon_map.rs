@@ -18,8 +18,9 @@
 //!
 //!     By default that estimate is not made afresh for every gather ray. Following Christensen
 //!     (*Faster photon map global illumination*, JGT 1999), the irradiance is estimated at a
-//!     pseudo-random one in [`PRECOMPUTE_STRIDE`] global photons, each the first time a gather
-//!     ray reads it ([`Precomputed`]), and a gather ray takes the value of the nearest
+//!     pseudo-random one in [`PRECOMPUTE_STRIDE`] global photons, all up front when there are
+//!     no more of them than the image's pixels ([`Gi::precompute_for`]), else each the first
+//!     time a gather ray reads it ([`Precomputed`]), and a gather ray takes the value of the nearest
 //!     such point whose normal is within 25° of the surface's (one 1-nearest query instead of a
 //!     50-nearest estimate). Where no such point lies within the search radius (a thin wall's
 //!     back, say) it falls back to the estimate. Why: a frame has tens of millions of gather
@@ -252,8 +253,8 @@ pub struct GiStats {
 pub struct Gi {
     pub global: PhotonMap,
     pub caustic: Option<PhotonMap>,
-    /// Irradiance at a subset of the global photons, each estimated when first read (see
-    /// [`GiSettings::precompute`]).
+    /// Irradiance at a subset of the global photons, each estimated when first read or up
+    /// front ([`Gi::precompute_for`]; see [`GiSettings::precompute`]).
     pub precomputed: Option<Precomputed>,
     /// Records of final gathers that shading points interpolate ([`Gi::with_cache`]).
     pub cache: Option<IrradianceCache>,
@@ -331,7 +332,8 @@ fn trace_and_build(
 }
 
 /// Irradiance at the precomputation points ([`is_precompute_point`]: about one global photon in
-/// [`PRECOMPUTE_STRIDE`]), each estimated the first time a gather ray reads it and kept.
+/// [`PRECOMPUTE_STRIDE`]), each estimated the first time a gather ray reads it and kept (or
+/// all up front for an image with at least as many pixels, [`Gi::precompute_for`]).
 ///
 /// Why lazily: a frame's gather rays land near a fraction of the points (on `room2.lua` at
 /// 128², 10^6 global photons: 1.6 M points, most of them on surfaces no gather ray from the

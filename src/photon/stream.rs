@@ -112,34 +112,19 @@ impl PhotonStream {
         self.len == 0
     }
 
-    /// Appends one photon.
-    pub fn push(&mut self, p: Staged) {
-        match self.blocks.last_mut() {
-            Some(b) if b.len() < BLOCK => b.push(p),
-            _ => {
-                let mut b = Vec::with_capacity(BLOCK);
-                b.push(p);
-                self.blocks.push(b);
-            }
-        }
-        self.len += 1;
-    }
-
-    /// Appends `photons`, in order.
+    /// Appends `photons`, in order, filling the last block before starting another.
     pub fn extend_from_slice(&mut self, mut photons: &[Staged]) {
         while !photons.is_empty() {
-            let room = match self.blocks.last() {
-                Some(b) if b.len() < BLOCK => BLOCK - b.len(),
+            let block = match self.blocks.last_mut() {
+                Some(b) if b.len() < BLOCK => b,
                 _ => {
                     self.blocks.push(Vec::with_capacity(BLOCK));
-                    BLOCK
+                    let last = self.blocks.len() - 1;
+                    &mut self.blocks[last]
                 }
             };
-            let (now, rest) = photons.split_at(room.min(photons.len()));
-            self.blocks
-                .last_mut()
-                .expect("a block")
-                .extend_from_slice(now);
+            let (now, rest) = photons.split_at((BLOCK - block.len()).min(photons.len()));
+            block.extend_from_slice(now);
             self.len += now.len();
             photons = rest;
         }
@@ -148,11 +133,6 @@ impl PhotonStream {
     /// Returns the photons in order.
     pub fn iter(&self) -> impl Iterator<Item = &Staged> {
         self.blocks.iter().flatten()
-    }
-
-    /// Returns the bytes the stream holds (its blocks' capacity).
-    pub fn bytes(&self) -> usize {
-        self.blocks.iter().map(Vec::capacity).sum::<usize>() * std::mem::size_of::<Staged>()
     }
 }
 
@@ -187,8 +167,8 @@ mod tests {
             s.extend_from_slice(a);
             rest = b;
         }
-        for p in rest {
-            s.push(*p);
+        for p in rest.chunks(1) {
+            s.extend_from_slice(p);
         }
         assert_eq!(s.len(), photons.len());
         assert!(s.iter().eq(photons.iter()));

@@ -52,7 +52,7 @@ use crate::geometry::{Ray, offset_ray_origin};
 use crate::material::bsdf::Bsdf;
 use crate::material::medium::MediumStack;
 use crate::photon::estimate::Filter;
-use crate::photon::file::SavedMaps;
+use crate::photon::file::{CountedMap, SavedMaps};
 use crate::photon::trace::{LightCounts, MapKind, photon_budget, trace_map_with};
 use crate::photon::{PhotonId, PhotonMap};
 use crate::progress::{NoProgress, Progress};
@@ -313,22 +313,25 @@ pub fn planned(settings: &GiSettings, plan: &Plan) -> GiSettings {
 }
 
 /// Phases 1 and 2 for one map: traces the photons of `kind` with each light's share of the
-/// budget and builds their kd-tree; returns the map, the per-light counts and the two phases'
-/// times. One map is traced and built before the next is traced, so that only one map's
-/// photons are ever held in the tracer's form ([`crate::photon::stream`]).
+/// budget and builds their kd-tree; returns the map with its per-light counts and the two
+/// phases' times. One map is traced and built before the next is traced, so that only one
+/// map's photons are ever held in the tracer's form ([`crate::photon::stream`]).
 fn trace_and_build(
     scene: &Scene,
     settings: &GiSettings,
     kind: MapKind,
     progress: &dyn Progress,
-) -> (PhotonMap, Vec<LightCounts>, Duration, Duration) {
+) -> (CountedMap, Duration, Duration) {
     let start = Instant::now();
     let budget = settings.budget(&scene.lights, kind);
     let traced = trace_map_with(scene, &budget, kind, settings.seed, progress);
     let trace_time = start.elapsed();
     let start = Instant::now();
-    let map = PhotonMap::from_stream(traced.photons);
-    (map, traced.per_light, trace_time, start.elapsed())
+    let map = CountedMap {
+        map: PhotonMap::from_stream(traced.photons),
+        per_light: traced.per_light,
+    };
+    (map, trace_time, start.elapsed())
 }
 
 /// Irradiance at the precomputation points ([`is_precompute_point`]: about one global photon in
@@ -400,14 +403,7 @@ impl Gi {
     pub fn build_with(scene: &Scene, settings: &GiSettings, progress: &dyn Progress) -> Gi {
         let preloaded = settings.preloaded.as_ref();
         if let Some(saved) = preloaded.and_then(Preloaded::take) {
-            let caustic = saved.caustic.map(|c| (c.map, c.per_light));
-            let (caustic_map, caustic) = caustic.unzip();
-            let mut gi = Gi::of_maps(
-                scene,
-                settings,
-                (saved.global.map, saved.global.per_light),
-                (caustic_map, caustic.unwrap_or_default()),
-            );
+            let mut gi = Gi::of_maps(scene, settings, saved.global, saved.caustic);
             gi.stats.read_time = preloaded.map(|p| p.1);
             // The frame's cache, made over the whole image when the maps were saved: the
             // cache `with_cache` would make (the fingerprint holds what it depends on).
@@ -415,23 +411,15 @@ impl Gi {
             gi.stats.read_records = gi.cache.as_ref().map_or(0, |c| c.len());
             return gi;
         }
-        let (global_map, global, mut trace_time, mut build_time) =
+        let (global, mut trace_time, mut build_time) =
             trace_and_build(scene, settings, MapKind::Global, progress);
-        let (caustic_map, caustic) = if settings.caustics {
-            let (map, counts, trace, build) =
-                trace_and_build(scene, settings, MapKind::Caustic, progress);
+        let caustic = settings.caustics.then(|| {
+            let (map, trace, build) = trace_and_build(scene, settings, MapKind::Caustic, progress);
             trace_time += trace;
             build_time += build;
-            (Some(map), counts)
-        } else {
-            (None, Vec::new())
-        };
-        let mut gi = Gi::of_maps(
-            scene,
-            settings,
-            (global_map, global),
-            (caustic_map, caustic),
-        );
+            map
+        });
+        let mut gi = Gi::of_maps(scene, settings, global, caustic);
         gi.stats.trace_time = trace_time;
         gi.stats.build_time = build_time;
         gi
@@ -442,20 +430,21 @@ impl Gi {
     fn of_maps(
         scene: &Scene,
         settings: &GiSettings,
-        (global_map, global): (PhotonMap, Vec<LightCounts>),
-        (caustic_map, caustic): (Option<PhotonMap>, Vec<LightCounts>),
+        global: CountedMap,
+        caustic: Option<CountedMap>,
     ) -> Gi {
         let extent = scene.extent().max(f32::MIN_POSITIVE);
         let r = settings.max_radius * extent;
+        let (caustic_map, caustic_counts) = caustic.map(|c| (c.map, c.per_light)).unzip();
         let mut gi = Gi {
             stats: GiStats {
-                global,
-                caustic,
-                global_bytes: global_map.bytes(),
+                global: global.per_light,
+                caustic: caustic_counts.unwrap_or_default(),
+                global_bytes: global.map.bytes(),
                 caustic_bytes: caustic_map.as_ref().map_or(0, |m| m.bytes()),
                 ..GiStats::default()
             },
-            global: global_map,
+            global: global.map,
             caustic: caustic_map.filter(|m| !m.is_empty()),
             precomputed: None,
             cache: None,

@@ -751,8 +751,9 @@ impl Gi {
     ) -> (Vec3A, f32) {
         let (mut ray, mut throughput, mut out) = (*ray, Vec3A::ONE, Vec3A::ZERO);
         let (mut bounces, mut first) = (0, None);
+        // Every ray of the gather path is a gather ray (its lookups cast none of another kind).
+        crate::accel::counters::kind(RayKind::Gather);
         loop {
-            crate::accel::counters::kind(RayKind::Gather);
             let Some(hit) = scene.intersect(&ray) else {
                 return (out, first.unwrap_or(f32::INFINITY));
             };

@@ -465,8 +465,9 @@ fn trace_one(
     let mut diffuse_bounced = false;
     let mut specular_bounced = false;
     let mut met = FirstHit::Nothing;
+    // Every ray of the path is a photon ray (nothing below casts another kind).
+    crate::accel::counters::kind(crate::accel::counters::RayKind::Photon);
     for _ in 0..MAX_BOUNCES {
-        crate::accel::counters::kind(crate::accel::counters::RayKind::Photon);
         let Some(hit) = scene.intersect(&ray) else {
             return met;
         };

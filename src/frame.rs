@@ -161,12 +161,10 @@ fn fingerprint(
         .iter()
         .flat_map(|m| m.texture.iter().chain(&m.bump));
     for path in meshes.chain(images) {
-        let bytes = crate::files::read_regular(path).map_err(|e| Error::File {
+        h.write_file(path).map_err(|e| Error::File {
             path: path.clone(),
             message: e.to_string(),
         })?;
-        h.write(&(bytes.len() as u64).to_le_bytes());
-        h.write(&bytes);
     }
     let budget = |kind| format!("{:?}", gi.budget(&scene.lights, kind));
     let caustic = if gi.caustics {

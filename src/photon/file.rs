@@ -99,6 +99,29 @@ impl Fnv {
         }
     }
 
+    /// Hashes the length (8 bytes, little-endian) and then the bytes of the regular file
+    /// `path`, read in pieces: a scene's mesh can be larger than is worth holding twice.
+    pub fn write_file(&mut self, path: &Path) -> std::io::Result<()> {
+        crate::files::check_regular(path)?;
+        let mut file = std::fs::File::open(path)?;
+        let len = file.metadata()?.len();
+        self.write(&len.to_le_bytes());
+        let mut buf = vec![0u8; 1 << 16];
+        let mut read = 0u64;
+        loop {
+            let n = file.read(&mut buf)?;
+            if n == 0 {
+                break;
+            }
+            self.write(&buf[..n]);
+            read += n as u64;
+        }
+        if read != len {
+            return Err(std::io::Error::other("the file changed while it was read"));
+        }
+        Ok(())
+    }
+
     /// Returns the hash so far.
     pub fn finish(self) -> u64 {
         self.0

@@ -1,27 +1,78 @@
 #!/usr/bin/env bash
 # The one gate: formatting, lints and the whole test suite, in release mode.
 # People run it before committing; .ci/run runs exactly this. On a fresh machine it first adds
-# what the gate needs and the toolchain may lack (rustfmt and clippy, through rustup), and
-# names what it cannot add itself (a C compiler: Rust's linker on Linux, and the build of the
-# vendored Lua).
+# what the gate needs and the machine may lack, and says what it adds:
+# - a C compiler (Rust links with it; mlua builds its vendored Lua with it): build-essential
+#   through apt-get, as root or with passwordless sudo;
+# - a Rust toolchain when rustup is there but no toolchain is, and a toolchain older than the
+#   crate's rust-version is updated through rustup;
+# - rustfmt and clippy, through rustup.
+# What it cannot add (no apt-get, no rights, no rustup) it names, with how to add it, and
+# stops before building anything.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+say() { echo "check: $*" >&2; }
+
+# Runs a command as root: directly, or through passwordless sudo; fails when neither can.
+as_root() {
+  if [ "$(id -u)" = 0 ]; then
+    "$@"
+  elif command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+    sudo -n "$@"
+  else
+    return 1
+  fi
+}
+
 if ! command -v "${CC:-cc}" >/dev/null 2>&1; then
-  echo "check: no C compiler (${CC:-cc}) on PATH; Rust links with it and mlua builds its" \
-    "vendored Lua with it: install one (Debian/Ubuntu: apt install build-essential)" >&2
-  exit 1
+  if command -v apt-get >/dev/null 2>&1 && as_root true; then
+    say "no C compiler (${CC:-cc}); installing build-essential"
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq build-essential >/dev/null
+  fi
+  if ! command -v "${CC:-cc}" >/dev/null 2>&1; then
+    say "no C compiler (${CC:-cc}) on PATH; Rust links with it and mlua builds its vendored" \
+      "Lua with it: install one (Debian/Ubuntu: apt install build-essential)"
+    exit 1
+  fi
+fi
+
+# The crate's minimum Rust (Cargo.toml's rust-version).
+need=$(sed -n 's/^rust-version = "\([0-9.]*\)"/\1/p' Cargo.toml)
+if ! command -v cargo >/dev/null 2>&1; then
+  if command -v rustup >/dev/null 2>&1; then
+    say "no Rust toolchain; installing stable through rustup"
+    rustup toolchain install stable --profile minimal --component rustfmt,clippy
+    rustup default stable
+  else
+    say "no cargo on PATH and no rustup to install it: install Rust $need or later" \
+      "(https://rustup.rs)"
+    exit 1
+  fi
+fi
+have=$(rustc --version | sed -n 's/^rustc \([0-9]*\.[0-9]*\).*/\1/p')
+older() { [ "$(printf '%s\n%s\n' "$1" "$2" | sort -V | head -1)" = "$1" ] && [ "$1" != "$2" ]; }
+if [ -n "$have" ] && [ -n "$need" ] && older "$have" "$need"; then
+  if command -v rustup >/dev/null 2>&1; then
+    say "rustc $have is older than the $need this crate needs; updating through rustup"
+    rustup update stable
+  else
+    say "rustc $have is older than the $need this crate needs, and there is no rustup to" \
+      "update it: install Rust $need or later (https://rustup.rs)"
+    exit 1
+  fi
 fi
 
 for tool in fmt clippy; do
   if ! cargo "$tool" --version >/dev/null 2>&1; then
     component=$([ "$tool" = fmt ] && echo rustfmt || echo clippy)
     if ! command -v rustup >/dev/null 2>&1; then
-      echo "check: cargo $tool is missing and there is no rustup to add it; install $component" \
-        "with the toolchain (https://rustup.rs, or your distribution's $component package)" >&2
+      say "cargo $tool is missing and there is no rustup to add it; install $component" \
+        "with the toolchain (https://rustup.rs, or your distribution's $component package)"
       exit 1
     fi
-    echo "check: installing $component" >&2
+    say "installing $component"
     rustup component add "$component"
   fi
 done

@@ -39,16 +39,19 @@ pub struct Frame {
     pub stats: Stats,
 }
 
-/// Renders `window` of the image of `scene` through `camera`: plans the frame, then runs the
-/// chosen integrator's phases, reporting each to `progress`.
+/// Renders `window` of the image of `scene` through `camera`: plans the frame, applies the
+/// plan's shading features to the scene ([`Scene::apply`]: an effect disabled there stays
+/// disabled), then runs the chosen integrator's phases, reporting each to `progress`.
 pub fn render(
-    scene: &Scene,
+    scene: &mut Scene,
     camera: &Camera,
     window: Window,
     settings: &Settings,
     progress: &dyn Progress,
 ) -> (Film, Stats) {
     let plan = plan_for(scene, settings);
+    scene.apply(plan.features);
+    let scene = &*scene;
     plan.integrator
         .render(scene, camera, window, settings, plan, progress)
 }
@@ -65,14 +68,14 @@ pub fn render_desc(
     settings: &Settings,
     progress: &dyn Progress,
 ) -> Result<Frame> {
-    let (window, scene, mut settings, factor) = prepare(desc, r, scale, crop, settings)?;
+    let (window, mut scene, mut settings, factor) = prepare(desc, r, scale, crop, settings)?;
     if let Some(path) = settings.photons.maps_file.clone() {
         let size = (window.full_width, window.full_height);
         let maps = read_maps(desc, r, &scene, &settings, &path, size)?;
         settings.photons.preloaded = Some(maps);
     }
     let camera = Camera::new(&r.camera, window.full_width, window.full_height);
-    let (film, mut stats) = render(&scene, &camera, window, &settings, progress);
+    let (film, mut stats) = render(&mut scene, &camera, window, &settings, progress);
     // Why the photon counts differ from the script's and the settings' (see
     // `GiSettings::follow_image`), among the plan's notes.
     if let Some(factor) = factor
@@ -97,7 +100,7 @@ fn prepare(
     settings: &Settings,
 ) -> Result<(Window, Scene, Settings, Option<f64>)> {
     let window = window(r, scale, crop)?;
-    let scene = build_scene(desc, r)?;
+    let mut scene = build_scene(desc, r)?;
     let pixels = |w: u32, h: u32| w as f64 * h as f64;
     let factor = pixels(window.full_width, window.full_height) / pixels(r.width, r.height);
     let mut settings = settings.clone();
@@ -106,6 +109,9 @@ fn prepare(
         settings.photons.photon_scale *= factor;
     }
     check_photon_budget(desc, r, &scene, &settings)?;
+    // Every pass of the frame, and the photon-map file's, sees the scene as the plan shades it.
+    let features = plan_for(&scene, &settings).features;
+    scene.apply(features);
     Ok((window, scene, settings, follow.then_some(factor)))
 }
 

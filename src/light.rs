@@ -157,6 +157,19 @@ impl Light {
         }
     }
 
+    /// Returns the light as a point at its centre seen from `p`, for hard shadows (the plan's
+    /// soft shadows off): a point light itself; an area light's centre with its cosine falloff;
+    /// a sphere light's centre with its intensity from afar (the mean of [`Light::sample`]).
+    pub fn centre_sample(&self, p: Vec3A) -> LightSample {
+        match self.shape {
+            Shape::Point { .. } | Shape::Area { .. } => self.sample(p, (0.5, 0.5)),
+            Shape::Sphere { centre, .. } => LightSample {
+                position: centre,
+                intensity: self.colour,
+            },
+        }
+    }
+
     /// Returns a sample of the light for shading point `p`, from a uniform pair `u` in [0, 1)².
     pub fn sample(&self, p: Vec3A, u: (f32, f32)) -> LightSample {
         match self.shape {

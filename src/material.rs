@@ -135,11 +135,24 @@ impl Material {
     /// and by Perlin noise at world point `p`, never tilted past the surface's geometric
     /// hemisphere (`ng`, same side as `ns`), so a surface never looks lit from behind.
     pub fn shading_normal(&self, ns: Vec3A, ng: Vec3A, p: Vec3A, uv: Vec2, dpdu: Vec3A) -> Vec3A {
+        self.shading_normal_with::<true, true>(ns, ng, p, uv, dpdu)
+    }
+
+    /// [`Material::shading_normal`] compiled with the bump map's code only when `BUMP` and the
+    /// noise's only when `NOISE` ([`crate::scene::Features`]).
+    pub fn shading_normal_with<const BUMP: bool, const NOISE: bool>(
+        &self,
+        ns: Vec3A,
+        ng: Vec3A,
+        p: Vec3A,
+        uv: Vec2,
+        dpdu: Vec3A,
+    ) -> Vec3A {
         let mut n = ns;
-        if let Some(b) = &self.bump {
+        if BUMP && let Some(b) = &self.bump {
             n = texture::apply_tangent_normal(n, dpdu, b.tangent_normal(uv));
         }
-        if self.perlin_scale > 0.0 {
+        if NOISE && self.perlin_scale > 0.0 {
             n = perlin::perturb_normal(n, p, self.perlin_scale);
         }
         keep_in_hemisphere(n, ng)

@@ -77,9 +77,10 @@ fn final_gathering_through_a_mirror_agrees_with_the_global_map_seen_directly() {
     };
     let desc = common::run_lua(src).unwrap();
     let r = &desc.renders[0];
-    let scene = caustic::scene::build::build_scene(&desc, r).unwrap();
+    let mut scene = caustic::scene::build::build_scene(&desc, r).unwrap();
     let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
-    let render = |indirect| common::render_scene(&scene, &camera, 24, 24, &settings(indirect));
+    let mut render =
+        |indirect| common::render_scene(&mut scene, &camera, 24, 24, &settings(indirect));
     let gather = render(Indirect::Gather { rays: 256 });
     let direct = render(Indirect::Direct);
     // Pixels that see the floor or the ceiling at least 0.5 from every wall (a density estimate

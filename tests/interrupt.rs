@@ -58,10 +58,10 @@ impl Progress for StopAfter {
 fn render(src: &str, settings: &Settings, progress: &dyn Progress) -> (Film, Option<Partial>) {
     let d = run_lua(src).unwrap();
     let r = &d.renders[0];
-    let scene = build_scene(&d, r).unwrap();
+    let mut scene = build_scene(&d, r).unwrap();
     let camera = Camera::new(&r.camera, r.width, r.height);
     let window = Window::full(r.width, r.height);
-    let (film, stats) = caustic::frame::render(&scene, &camera, window, settings, progress);
+    let (film, stats) = caustic::frame::render(&mut scene, &camera, window, settings, progress);
     (film, stats.interrupted)
 }
 

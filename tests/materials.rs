@@ -31,9 +31,9 @@ fn ambient_render(
     );
     let d = common::run_lua_in(&src, dir).unwrap();
     let r = &d.renders[0];
-    let scene = caustic::scene::build::build_scene(&d, r).unwrap();
+    let mut scene = caustic::scene::build::build_scene(&d, r).unwrap();
     let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
-    let film = common::render_scene(&scene, &camera, r.width, r.height, &common::whitted());
+    let film = common::render_scene(&mut scene, &camera, r.width, r.height, &common::whitted());
     let surfaces = (0..r.width * r.height)
         .map(|i| {
             let ray: Ray = camera.ray((i % r.width) as f32 + 0.5, (i / r.width) as f32 + 0.5);

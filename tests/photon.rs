@@ -96,7 +96,7 @@ fn closed_sphere_has_radiance_one_with_final_gathering() {
     // interreflection brings it to 0.5/(1−0.5) = 1.
     let d = run_lua(&closed_sphere(300_000)).unwrap();
     let r = &d.renders[0];
-    let scene = build_scene(&d, r).unwrap();
+    let mut scene = build_scene(&d, r).unwrap();
     assert_eq!(plan(&scene, GiMode::Auto).integrator, Integrator::PhotonMap);
     let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
     // Both ways a gather ray reads the global map (precomputed irradiance and a fresh
@@ -117,7 +117,7 @@ fn closed_sphere_has_radiance_one_with_final_gathering() {
             ..common::centre_ray()
         };
         let (film, stats) = caustic::frame::render(
-            &scene,
+            &mut scene,
             &camera,
             caustic::film::Window::full(r.width, r.height),
             &settings,
@@ -632,7 +632,7 @@ fn caustic_photons_aim_at_a_flat_slab_through_its_box_and_store_the_fresnel_flux
 /// Renders `scenes/cornell_glass.lua` at 96 × 96 (one centre ray a pixel, 100k global photons,
 /// 64 gather rays a point), the irradiance cache on or off, in `window` (default: all of it).
 fn cornell_96(cached: bool, window: Option<caustic::film::Window>) -> caustic::film::Film {
-    let (d, scene) = cornell_glass(false);
+    let (d, mut scene) = cornell_glass(false);
     let camera = caustic::camera::Camera::new(&d.renders[0].camera, 96, 96);
     let settings = Settings {
         photons: GiSettings {
@@ -650,7 +650,7 @@ fn cornell_96(cached: bool, window: Option<caustic::film::Window>) -> caustic::f
     };
     let window = window.unwrap_or(caustic::film::Window::full(96, 96));
     caustic::frame::render(
-        &scene,
+        &mut scene,
         &camera,
         window,
         &settings,

@@ -124,7 +124,7 @@ fn overrides_overrule_the_plan() {
 /// gathering disabled the frame is the global map seen directly, bit for bit.
 #[test]
 fn the_passes_follow_the_plan() {
-    let glass = scene("scenes/validate/cornell_glass.lua");
+    let mut glass = scene("scenes/validate/cornell_glass.lua");
     let d = desc("scenes/validate/cornell_glass.lua");
     let camera = caustic::camera::Camera::new(&d.renders[0].camera, 12, 12);
     let base = Settings {
@@ -135,9 +135,9 @@ fn the_passes_follow_the_plan() {
         },
         ..Settings::default()
     };
-    let render = |s: &Settings| {
+    let mut render = |s: &Settings| {
         let w = caustic::film::Window::full(12, 12);
-        caustic::frame::render(&glass, &camera, w, s, &caustic::progress::NoProgress)
+        caustic::frame::render(&mut glass, &camera, w, s, &caustic::progress::NoProgress)
     };
     let disabled = Settings {
         overrides: Overrides {
@@ -206,5 +206,276 @@ fn info_prints_the_plan_and_bad_effects_are_named() {
             "unknown effect 'glossy'; the effects are photon-maps, caustics, final-gathering"
         ),
         "{err}"
+    );
+}
+
+/// A photon-mapped scene without refraction, textures, normal maps, noise or area lights: a
+/// mirror ball against a red wall on a white floor under a point light.
+const PLAIN: &str = "white = gr.material({0.7, 0.7, 0.7}, {0, 0, 0}, 0)
+    red = gr.material({0.7, 0.2, 0.2}, {0, 0, 0}, 0)
+    mirror = gr.material({0, 0, 0}, {0.9, 0.9, 0.9}, 0)
+    root = gr.node('root')
+    f = gr.cube('floor'); f:set_material(white); f:scale(4, 0.1, 4); f:translate(-2, -1.1, -2); root:add_child(f)
+    w = gr.cube('wall'); w:set_material(red); w:scale(4, 4, 0.1); w:translate(-2, -1, -2); root:add_child(w)
+    b = gr.nh_sphere('ball', {0, -0.5, -0.5}, 0.5); b:set_material(mirror); root:add_child(b)
+    gr.render(root, 'x.png', 16, 16, {0, 0, 3}, {0, -0.2, -1}, {0, 1, 0}, 50, {0.1, 0.1, 0.1},
+              {gr.light({0, 1.5, 1}, {1, 1, 1}, {1, 0, 0}, nil, 3000)})";
+
+/// A scene with every effect: a glass ball, a textured and normal-mapped floor, a noisy red
+/// wall, under an area light.
+fn rich() -> String {
+    let tex = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/textures");
+    let t = |name: &str| format!("'{}'", tex.join(name).display());
+    format!(
+        "floor = gr.material({{0.7, 0.7, 0.7}}, {{0, 0, 0}}, 0, 0, 1, 0, {}, {})
+        red = gr.material({{0.7, 0.2, 0.2}}, {{0, 0, 0}}, 0, 0, 1, 2)
+        glass = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 1.5)
+        root = gr.node('root')
+        f = gr.cube('floor'); f:set_material(floor); f:scale(4, 0.1, 4); f:translate(-2, -1.1, -2); root:add_child(f)
+        w = gr.cube('wall'); w:set_material(red); w:scale(4, 4, 0.1); w:translate(-2, -1, -2); root:add_child(w)
+        b = gr.nh_sphere('ball', {{0, -0.5, -0.5}}, 0.5); b:set_material(glass); root:add_child(b)
+        light = gr.area_light({{0, 1.5, 0}}, {{1, 1, 1}}, {{1, 0, 0}}, 1, 3000, {{0.6, 0, 0}}, {{0, 0, 0.6}})
+        gr.render(root, 'x.png', 16, 16, {{0, 0, 3}}, {{0, -0.2, -1}}, {{0, 1, 0}}, 50, {{0.1, 0.1, 0.1}},
+                  {{light}})",
+        t("tiles_red.png"),
+        t("tiles_norm.png")
+    )
+}
+
+/// Renders the script `src` through the frame call with `overrides` (few photons, the same
+/// seed every time); returns the pixels, the plan and the features the scene was shaded with.
+fn render_src(
+    src: &str,
+    overrides: Overrides,
+) -> (
+    Vec<glam::Vec3A>,
+    caustic::integrator::Plan,
+    caustic::scene::Features,
+) {
+    let d = common::run_lua(src).unwrap();
+    let settings = Settings {
+        overrides,
+        photons: GiSettings {
+            photons: 3000,
+            caustic_photons: 3000,
+            follow_image: false,
+            ..GiSettings::default()
+        },
+        ..Settings::default()
+    };
+    let f = caustic::frame::render_desc(
+        &d,
+        &d.renders[0],
+        1.0,
+        None,
+        &settings,
+        &caustic::progress::NoProgress,
+    )
+    .unwrap();
+    (f.film.pixels, f.stats.plan, f.scene.features)
+}
+
+fn forcing(e: Effect) -> Overrides {
+    Overrides {
+        force: vec![e],
+        ..Overrides::default()
+    }
+}
+
+fn disabling(e: Effect) -> Overrides {
+    Overrides {
+        disable: vec![e],
+        ..Overrides::default()
+    }
+}
+
+/// What the plan skips was not needed: on a scene without refraction, soft shadows, textures,
+/// normal maps or noise, the plan leaves each out (the hits are shaded by the kernel compiled
+/// without it), and the image equals, bit for bit with the same seed, the render with that
+/// effect forced on (the general kernel). Caustics likewise on a box with no specular surface.
+#[test]
+fn a_ruled_out_effect_forced_on_changes_no_pixel() {
+    let (auto, plan, features) = render_src(PLAIN, Overrides::default());
+    assert_eq!(plan.integrator, Integrator::PhotonMap);
+    assert_eq!(
+        (features.textures, features.normal_maps, features.noise),
+        (false, false, false),
+        "the specialised kernel shades the plain scene"
+    );
+    assert!(!features.refraction && !features.soft_shadows);
+    assert!(auto.iter().any(|p| p.max_element() > 0.01), "a lit image");
+    for e in [
+        Effect::Refraction,
+        Effect::SoftShadows,
+        Effect::Textures,
+        Effect::NormalMaps,
+        Effect::Noise,
+    ] {
+        let d = plan.decision(e).unwrap();
+        assert!(!d.on, "{d}");
+        let (forced, fplan, ffeatures) = render_src(PLAIN, forcing(e));
+        let fd = fplan.decision(e).unwrap();
+        assert!(fd.on && matches!(fd.why, Why::ForcedInVain(_)), "{fd}");
+        assert_ne!(
+            features,
+            ffeatures,
+            "forcing {} changes the kernel",
+            e.name()
+        );
+        assert!(auto == forced, "forcing {} on changed the image", e.name());
+    }
+    let box_src = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/validate/cornell_diffuse.lua"),
+    )
+    .unwrap()
+    .replace(
+        "dofile((debug.getinfo(1, 'S').source:match('^@(.*[/\\\\])') or '') .. 'lib/box.lua')",
+        &std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/validate/lib/box.lua"),
+        )
+        .unwrap(),
+    );
+    let (auto, plan, _) = render_src(&box_src, Overrides::default());
+    assert!(!plan.caustics, "{:?}", plan.decision(Effect::Caustics));
+    let (forced, fplan, _) = render_src(&box_src, forcing(Effect::Caustics));
+    assert!(fplan.caustics);
+    assert!(auto == forced, "an empty caustic map changed the image");
+}
+
+/// And what the plan keeps is needed: on a scene with each effect, the plan includes it, and
+/// disabling it changes the image.
+#[test]
+fn an_effect_the_scene_has_is_planned_and_disabling_it_changes_the_image() {
+    let src = rich();
+    let (auto, plan, features) = render_src(&src, Overrides::default());
+    assert_eq!(
+        features,
+        caustic::scene::Features {
+            specular_depth: features.specular_depth,
+            ..caustic::scene::Features::GENERAL
+        }
+    );
+    for e in [
+        Effect::Caustics,
+        Effect::Refraction,
+        Effect::SoftShadows,
+        Effect::Textures,
+        Effect::NormalMaps,
+        Effect::Noise,
+        Effect::FinalGathering,
+    ] {
+        let d = plan.decision(e).unwrap();
+        assert!(
+            d.on && !matches!(d.why, Why::Forced | Why::ForcedInVain(_)),
+            "{d}"
+        );
+        let (off, oplan, _) = render_src(&src, disabling(e));
+        assert_eq!(oplan.decision(e).unwrap().why, Why::Disabled);
+        let changed = auto.iter().zip(&off).filter(|(a, b)| a != b).count();
+        println!(
+            "--disable {}: {changed} of {} pixels change",
+            e.name(),
+            auto.len()
+        );
+        assert!(changed > 0, "disabling {} changed nothing", e.name());
+    }
+}
+
+/// Global illumination asked off (`--gi off` on a photon-mapped scene) rules out the caustic map
+/// and final gathering: forced on, each says it does nothing, and no pixel changes.
+#[test]
+fn effects_of_global_illumination_asked_off_change_nothing_when_forced() {
+    let off = |mut o: Overrides| {
+        o.disable.push(Effect::PhotonMaps);
+        o
+    };
+    let (auto, plan, _) = render_src(PLAIN, off(Overrides::default()));
+    assert_eq!(plan.integrator, Integrator::Whitted);
+    for e in [Effect::Caustics, Effect::FinalGathering] {
+        let (forced, fplan, _) = render_src(PLAIN, off(forcing(e)));
+        assert!(
+            matches!(fplan.decision(e).unwrap().why, Why::ForcedInVain(_)),
+            "{:?}",
+            fplan.decision(e)
+        );
+        assert!(auto == forced, "forcing {} changed the image", e.name());
+    }
+}
+
+/// Whether a course scene gets global illumination is a choice of lighting model, not an
+/// absence: an A4 scene (no power or num_photons) is planned without photon maps, and forcing
+/// them on replaces its ambient term with photon-mapped light, so the image changes.
+#[test]
+fn global_illumination_on_an_a4_scene_is_a_lighting_model() {
+    let a4 = PLAIN.replace("nil, 3000", "");
+    let a4 = a4.replace("{1, 0, 0}, )", "{1, 0, 0})");
+    let (ambient, plan, _) = render_src(&a4, Overrides::default());
+    assert_eq!(
+        plan.decision(Effect::PhotonMaps).unwrap().why,
+        Why::NoLightAsks
+    );
+    let (photons, fplan, _) = render_src(&a4, forcing(Effect::PhotonMaps));
+    assert_eq!(fplan.integrator, Integrator::PhotonMap);
+    assert!(ambient != photons);
+}
+
+/// The specular depth follows the scene: none without a specular surface, the default for one
+/// glass ball, and two crossings per layer (plus two) for eight nested glass shells.
+#[test]
+fn the_specular_depth_follows_nested_dielectrics() {
+    use caustic::integrator::plan::DepthWhy;
+    let none = Overrides::default();
+    let diffuse = plan_with(
+        &scene("scenes/validate/cornell_diffuse.lua"),
+        GiMode::Auto,
+        &none,
+        true,
+    );
+    assert_eq!(
+        (diffuse.features.specular_depth, diffuse.depth_why),
+        (0, DepthWhy::NoSpecular)
+    );
+    let glass = plan_with(
+        &scene("scenes/validate/cornell_glass.lua"),
+        GiMode::Auto,
+        &none,
+        true,
+    );
+    assert_eq!(
+        (glass.features.specular_depth, glass.depth_why),
+        (12, DepthWhy::Default(1))
+    );
+    let mut src = String::from(
+        "glass = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)
+         root = gr.node('root')\n",
+    );
+    for k in 0..8 {
+        src += &format!(
+            "s{k} = gr.nh_sphere('s{k}', {{0, 0, 0}}, {}); s{k}:set_material(glass); root:add_child(s{k})\n",
+            1.0 - 0.1 * k as f32
+        );
+    }
+    src += "gr.render(root, 'x.png', 4, 4, {0, 0, 5}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0},
+              {gr.light({0, 3, 3}, {1, 1, 1}, {1, 0, 0})})";
+    let d = common::run_lua(&src).unwrap();
+    let shells = plan_with(
+        &build_scene(&d, &d.renders[0]).unwrap(),
+        GiMode::Auto,
+        &none,
+        true,
+    );
+    assert_eq!(
+        (shells.features.specular_depth, shells.depth_why),
+        (18, DepthWhy::Nested(8))
+    );
+    let p = plan_with(
+        &build_scene(&d, &d.renders[0]).unwrap(),
+        GiMode::Auto,
+        &disabling(Effect::Refraction),
+        true,
+    );
+    assert_eq!(
+        p.features.specular_depth, 0,
+        "opaque black shells: nothing specular"
     );
 }

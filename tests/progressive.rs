@@ -131,7 +131,7 @@ fn mse_and_mean(film: &Film, reference: &[f32]) -> (f64, f64) {
 /// SPPM's α = 1/3 as −1/6; a wrong power or kernel normalisation moves the mean.
 #[test]
 fn progressive_error_falls_at_the_predicted_rate_and_converges_to_the_closed_form() {
-    let (scene, camera) = mirror_scene();
+    let (mut scene, camera) = mirror_scene();
     let reference = mirror_reference(&camera);
     let ref_mean = reference.iter().map(|&r| r as f64).sum::<f64>() / reference.len() as f64;
     let seeds = 6;
@@ -149,7 +149,7 @@ fn progressive_error_falls_at_the_predicted_rate_and_converges_to_the_closed_for
         );
         let snapshots = Snapshots::default();
         let window = Window::full(SIDE, SIDE);
-        let (_, stats) = caustic::frame::render(&scene, &camera, window, &settings, &snapshots);
+        let (_, stats) = caustic::frame::render(&mut scene, &camera, window, &settings, &snapshots);
         assert_eq!(stats.plan.integrator, Integrator::Progressive);
         let snaps = snapshots.0.into_inner().unwrap();
         for (k, &n) in checkpoints.iter().enumerate() {
@@ -191,7 +191,7 @@ fn progressive_error_falls_at_the_predicted_rate_and_converges_to_the_closed_for
 /// stops is within a factor 1.5 of the target either way, and it stopped for that reason.
 #[test]
 fn target_error_stops_near_the_error_it_asks_for() {
-    let (scene, camera) = mirror_scene();
+    let (mut scene, camera) = mirror_scene();
     let reference = mirror_reference(&camera);
     let ref_mean = reference.iter().map(|&r| r as f64).sum::<f64>() / reference.len() as f64;
     for target in [0.02, 0.01] {
@@ -206,7 +206,7 @@ fn target_error_stops_near_the_error_it_asks_for() {
             );
             let window = Window::full(SIDE, SIDE);
             let (film, stats) =
-                caustic::frame::render(&scene, &camera, window, &settings, &NoProgress);
+                caustic::frame::render(&mut scene, &camera, window, &settings, &NoProgress);
             let p = stats.progressive.unwrap();
             assert_eq!(p.stop, Stop::TargetError, "target {target}");
             let actual = mse_and_mean(&film, &reference).0.sqrt() / ref_mean;
@@ -229,7 +229,7 @@ fn target_error_stops_near_the_error_it_asks_for() {
 /// two.
 #[test]
 fn time_budget_stops_the_render() {
-    let (scene, camera) = mirror_scene();
+    let (mut scene, camera) = mirror_scene();
     let settings = mirror_settings(
         3,
         ProgressiveSettings {
@@ -239,7 +239,7 @@ fn time_budget_stops_the_render() {
         },
     );
     let window = Window::full(SIDE, SIDE);
-    let (_, stats) = caustic::frame::render(&scene, &camera, window, &settings, &NoProgress);
+    let (_, stats) = caustic::frame::render(&mut scene, &camera, window, &settings, &NoProgress);
     let p = stats.progressive.unwrap();
     assert_eq!(p.stop, Stop::TimeBudget);
     assert!(p.passes >= 1 && p.passes < 1 << 20, "{} passes", p.passes);
@@ -334,7 +334,7 @@ fn peak_memory_does_not_grow_with_passes() {
 fn progressive_renders_are_deterministic_across_threads_and_tiles() {
     let d = run_lua(GLASS_BOX).unwrap();
     let r = &d.renders[0];
-    let scene = build_scene(&d, r).unwrap();
+    let mut scene = build_scene(&d, r).unwrap();
     let camera = Camera::new(&r.camera, r.width, r.height);
     let settings = Settings {
         photons: GiSettings {
@@ -351,12 +351,14 @@ fn progressive_renders_are_deterministic_across_threads_and_tiles() {
         sampling: Sampling::Stratified { spp: 1 },
         ..Settings::default()
     };
-    let render = |threads: usize, window: Window| {
+    let mut render = |threads: usize, window: Window| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| caustic::frame::render(&scene, &camera, window, &settings, &NoProgress).0)
+        pool.install(|| {
+            caustic::frame::render(&mut scene, &camera, window, &settings, &NoProgress).0
+        })
     };
     let full = Window::full(32, 32);
     let one = render(1, full);

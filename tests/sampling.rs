@@ -37,7 +37,7 @@ fn flat_scene() -> (Scene, Camera, u32, u32) {
 }
 
 fn render(
-    scene: &Scene,
+    scene: &mut Scene,
     camera: &Camera,
     w: u32,
     h: u32,
@@ -65,7 +65,7 @@ fn rmse(a: &Film, b: &Film, pixels: impl Iterator<Item = usize>) -> f64 {
 
 #[test]
 fn cropped_windows_equal_the_full_render() {
-    let (scene, camera, w, h) = flat_scene();
+    let (mut scene, camera, w, h) = flat_scene();
     for sampling in [
         Sampling::Stratified { spp: 4 },
         Sampling::Adaptive {
@@ -73,7 +73,7 @@ fn cropped_windows_equal_the_full_render() {
             max_depth: 3,
         },
     ] {
-        let full = render(&scene, &camera, w, h, sampling.clone(), None);
+        let full = render(&mut scene, &camera, w, h, sampling.clone(), None);
         let win = Window {
             x0: 17,
             y0: 9,
@@ -82,7 +82,7 @@ fn cropped_windows_equal_the_full_render() {
             full_width: w,
             full_height: h,
         };
-        let crop = render(&scene, &camera, w, h, sampling.clone(), Some(win));
+        let crop = render(&mut scene, &camera, w, h, sampling.clone(), Some(win));
         for y in win.y0..win.y1 {
             for x in win.x0..win.x1 {
                 assert_eq!(
@@ -97,18 +97,25 @@ fn cropped_windows_equal_the_full_render() {
 
 #[test]
 fn adaptive_sampling_beats_uniform_supersampling_at_equal_error() {
-    let (scene, camera, w, h) = flat_scene();
+    let (mut scene, camera, w, h) = flat_scene();
     let reference = render(
-        &scene,
+        &mut scene,
         &camera,
         w,
         h,
         Sampling::Stratified { spp: 400 },
         None,
     );
-    let centre = render(&scene, &camera, w, h, Sampling::Stratified { spp: 1 }, None);
+    let centre = render(
+        &mut scene,
+        &camera,
+        w,
+        h,
+        Sampling::Stratified { spp: 1 },
+        None,
+    );
     let adaptive = render(
-        &scene,
+        &mut scene,
         &camera,
         w,
         h,
@@ -124,7 +131,14 @@ fn adaptive_sampling_beats_uniform_supersampling_at_equal_error() {
     // The cheapest uniform rate whose error is as low as the adaptive render's.
     let mut uniform = None;
     for spp in [1u32, 2, 4, 6, 9, 12, 16, 25, 36, 49, 64] {
-        let film = render(&scene, &camera, w, h, Sampling::Stratified { spp }, None);
+        let film = render(
+            &mut scene,
+            &camera,
+            w,
+            h,
+            Sampling::Stratified { spp },
+            None,
+        );
         if rmse(&film, &reference, all()) <= adaptive_err {
             uniform = Some(spp);
             break;
@@ -359,9 +373,9 @@ fn default_pixels_average_their_area() {
     );
     let d = run_lua(&src).unwrap();
     let r = &d.renders[0];
-    let scene = build_scene(&d, r).unwrap();
-    let share = |settings: &Settings| {
-        let film = common::render_scene(&scene, &camera, w, h, settings);
+    let mut scene = build_scene(&d, r).unwrap();
+    let mut share = |settings: &Settings| {
+        let film = common::render_scene(&mut scene, &camera, w, h, settings);
         let mut sum = 0.0;
         for y in 0..h {
             // The wall's share: 1 where the pixel is all wall (its left neighbour), 0 all sky.

@@ -177,13 +177,13 @@ fn area_light_irradiance_matches_quadrature_and_casts_soft_shadows() {
     "#;
     let d = common::run_lua(src).unwrap();
     let r = &d.renders[0];
-    let scene = caustic::scene::build::build_scene(&d, r).unwrap();
+    let mut scene = caustic::scene::build::build_scene(&d, r).unwrap();
     let camera = caustic::camera::Camera::new(&r.camera, r.width, r.height);
     let settings = caustic::integrator::Settings {
         light_samples: 1024,
         ..common::whitted()
     };
-    let film = common::render_scene(&scene, &camera, r.width, r.height, &settings);
+    let film = common::render_scene(&mut scene, &camera, r.width, r.height, &settings);
     // Irradiance at floor point p from the light (radiance I/A = 1), by a 200×200 midpoint rule.
     let quadrature = |p: Vec3A| {
         let n = 200;

@@ -43,7 +43,7 @@ fn furnace(kd: [f32; 3], photons: u32) -> (Scene, Camera) {
 
 /// Returns the mean red radiance over the furnace image rendered with `indirect` (final
 /// gathering forced on or off to match, as `--force` and `--disable` do).
-fn mean_radiance(scene: &Scene, camera: &Camera, indirect: Indirect) -> f64 {
+fn mean_radiance(scene: &mut Scene, camera: &Camera, indirect: Indirect) -> f64 {
     let gathering = vec![Effect::FinalGathering];
     let overrides = match indirect {
         Indirect::Gather { .. } => Overrides {
@@ -80,10 +80,10 @@ fn mean_radiance(scene: &Scene, camera: &Camera, indirect: Indirect) -> f64 {
 fn white_furnace_matches_the_closed_form_in_both_indirect_modes() {
     let mut report = Vec::new();
     for (a, photons) in [(0.5f32, 400_000), (0.9, 200_000)] {
-        let (scene, camera) = furnace([a; 3], photons);
+        let (mut scene, camera) = furnace([a; 3], photons);
         let want = (a / (1.0 - a)) as f64;
         for indirect in [Indirect::Gather { rays: 64 }, Indirect::Direct] {
-            let got = mean_radiance(&scene, &camera, indirect);
+            let got = mean_radiance(&mut scene, &camera, indirect);
             let err = got / want - 1.0;
             if err.abs() > 0.01 {
                 report.push(format!(
@@ -142,7 +142,7 @@ fn white_furnace_matches_the_closed_form_with_the_progressive_integrator() {
     use caustic::integrator::progressive::ProgressiveSettings;
     let mut report = Vec::new();
     for a in [0.5f32, 0.9] {
-        let (scene, camera) = furnace([a; 3], 50_000);
+        let (mut scene, camera) = furnace([a; 3], 50_000);
         let want = (a / (1.0 - a)) as f64;
         for indirect in [Indirect::Gather { rays: 16 }, Indirect::Direct] {
             let settings = Settings {
@@ -159,7 +159,7 @@ fn white_furnace_matches_the_closed_form_with_the_progressive_integrator() {
             };
             let window = Window::full(SIZE, SIZE);
             let (film, stats) =
-                caustic::frame::render(&scene, &camera, window, &settings, &NoProgress);
+                caustic::frame::render(&mut scene, &camera, window, &settings, &NoProgress);
             assert_eq!(stats.plan.integrator, Integrator::Progressive);
             assert!(film.pixels.iter().all(|p| p.is_finite()));
             let got =

@@ -204,11 +204,14 @@ pub struct RenderArgs {
     /// Progressive: write the running image to the output every K passes.
     #[arg(long, value_name = "K")]
     pub write_every: Option<u32>,
-    /// Simulate EFFECT whatever the plan decides: photon-maps, caustics or final-gathering
-    /// (repeatable; `caustic info` and --stats print the plan and its reasons).
+    /// Simulate EFFECT whatever the plan decides: photon-maps, caustics, final-gathering,
+    /// refraction, soft-shadows, textures, normal-maps or noise (repeatable; `caustic info`
+    /// and --stats print the plan and its reasons).
     #[arg(long, value_name = "EFFECT", value_parser = parse_effect)]
     pub force: Vec<Effect>,
-    /// Do not simulate EFFECT: photon-maps, caustics or final-gathering (repeatable).
+    /// Do not simulate EFFECT: photon-maps, caustics, final-gathering, refraction (transparent
+    /// surfaces turn opaque), soft-shadows (area lights sampled at their centre), textures,
+    /// normal-maps or noise (repeatable).
     #[arg(long, value_name = "EFFECT", value_parser = parse_effect)]
     pub disable: Vec<Effect>,
     /// Photons for the global map, shared by lights without num_photons in proportion to their
@@ -950,7 +953,7 @@ fn info_command(args: InfoArgs) -> Result<()> {
             (settings, "the scene's gr.settings")
         };
         let scene = build_scene(&desc, r)?;
-        let plan = crate::integrator::plan(&scene, settings.gi);
+        let plan = crate::integrator::plan::plan_for(&scene, &settings);
         println!("  plan of render {} ({which}):", i + 1);
         for line in plan.lines() {
             println!("    {line}");

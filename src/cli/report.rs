@@ -175,7 +175,7 @@ pub fn print_stats(
         rstats.material_time.as_secs_f64(),
         100.0 * rstats.material_time.as_secs_f64() / busy.max(1e-9)
     );
-    println!("  plan: {}", frame.stats.plan.lines().join("; "));
+    print_plan(frame, secs);
     if let Some(photons) = &frame.stats.photons {
         print_photon_stats(photons, rstats);
     }
@@ -196,6 +196,53 @@ pub fn print_stats(
     }
     if let Some(kib) = crate::mem::peak_resident_kib() {
         println!("  peak resident memory: {:.1} MiB", kib as f64 / 1024.0);
+    }
+}
+
+/// Prints the plan, each decision with the time of the phases it ran (the camera pass, `secs`,
+/// runs every one that shades).
+fn print_plan(frame: &crate::frame::Frame, secs: f64) {
+    use crate::integrator::plan::Effect;
+    let plan = &frame.stats.plan;
+    let (r, photons) = (&frame.stats.render, frame.stats.photons.as_ref());
+    let s = |d: std::time::Duration| d.as_secs_f64();
+    println!("  plan, with the phases each decision runs:");
+    for d in &plan.decisions {
+        let phase = match (d.effect, d.on, photons) {
+            (Effect::PhotonMaps, true, Some(p)) => format!(
+                "; global map traced and built in {:.3} s",
+                s(p.trace_time + p.build_time - p.caustic_time)
+            ),
+            (Effect::Caustics, true, Some(p)) => {
+                format!(
+                    "; caustic map traced and built in {:.3} s",
+                    s(p.caustic_time)
+                )
+            }
+            (Effect::FinalGathering, true, Some(p)) => format!(
+                "; precomputation points {:.3} s, irradiance cache {:.3} s, {} gathers in the camera pass",
+                s(p.precompute_time),
+                p.cache.as_ref().map_or(0.0, |c| s(c.time)),
+                r.gathered
+            ),
+            (Effect::SoftShadows, true, _) => {
+                format!("; {} shadow rays in the camera pass", r.shadow_rays)
+            }
+            (Effect::Textures | Effect::NormalMaps | Effect::Noise, true, _) => format!(
+                "; materials (textures, maps and noise together) {:.3} s of thread time in the camera pass",
+                s(r.material_time)
+            ),
+            _ => String::new(),
+        };
+        println!("    {d}{phase}");
+    }
+    println!(
+        "    specular depth: {} ({})",
+        plan.features.specular_depth, plan.depth_why
+    );
+    println!("    camera pass: {secs:.3} s");
+    for note in &plan.notes {
+        println!("    {note}");
     }
 }
 

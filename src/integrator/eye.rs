@@ -39,8 +39,9 @@ use crate::scene::interaction::{Interaction, Needs};
 use crate::stats::RayCounts;
 use glam::Vec3A;
 
-/// Deepest chain of reflections and refractions followed by deterministic splitting; deeper
-/// paths go on by Russian roulette.
+/// Deepest chain of reflections and refractions followed by deterministic splitting by default;
+/// deeper paths go on by Russian roulette. The plan deepens it for scenes of many nested
+/// dielectric layers ([`super::plan`]).
 pub const MAX_DEPTH: u32 = 12;
 /// Deepest chain followed at all, even under roulette (a closed box of perfect mirrors never
 /// loses weight).
@@ -72,9 +73,10 @@ impl PathState {
         }
     }
 
-    /// Returns whether the path still splits deterministically over lobes (else: roulette).
-    fn splits(&self) -> bool {
-        self.depth < MAX_DEPTH
+    /// Returns whether the path still splits deterministically over lobes (else: roulette), for
+    /// a scene whose plan splits `depth` specular bounces deep.
+    fn splits(&self, depth: u32) -> bool {
+        self.depth < depth
     }
 
     /// Decides by Russian roulette whether a path beyond [`MAX_DEPTH`] goes on into a child of
@@ -180,7 +182,7 @@ impl Tracer<'_> {
             if let Some(crossing) = it.bsdf.crossing(&state.media) {
                 if crossing.is_false() {
                     // The boundary of a solid inside a denser one: no surface here, go straight on.
-                    let q = if state.splits() {
+                    let q = if state.splits(self.scene.features.specular_depth) {
                         1.0
                     } else {
                         match state.roulette(1.0, rng, counts) {
@@ -212,14 +214,19 @@ impl Tracer<'_> {
             return colour;
         }
         for light in &self.scene.lights {
-            let samples = if light.is_area() {
+            let soft = light.is_area() && self.scene.features.soft_shadows;
+            let samples = if soft {
                 stratified_2d(rng, self.light_samples)
             } else {
                 vec![(0.5, 0.5)]
             };
             let mut sum = Vec3A::ZERO;
             for &u in &samples {
-                let ls = light.sample(p, u);
+                let ls = if soft {
+                    light.sample(p, u)
+                } else {
+                    light.centre_sample(p)
+                };
                 let to_light = ls.position - p;
                 let d = to_light.length();
                 if d == 0.0 || ls.intensity == Vec3A::ZERO {
@@ -271,7 +278,7 @@ impl Tracer<'_> {
         if !mat.is_reflective() {
             return colour;
         }
-        let q = if state.splits() {
+        let q = if state.splits(self.scene.features.specular_depth) {
             (state.weight * weight > MIN_WEIGHT).then_some(1.0)
         } else {
             state.roulette(weight, rng, counts)
@@ -301,7 +308,7 @@ impl Tracer<'_> {
         let (p, ng) = (it.surf.p, it.bsdf.ng);
         let split = it.bsdf.dielectric(crossing);
         let f = split.f;
-        if !state.splits() {
+        if !state.splits(self.scene.features.specular_depth) {
             return self.dielectric_lobe(it, crossing, &split, state, rng, counts);
         }
         let mut out = Vec3A::ZERO;

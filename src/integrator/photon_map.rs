@@ -232,8 +232,11 @@ pub struct GiStats {
     /// Bytes each map owns ([`PhotonMap::bytes`]).
     pub global_bytes: usize,
     pub caustic_bytes: usize,
+    /// Tracing and kd-tree building of both maps.
     pub trace_time: Duration,
     pub build_time: Duration,
+    /// Of those, the caustic map's tracing and building.
+    pub caustic_time: Duration,
     /// Time to make the map of precomputation points (zero without), and how many it holds.
     pub precompute_time: Duration,
     pub precomputed_points: usize,
@@ -417,11 +420,13 @@ impl Gi {
             let (map, trace, build) = trace_and_build(scene, settings, MapKind::Caustic, progress);
             trace_time += trace;
             build_time += build;
-            map
+            (map, trace + build)
         });
-        let mut gi = Gi::of_maps(scene, settings, global, caustic);
+        let caustic_time = caustic.as_ref().map_or(Duration::ZERO, |c| c.1);
+        let mut gi = Gi::of_maps(scene, settings, global, caustic.map(|c| c.0));
         gi.stats.trace_time = trace_time;
         gi.stats.build_time = build_time;
+        gi.stats.caustic_time = caustic_time;
         gi
     }
 

@@ -11,7 +11,20 @@
 //!   or a dielectric): without one no photon path light → specular → diffuse exists.
 //! - **final gathering** when photon maps are on and `--indirect gather` (the default); with
 //!   `--indirect direct` the global map is seen directly.
-//! - soft shadows only for area and sphere lights (reported; the lights decide it).
+//! - **refraction** (Fresnel splitting and media tracking) only when a placed material is
+//!   transparent; **textures**, **normal maps** (bump and normal maps) and **noise** (Perlin
+//!   normals) only when a placed material has one. The hits are shaded by a kernel compiled
+//!   without the effects that are off ([`crate::scene::Features`], `Scene::interaction`): their
+//!   code is not reached, rather than skipped by a check at every ray. Disabling one that the
+//!   scene has removes it from the materials ([`Scene::apply`]).
+//! - **soft shadows** only for area and sphere lights; disabled, those are sampled at their
+//!   centre (hard shadows; their photons still leave the whole surface).
+//! - **adaptive** refinement when `--adaptive` asks (reported: the sampler refines only where
+//!   neighbouring corners differ).
+//! - the **specular depth** eye paths split over: 0 without a specular surface, else the
+//!   default [`super::eye::MAX_DEPTH`], deepened to `2·L + 2` for `L` dielectric layers nested
+//!   one inside another (a ray crosses each layer twice on the way through); beyond it paths go
+//!   on by Russian roulette, so the depth trades noise for time, never bias.
 //! - photon counts that follow the image ([`crate::frame::render_desc`], see
 //!   `GiSettings::follow_image`): a preview at a quarter of the script's size traces a sixteenth
 //!   of its photons, unless the command line fixes a count; the reason joins the plan's notes.
@@ -19,15 +32,24 @@
 //! `--force EFFECT` and `--disable EFFECT` overrule the decisions for the effects in
 //! [`Effect::OVERRIDABLE`]; `--gi on|off` is `--force`/`--disable photon-maps`. A forced effect
 //! the scene cannot have is planned on and says why it will do nothing (a caustic map without a
-//! specular surface stays empty).
+//! specular surface stays empty; the general shading kernel finds no texture). Forcing is how
+//! the plan is checked: a scene without an effect renders bit for bit the same with the effect
+//! forced on (tests/plan.rs), so what the plan skips was not needed.
 //!
 //! Each decision is data ([`Decision`]: the effect, on or off, and a typed [`Why`]) rendered as
 //! text by `Display`, so tests and tools read the plan without parsing sentences.
 
 use super::Integrator;
+use super::eye::MAX_DEPTH;
 use crate::photon::trace::specular_targets;
-use crate::scene::Scene;
+use crate::scene::{Features, Scene};
 use std::fmt;
+
+/// Deepest specular depth the plan chooses for nested dielectrics (32 layers).
+pub const MAX_SPECULAR_DEPTH: u32 = 66;
+/// Most transparent instances whose nesting the plan measures (the measure is quadratic);
+/// with more, the default depth stands.
+const MAX_NESTING_INSTANCES: usize = 4096;
 
 /// What `--gi` asks for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,13 +65,26 @@ pub enum Effect {
     PhotonMaps,
     Caustics,
     FinalGathering,
+    Refraction,
     SoftShadows,
+    Textures,
+    NormalMaps,
+    Noise,
+    Adaptive,
 }
 
 impl Effect {
     /// The effects `--force` and `--disable` take.
-    pub const OVERRIDABLE: [Effect; 3] =
-        [Effect::PhotonMaps, Effect::Caustics, Effect::FinalGathering];
+    pub const OVERRIDABLE: [Effect; 8] = [
+        Effect::PhotonMaps,
+        Effect::Caustics,
+        Effect::FinalGathering,
+        Effect::Refraction,
+        Effect::SoftShadows,
+        Effect::Textures,
+        Effect::NormalMaps,
+        Effect::Noise,
+    ];
 
     /// The effect's name on the command line and in the plan.
     pub fn name(self) -> &'static str {
@@ -57,7 +92,22 @@ impl Effect {
             Effect::PhotonMaps => "photon-maps",
             Effect::Caustics => "caustics",
             Effect::FinalGathering => "final-gathering",
+            Effect::Refraction => "refraction",
             Effect::SoftShadows => "soft-shadows",
+            Effect::Textures => "textures",
+            Effect::NormalMaps => "normal-maps",
+            Effect::Noise => "noise",
+            Effect::Adaptive => "adaptive",
+        }
+    }
+
+    /// What a material has when it calls for this effect, for the plan's text.
+    fn material_noun(self) -> &'static str {
+        match self {
+            Effect::Textures => "with a texture",
+            Effect::NormalMaps => "with a bump or normal map",
+            Effect::Noise => "with Perlin noise",
+            _ => "calling for it",
         }
     }
 
@@ -113,6 +163,27 @@ pub enum Why {
     /// This many area or sphere lights.
     AreaLights(usize),
     PointLightsOnly,
+    /// This many placed materials call for the effect (transparent, textured, ...).
+    Materials(usize),
+    /// No placed material calls for it.
+    NoMaterial,
+    /// `--adaptive`.
+    AdaptiveAsked,
+    /// A fixed number of samples per pixel.
+    FixedSamples,
+}
+
+/// Why the plan chose its specular depth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthWhy {
+    /// No surface is specular: no path splits.
+    NoSpecular,
+    /// The default depth covers the scene's nesting of this many dielectric layers.
+    Default(u32),
+    /// This many dielectric layers nest one inside another.
+    Nested(u32),
+    /// Too many transparent instances to measure their nesting.
+    Unmeasured(usize),
 }
 
 /// One decision of the plan.
@@ -142,8 +213,36 @@ impl fmt::Display for Decision {
             Why::DirectVisualisation => "--indirect direct: the global map seen directly".into(),
             Why::AreaLights(n) => format!("{n} area or sphere lights"),
             Why::PointLightsOnly => "point lights only".to_string(),
+            Why::Materials(n) if self.effect == Effect::Refraction => {
+                format!("{n} transparent materials")
+            }
+            Why::Materials(n) => format!("{n} materials {}", self.effect.material_noun()),
+            Why::NoMaterial if self.effect == Effect::Refraction => {
+                "no transparent material".to_string()
+            }
+            Why::NoMaterial => format!("no material {}", self.effect.material_noun()),
+            Why::AdaptiveAsked => "--adaptive".to_string(),
+            Why::FixedSamples => "a fixed number of samples per pixel".to_string(),
         };
         write!(f, "{}: {state} ({why})", self.effect.name())
+    }
+}
+
+impl fmt::Display for DepthWhy {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DepthWhy::NoSpecular => write!(f, "no specular surface: no path splits"),
+            DepthWhy::Default(l) => write!(
+                f,
+                "the default; {l} nested dielectric layers need at most {}",
+                2 * l + 2
+            ),
+            DepthWhy::Nested(l) => write!(f, "{l} nested dielectric layers, crossed twice each"),
+            DepthWhy::Unmeasured(n) => write!(
+                f,
+                "the default; {n} transparent instances are too many to measure their nesting"
+            ),
+        }
     }
 }
 
@@ -156,6 +255,10 @@ pub struct Plan {
     pub caustics: bool,
     /// Whether the photon-mapping integrator gathers (else it shows the global map directly).
     pub final_gathering: bool,
+    /// The shading effects and specular depth the passes simulate ([`Scene::apply`]).
+    pub features: Features,
+    /// Why the specular depth is `features.specular_depth`.
+    pub depth_why: DepthWhy,
     pub decisions: Vec<Decision>,
     /// What else the frame changed and why (photon counts following the image).
     pub notes: Vec<String>,
@@ -165,7 +268,20 @@ impl Plan {
     /// Returns the decisions and notes as text, one per item.
     pub fn lines(&self) -> Vec<String> {
         let decisions = self.decisions.iter().map(ToString::to_string);
-        decisions.chain(self.notes.iter().cloned()).collect()
+        let depth = format!(
+            "specular depth: {} ({})",
+            self.features.specular_depth, self.depth_why
+        );
+        let notes = self.notes.iter().cloned();
+        decisions
+            .chain(std::iter::once(depth))
+            .chain(notes)
+            .collect()
+    }
+
+    /// Returns the decision about `effect`.
+    pub fn decision(&self, effect: Effect) -> Option<&Decision> {
+        self.decisions.iter().find(|d| d.effect == effect)
     }
 }
 
@@ -182,9 +298,24 @@ pub fn plan_for(scene: &Scene, settings: &super::Settings) -> Plan {
         settings.photons.indirect,
         super::photon_map::Indirect::Gather { .. }
     );
-    if settings.progressive.is_none() {
-        return plan_with(scene, settings.gi, &settings.overrides, gather);
+    let mut plan = if settings.progressive.is_none() {
+        plan_with(scene, settings.gi, &settings.overrides, gather)
+    } else {
+        progressive_plan(scene, settings, gather)
+    };
+    if let crate::render::Sampling::Adaptive { .. } = settings.sampling
+        && let Some(d) = plan
+            .decisions
+            .iter_mut()
+            .find(|d| d.effect == Effect::Adaptive)
+    {
+        (d.on, d.why) = (true, Why::AdaptiveAsked);
     }
+    plan
+}
+
+/// Returns the plan of a progressive render: photon maps on unless disabled.
+fn progressive_plan(scene: &Scene, settings: &super::Settings, gather: bool) -> Plan {
     let mut plan = plan_with(scene, GiMode::On, &settings.overrides, gather);
     if let Some(d) = plan
         .decisions
@@ -263,15 +394,64 @@ pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: boo
         why,
     });
     let area = scene.lights.iter().filter(|l| l.is_area()).count();
+    let auto = if area > 0 {
+        (true, Why::AreaLights(area))
+    } else {
+        (false, Why::PointLightsOnly)
+    };
+    let (soft_shadows, mut why) = decide(Effect::SoftShadows, auto);
+    if soft_shadows && area == 0 {
+        why = Why::ForcedInVain("point lights only: there is no area to soften shadows over");
+    }
     decisions.push(Decision {
         effect: Effect::SoftShadows,
-        on: area > 0,
-        why: if area > 0 {
-            Why::AreaLights(area)
-        } else {
-            Why::PointLightsOnly
-        },
+        on: soft_shadows,
+        why,
     });
+    let materials = scene.placed_materials();
+    let mut material_effect = |effect, has: &dyn Fn(&crate::material::Material) -> bool, vain| {
+        let n = materials.iter().filter(|m| has(m)).count();
+        let auto = if n > 0 {
+            (true, Why::Materials(n))
+        } else {
+            (false, Why::NoMaterial)
+        };
+        let (on, mut why) = decide(effect, auto);
+        if on && n == 0 {
+            why = Why::ForcedInVain(vain);
+        }
+        decisions.push(Decision { effect, on, why });
+        on
+    };
+    let refraction = material_effect(
+        Effect::Refraction,
+        &|m| m.transparency > 0.0,
+        "no material is transparent: nothing refracts",
+    );
+    let textures = material_effect(
+        Effect::Textures,
+        &|m| m.texture.is_some(),
+        "no material has a texture: the general kernel looks for one and finds none",
+    );
+    let normal_maps = material_effect(
+        Effect::NormalMaps,
+        &|m| m.bump.is_some(),
+        "no material has a bump or normal map: the general kernel finds none",
+    );
+    let noise = material_effect(
+        Effect::Noise,
+        &|m| m.perlin_scale > 0.0,
+        "no material has Perlin noise: the general kernel finds none",
+    );
+    decisions.push(Decision {
+        effect: Effect::Adaptive,
+        on: false,
+        why: Why::FixedSamples,
+    });
+    let specular = materials
+        .iter()
+        .any(|m| m.is_reflective() || (refraction && m.transparency > 0.0));
+    let (specular_depth, depth_why) = specular_depth(scene, specular && refraction, specular);
     Plan {
         integrator: if photon_maps {
             Integrator::PhotonMap
@@ -280,7 +460,62 @@ pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: boo
         },
         caustics: caustics && photon_maps,
         final_gathering,
+        features: Features {
+            textures,
+            normal_maps,
+            noise,
+            refraction,
+            soft_shadows,
+            specular_depth,
+        },
+        depth_why,
         decisions,
         notes: Vec::new(),
     }
+}
+
+/// Returns the depth eye paths split over and why: 0 when no surface is specular; else
+/// [`MAX_DEPTH`], or `2·L + 2` when `L` transparent instances nest one inside another (by their
+/// world boxes) and that is deeper; at most [`MAX_SPECULAR_DEPTH`]. `dielectrics` is whether
+/// transparent materials refract.
+fn specular_depth(scene: &Scene, dielectrics: bool, specular: bool) -> (u32, DepthWhy) {
+    if !specular {
+        return (0, DepthWhy::NoSpecular);
+    }
+    let boxes: Vec<crate::accel::Bounds> = if dielectrics {
+        scene.transparent.iter().map(|t| t.1).collect()
+    } else {
+        Vec::new()
+    };
+    if boxes.len() > MAX_NESTING_INSTANCES {
+        return (MAX_DEPTH, DepthWhy::Unmeasured(boxes.len()));
+    }
+    let layers = nesting(&boxes);
+    let need = (2 * layers + 2).min(MAX_SPECULAR_DEPTH);
+    if need > MAX_DEPTH {
+        (need, DepthWhy::Nested(layers))
+    } else {
+        (MAX_DEPTH, DepthWhy::Default(layers))
+    }
+}
+
+/// Returns the longest chain of boxes each strictly inside the one before.
+fn nesting(boxes: &[crate::accel::Bounds]) -> u32 {
+    let inside = |a: &crate::accel::Bounds, b: &crate::accel::Bounds| {
+        a.min.cmpge(b.min).all() && a.max.cmple(b.max).all() && a != b
+    };
+    // Larger boxes first: a box can only be inside one that comes before it.
+    let mut order: Vec<usize> = (0..boxes.len()).collect();
+    let volume =
+        |b: &crate::accel::Bounds| (b.max - b.min).max(glam::Vec3A::ZERO).element_product();
+    order.sort_by(|&a, &b| volume(&boxes[b]).total_cmp(&volume(&boxes[a])));
+    let mut chain = vec![1u32; boxes.len()];
+    for i in 0..order.len() {
+        for j in 0..i {
+            if inside(&boxes[order[i]], &boxes[order[j]]) {
+                chain[i] = chain[i].max(chain[j] + 1);
+            }
+        }
+    }
+    chain.into_iter().max().unwrap_or(0)
 }

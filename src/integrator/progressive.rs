@@ -333,6 +333,7 @@ fn add_photon_stats(total: &mut GiStats, pass: &GiStats) {
     total.caustic_bytes = total.caustic_bytes.max(pass.caustic_bytes);
     total.trace_time += pass.trace_time;
     total.build_time += pass.build_time;
+    total.caustic_time += pass.caustic_time;
 }
 
 /// The running sums of a progressive render: all passes, and the even and the odd ones apart.

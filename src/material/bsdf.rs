@@ -112,9 +112,31 @@ impl<'a> Bsdf<'a> {
     /// texture applied and, when `bend` is set, the shading normal bent by the bump map and noise
     /// (lookups that read only `kd` and the geometric normal skip it).
     pub fn new(material: &'a Material, surf: &SurfaceHit, wo: Vec3A, bend: bool) -> Bsdf<'a> {
-        let kd = material.diffuse(surf.uv);
-        let ns = if bend && material.perturbs_normals() {
-            material.shading_normal(surf.ns, surf.ng, surf.p, surf.uv, surf.dpdu)
+        if bend {
+            Bsdf::kernel::<true, true, true>(material, surf, wo)
+        } else {
+            Bsdf::kernel::<true, false, false>(material, surf, wo)
+        }
+    }
+
+    /// [`Bsdf::new`] compiled for the effects a scene's plan keeps ([`crate::scene::Features`]):
+    /// the texture lookup only with `TEX`, the bump map only with `BUMP`, Perlin noise only with
+    /// `NOISE`. A kernel without an effect gives the same BSDF as the general one wherever no
+    /// material has the effect (tests/plan.rs renders both, bit for bit).
+    pub fn kernel<const TEX: bool, const BUMP: bool, const NOISE: bool>(
+        material: &'a Material,
+        surf: &SurfaceHit,
+        wo: Vec3A,
+    ) -> Bsdf<'a> {
+        let kd = if TEX {
+            material.diffuse(surf.uv)
+        } else {
+            material.kd
+        };
+        let bends = (BUMP && material.bump.is_some()) || (NOISE && material.perlin_scale > 0.0);
+        let ns = if bends {
+            material
+                .shading_normal_with::<BUMP, NOISE>(surf.ns, surf.ng, surf.p, surf.uv, surf.dpdu)
         } else {
             surf.ns
         };

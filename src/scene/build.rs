@@ -97,6 +97,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         tlas,
         stats,
         transparent: Vec::new(),
+        features: super::types::Features::GENERAL,
     };
     scene.transparent = scene
         .instances

@@ -38,7 +38,7 @@ impl Scene {
         let material = &self.materials[surf.material as usize];
         let wo = -ray.dir.normalize();
         let start = clock.is_some().then(std::time::Instant::now);
-        let mut bsdf = Bsdf::new(material, &surf, wo, needs == Needs::Full);
+        let mut bsdf = self.kernel(needs)(material, &surf, wo);
         // Only where a second transparent solid exists can one touch this surface.
         if material.transparency > 0.0 && self.transparent.len() > 1 {
             bsdf.touching = self.touching(ray, hit);
@@ -48,4 +48,24 @@ impl Scene {
         }
         Interaction { surf, bsdf }
     }
+
+    /// Returns the BSDF kernel for hits that need `needs`, compiled without the shading effects
+    /// the plan left out ([`crate::scene::Features`]): one choice per hit among eight
+    /// instances, instead of a check per effect.
+    fn kernel<'a>(&self, needs: Needs) -> Kernel<'a> {
+        let f = self.features;
+        let bend = needs == Needs::Full;
+        macro_rules! pick {
+            ($($t:literal, $b:literal, $n:literal);*) => {
+                match (f.textures, bend && f.normal_maps, bend && f.noise) {
+                    $(($t, $b, $n) => Bsdf::kernel::<$t, $b, $n>,)*
+                }
+            };
+        }
+        pick!(true, true, true; true, true, false; true, false, true; true, false, false;
+              false, true, true; false, true, false; false, false, true; false, false, false)
+    }
 }
+
+/// A BSDF kernel ([`Bsdf::kernel`]).
+type Kernel<'a> = fn(&'a crate::material::Material, &SurfaceHit, glam::Vec3A) -> Bsdf<'a>;

@@ -15,4 +15,4 @@ pub mod query;
 pub mod types;
 
 pub use build::build_scene;
-pub use types::{Instance, Scene, Shape};
+pub use types::{Features, Instance, Scene, Shape};

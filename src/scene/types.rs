@@ -89,9 +89,82 @@ pub struct Scene {
     /// fewer than two, no two transparent solids can touch and [`Scene::touching`] is skipped;
     /// otherwise it runs only at hits inside another one's bounds.
     pub transparent: Vec<(u32, Bounds)>,
+    /// What of its materials and lights the passes simulate: the effect plan's choice, applied
+    /// by [`Scene::apply`] before any pass runs; [`Features::GENERAL`] until then.
+    pub features: Features,
+}
+
+/// The parts of shading the effect plan can leave out ([`crate::integrator::plan`]). Each hit is
+/// shaded by a kernel compiled for these flags ([`Scene::interaction`]), so the code of an effect
+/// that is off is not reached at all, rather than skipped by a check at every ray.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Features {
+    /// Colour maps replace `kd`.
+    pub textures: bool,
+    /// Bump and normal maps bend the shading normal.
+    pub normal_maps: bool,
+    /// Perlin noise bends the shading normal.
+    pub noise: bool,
+    /// Transparent materials refract (else they are opaque: `t = 0`).
+    pub refraction: bool,
+    /// Area and sphere lights are sampled over their surface (else at their centre: hard
+    /// shadows).
+    pub soft_shadows: bool,
+    /// Deepest chain of specular bounces an eye path splits deterministically over; deeper, it
+    /// goes on by Russian roulette ([`crate::integrator::eye`]).
+    pub specular_depth: u32,
+}
+
+impl Features {
+    /// Everything on, at the fixed depth: the kernel that handles any material.
+    pub const GENERAL: Features = Features {
+        textures: true,
+        normal_maps: true,
+        noise: true,
+        refraction: true,
+        soft_shadows: true,
+        specular_depth: crate::integrator::eye::MAX_DEPTH,
+    };
 }
 
 impl Scene {
+    /// Makes the passes simulate `features` (the plan's): an effect turned off is removed from
+    /// the materials that had it (their textures, maps, noise or transparency), so every query
+    /// sees the same scene, and the hits are shaded by the kernel without its code. Removal
+    /// cannot be undone: a scene rendered with an effect disabled keeps it disabled.
+    pub fn apply(&mut self, features: Features) {
+        for m in &mut self.materials {
+            if !features.textures {
+                m.texture = None;
+            }
+            if !features.normal_maps {
+                m.bump = None;
+            }
+            if !features.noise {
+                m.perlin_scale = 0.0;
+            }
+            if !features.refraction {
+                m.transparency = 0.0;
+            }
+        }
+        if !features.refraction {
+            self.transparent.clear();
+        }
+        self.features = features;
+    }
+
+    /// Returns the materials the placed instances can shade with (each once, in index order).
+    pub fn placed_materials(&self) -> Vec<&Material> {
+        let mut ids: Vec<u32> = self
+            .instances
+            .iter()
+            .flat_map(|inst| self.instance_materials(inst))
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        ids.iter().map(|&m| &self.materials[m as usize]).collect()
+    }
+
     /// Returns every material index an instance can shade with (its own, its mesh file's, or its
     /// CSG operands').
     pub fn instance_materials(&self, inst: &Instance) -> Vec<u32> {

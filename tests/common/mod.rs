@@ -152,9 +152,9 @@ pub fn render_films_with(
         name,
         dir,
         Box::new(move |desc: &SceneDesc, r: &RenderDesc| {
-            let scene = build_scene(desc, r)?;
+            let mut scene = build_scene(desc, r)?;
             let camera = Camera::new(&r.camera, r.width, r.height);
-            let film = render_scene(&scene, &camera, r.width, r.height, &settings);
+            let film = render_scene(&mut scene, &camera, r.width, r.height, &settings);
             sink.borrow_mut().push((r.clone(), camera, film));
             Ok(())
         }),
@@ -172,7 +172,7 @@ pub fn whitted() -> Settings {
 
 /// Renders the whole `width × height` image of `scene` through the one frame call.
 pub fn render_scene(
-    scene: &Scene,
+    scene: &mut Scene,
     camera: &Camera,
     width: u32,
     height: u32,

@@ -53,7 +53,7 @@ struct Cli {
 
 /// Renders `sampling` `reps` times; returns the film and the best wall time.
 fn timed(
-    scene: &Scene,
+    scene: &mut Scene,
     camera: &Camera,
     w: u32,
     h: u32,
@@ -109,19 +109,26 @@ fn main() -> ExitCode {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
     }
-    let Some((scene, camera, w, h)) = found.borrow_mut().take() else {
+    let Some((mut scene, camera, w, h)) = found.borrow_mut().take() else {
         eprintln!("error: {} calls no gr.render", cli.scene.display());
         return ExitCode::FAILURE;
     };
     let (reference, ref_s) = timed(
-        &scene,
+        &mut scene,
         &camera,
         w,
         h,
         Sampling::Stratified { spp: cli.ref_spp },
         1,
     );
-    let (centre, _) = timed(&scene, &camera, w, h, Sampling::Stratified { spp: 1 }, 1);
+    let (centre, _) = timed(
+        &mut scene,
+        &camera,
+        w,
+        h,
+        Sampling::Stratified { spp: 1 },
+        1,
+    );
     let edge: Vec<bool> = reference
         .pixels
         .iter()
@@ -150,7 +157,7 @@ fn main() -> ExitCode {
     };
     for &spp in &cli.spp {
         let (film, secs) = timed(
-            &scene,
+            &mut scene,
             &camera,
             w,
             h,
@@ -164,7 +171,7 @@ fn main() -> ExitCode {
             threshold,
             max_depth: cli.depth,
         };
-        let (film, secs) = timed(&scene, &camera, w, h, sampling, cli.reps);
+        let (film, secs) = timed(&mut scene, &camera, w, h, sampling, cli.reps);
         row(
             format!("adaptive t={threshold} depth {}", cli.depth),
             &film,

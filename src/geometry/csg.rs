@@ -108,7 +108,7 @@ impl CsgTree {
                     face: c.face,
                 };
                 shape
-                    .interval(lo, ld)
+                    .interval(lo, ld, super::origin_size(leaf_from_csg, o))
                     .map(|iv| Span {
                         enter: to_boundary(iv.enter),
                         exit: to_boundary(iv.exit),

@@ -23,7 +23,17 @@ pub mod water;
 
 pub use ray::{Ray, offset_ray_origin, spawn_offset};
 
-use glam::Vec3A;
+use glam::{Affine3A, Vec3A};
+
+/// Returns, per axis, the size of the terms of `m·p` (`|M|·|p| + |t|`): `f32` rounding moves
+/// each coordinate of the transformed point by a few ulps of that, not of the largest
+/// coordinate. A slab scaled 10⁴ times thinner puts a far ray's origin at 10⁴ in y, yet its x
+/// is as exact as the world's.
+pub fn origin_size(m: &Affine3A, p: Vec3A) -> Vec3A {
+    let a = m.matrix3;
+    let p = p.abs();
+    a.x_axis.abs() * p.x + a.y_axis.abs() * p.y + a.z_axis.abs() * p.z + m.translation.abs()
+}
 
 /// An analytic primitive in its own object space (the unit shapes of `gr.sphere`, `gr.cube`,
 /// `gr.cylinder` and `gr.cone`).
@@ -40,11 +50,13 @@ pub enum Analytic {
 }
 
 impl Analytic {
-    /// Returns where the full line `o + t·d` (object space) enters and leaves the primitive.
-    pub fn interval(self, o: Vec3A, d: Vec3A) -> Option<Interval> {
+    /// Returns where the full line `o + t·d` (object space) enters and leaves the primitive;
+    /// `o_size` is, per axis, the size of the terms `o` was computed from
+    /// ([`origin_size`]), which bounds its rounding error.
+    pub fn interval(self, o: Vec3A, d: Vec3A, o_size: Vec3A) -> Option<Interval> {
         match self {
             Analytic::Sphere => sphere::interval(o, d),
-            Analytic::Cube => cube::interval(o, d),
+            Analytic::Cube => cube::interval(o, d, o_size),
             Analytic::Cylinder => cylinder::interval(o, d),
             Analytic::Cone => cone::interval(o, d),
         }

@@ -142,7 +142,10 @@ impl Scene {
             })
         };
         let hit = match inst.shape {
-            Shape::Analytic(a) => analytic(a.interval(local.origin, local.dir)),
+            Shape::Analytic(a) => {
+                let size = crate::geometry::origin_size(&inst.object_from_world, r.origin);
+                analytic(a.interval(local.origin, local.dir, size))
+            }
             Shape::Mesh(m) => self.meshes[m as usize]
                 .intersect(&local)
                 .map(|(tri, h)| Hit {

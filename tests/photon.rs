@@ -721,3 +721,45 @@ fn a_tile_rendered_with_the_irradiance_cache_is_the_full_frames() {
         }
     }
 }
+
+/// A small lamp over a small table in empty space (Jensen's projection maps, §5): a point
+/// light 0.95 above a 1 × 1 plate sees it in 7% of its directions. Its global photons leave
+/// only through the projection map's cells that can reach the plate, so most of them land on
+/// it (a uniform light loses 93% to the sky), and the map is unbiased: the flux stored on the
+/// plate matches the closed form Φ · Ω / 4π, Ω = 4 asin(a² / (a² + h²)) for a square of side
+/// 2a at height h, within 2% (the binomial noise is 0.7% at 20,000 photons).
+#[test]
+fn global_photons_of_a_small_lamp_go_where_the_scene_is() {
+    let src = "m = gr.material({0.5, 0.5, 0.5}, {0, 0, 0}, 0)\n\
+               root = gr.node('root')\n\
+               t = gr.cube('table'); t:set_material(m); t:scale(1, 0.0001, 1); t:translate(-0.5, -0.0001, -0.5); root:add_child(t)\n\
+               gr.render(root, 'x.png', 4, 4, {0, 2, 5}, {0, -0.3, -1}, {0, 1, 0}, 50, {0, 0, 0},\n\
+                         {gr.light({0, 0.95, 0}, {1, 1, 1}, {0, 0, 1})})";
+    let n = 20_000;
+    let traced = trace(src, n, MapKind::Global, 9);
+    let c = &traced.per_light[0];
+    let kept = c.kept_ppm as f64 / 1e6;
+    let met = c.met_surface as f64 / c.emitted as f64;
+    let (a, h) = (0.5f64, 0.95f64);
+    let omega = 4.0 * (a * a / (a * a + h * h)).asin();
+    let share = omega / (4.0 * std::f64::consts::PI);
+    println!(
+        "projection map kept {:.2}% of directions; {:.2}% of global photons met the plate (it covers {:.2}%)",
+        100.0 * kept,
+        100.0 * met,
+        100.0 * share
+    );
+    assert!(kept > share && kept < 0.2, "kept {kept}");
+    assert!(met > 5.0 * share, "only {met} of photons met the plate");
+    assert_eq!(
+        c.met_surface, c.stored,
+        "every photon meeting the plate is stored once"
+    );
+    // Φ = 4π² for colour 1 (physical intensity π per steradian over 4π).
+    let want = 4.0 * std::f64::consts::PI.powi(2) * share;
+    let got: f64 = traced.photons.iter().map(|p| p.view().power.x as f64).sum();
+    assert!(
+        (got / want - 1.0).abs() < 0.02,
+        "stored flux {got}, closed form {want}"
+    );
+}

@@ -264,6 +264,27 @@ fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
             bytes as f64 / stored.max(1) as f64
         );
     }
+    let emitted: u64 = s.global.iter().map(|c| c.emitted).sum();
+    let met: u64 = s.global.iter().map(|c| c.met_surface).sum();
+    if emitted > 0 && s.read_time.is_none() {
+        let kept: Vec<String> = s
+            .global
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.kept_ppm > 0)
+            .map(|(l, c)| format!("light {} {:.1}%", l + 1, c.kept_ppm as f64 / 1e4))
+            .collect();
+        let maps = if kept.is_empty() {
+            "no projection map: every light can reach the scene in any direction, or is not a point light"
+                .to_string()
+        } else {
+            format!("projection maps kept {} of the directions", kept.join(", "))
+        };
+        println!(
+            "  global photons: {:.1}% of {emitted} met a surface ({maps})",
+            100.0 * met as f64 / emitted as f64
+        );
+    }
     let emitted: u64 = s.caustic.iter().map(|c| c.emitted).sum();
     if emitted > 0 {
         let on: u64 = s.caustic.iter().map(|c| c.first_hit_specular).sum();

@@ -380,6 +380,7 @@ fn read_map<R: Read>(r: &mut Input<R>, what: &str, size: u64) -> Result<CountedM
             emitted: r.u64(what)?,
             stored: r.u64(what)?,
             first_hit_specular: r.u64(what)?,
+            ..LightCounts::default()
         });
     }
     let n = r.u64(what)?;
@@ -450,6 +451,7 @@ mod tests {
                 emitted: 1000,
                 stored: stored as u64,
                 first_hit_specular: 7,
+                ..LightCounts::default()
             }]
         };
         SavedMaps {

@@ -1,8 +1,11 @@
 //! Photon tracing: emission from the lights, scattering by the materials, storage at diffuse
 //! surfaces into the global and caustic maps (Jensen).
 //!
-//! - **Global photons** leave each light with its emission distribution ([`Light::emit`]) and are
-//!   stored at every surface with a diffuse part. At each hit a photon takes one of the material's
+//! - **Global photons** leave each light with its emission distribution ([`Light::emit`]), a
+//!   point light's only through the directions that can meet the scene (its [`ProjectionMap`],
+//!   Jensen's projection map: a lamp over a small table in empty space sends three quarters of
+//!   its photons onto the table instead of 7%), and are stored at every surface with a diffuse
+//!   part. At each hit a photon takes one of the material's
 //!   behaviours ([`crate::material::Material::lobes`]) with probability equal to its weight
 //!   (Russian roulette on albedo), or is absorbed; its power is divided by that probability, so
 //!   it stays an unbiased estimate.
@@ -60,6 +63,12 @@ pub struct LightCounts {
     /// Photons whose first surface was specular (a mirror or a dielectric): for the caustic
     /// map, how well aiming at the specular objects works (Jensen's projection maps).
     pub first_hit_specular: u64,
+    /// Photons that met any surface: for the global map, how well the projection map works
+    /// (not kept in photon-map files: 0 for maps read from one).
+    pub met_surface: u64,
+    /// The share of the sphere of directions the light's projection map kept for global
+    /// photons, in millionths (0: no map, every direction).
+    pub kept_ppm: u32,
 }
 
 /// The photons of one map in the order they were traced (see [`PhotonMap::from_stream`]), with
@@ -187,6 +196,37 @@ impl Cone {
         }
     }
 
+    /// Returns a cone holding `target` seen from `origin`: [`Cone::around`], or where that is
+    /// every direction while `origin` is outside the target's box, the hemisphere beyond the
+    /// box face that separates them (every point of the box lies past that face's plane).
+    fn holding(origin: Vec3A, target: &Target) -> Cone {
+        let cone = Cone::around(origin, target);
+        let b = &target.bounds;
+        if cone.cos_max > -1.0 {
+            return cone;
+        }
+        let below = b.min - origin;
+        let above = origin - b.max;
+        let (gap, axis) = (0..3)
+            .flat_map(|a| {
+                let mut e = Vec3A::ZERO;
+                e[a] = 1.0;
+                [(below[a], e), (above[a], -e)]
+            })
+            .fold(
+                (0.0f32, Vec3A::ZERO),
+                |best, g| if g.0 > best.0 { g } else { best },
+            );
+        if gap <= 0.0 {
+            return cone;
+        }
+        Cone {
+            axis,
+            cos_max: 0.0,
+            solid_angle: TAU,
+        }
+    }
+
     fn contains(&self, dir: Vec3A) -> bool {
         dir.dot(self.axis) >= self.cos_max
     }
@@ -217,17 +257,22 @@ pub struct Target {
 /// itself, where the box's sphere is √3 times wider and would waste two thirds of the caustic
 /// photons aimed at it (the share that meets it first is in `--stats`).
 pub fn specular_targets(scene: &Scene) -> Vec<Target> {
+    targets_where(scene, |inst| {
+        scene
+            .instance_materials(inst)
+            .iter()
+            .any(|&m| scene.materials[m as usize].is_specular())
+    })
+}
+
+/// Returns the bounding sphere and box of every instance for which `keep` holds.
+fn targets_where(scene: &Scene, keep: impl Fn(&crate::scene::Instance) -> bool) -> Vec<Target> {
     use crate::geometry::Analytic;
     use crate::scene::types::Shape;
     scene
         .instances
         .iter()
-        .filter(|inst| {
-            scene
-                .instance_materials(inst)
-                .iter()
-                .any(|&m| scene.materials[m as usize].is_specular())
-        })
+        .filter(|inst| keep(inst))
         .map(|inst| {
             let c = (inst.bounds.min + inst.bounds.max) * 0.5;
             let boxed = (c, (inst.bounds.max - c).length());
@@ -277,6 +322,167 @@ fn stretch(m: glam::Mat3A) -> f32 {
     }
 }
 
+/// Cells per side of a [`ProjectionMap`]: 128 × 128 cells of 1/16384 of the sphere each
+/// (about 1.6° across at the equator).
+const PROJECTION_SIDE: u32 = 128;
+/// Most instances a projection map tests one by one; beyond, it tests the box around them all.
+const PROJECTION_TARGETS: usize = 4096;
+
+/// Jensen's projection map (1996, §5) for a point light's global photons: the directions from
+/// the light that can meet geometry, as cells of a grid over `(z, φ)`. Cells of equal `Δz` and
+/// `Δφ` have equal solid angle (Archimedes), and a direction uniform in `(z, φ)` within a cell
+/// is uniform in solid angle, so a photon sent through a cell chosen uniformly among the `m` of
+/// `M` kept carries `Φ·(m/M)/n`: the flux into the kept directions, and none is lost, because a
+/// cell is dropped only when its bounding cone misses the cone around every instance
+/// ([`Cone::around`]). A small lamp over a large empty space then spends its photons on the
+/// scene, not on the sky.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProjectionMap {
+    /// The kept cells, `i·SIDE + j` for `z` row `i` and `φ` column `j`.
+    cells: Vec<u32>,
+}
+
+impl ProjectionMap {
+    /// Returns the map of the light at `origin` over `targets`, or `None` when every cell is
+    /// kept (the map would only reorder the photons) or no cell is (nothing to light).
+    pub fn new(origin: Vec3A, targets: &[Target]) -> Option<ProjectionMap> {
+        let merged;
+        let targets = if targets.len() > PROJECTION_TARGETS {
+            let b = targets
+                .iter()
+                .fold(crate::accel::Bounds::EMPTY, |a, t| a.union(t.bounds));
+            let c = (b.min + b.max) * 0.5;
+            merged = [Target {
+                centre: c,
+                radius: (b.max - c).length() * 1.001 + 1e-6,
+                bounds: b,
+            }];
+            &merged[..]
+        } else {
+            targets
+        };
+        let cones: Vec<Cone> = targets.iter().map(|t| Cone::holding(origin, t)).collect();
+        if cones
+            .iter()
+            .any(|c| c.cos_max <= -1.0 || !c.cos_max.is_finite())
+        {
+            return None;
+        }
+        // Each cone's half-angle h, with its cosine and sine: a cell of spread s is seen when
+        // the angle between the axes is at most h + s, i.e. their cosine at least
+        // cos h·cos s − sin h·sin s (every direction once h + s reaches π).
+        let half: Vec<(f32, f32, f32)> = cones
+            .iter()
+            .map(|c| {
+                let cos = c.cos_max.clamp(-1.0, 1.0);
+                (cos.acos(), cos, (1.0 - cos * cos).max(0.0).sqrt())
+            })
+            .collect();
+        let n = PROJECTION_SIDE;
+        let at = |i: f32, j: f32| crate::light::uniform_sphere((i / n as f32, j / n as f32));
+        // Rows in parallel (thousands of instances make it 4096 × 16384 cone tests).
+        use rayon::prelude::*;
+        let cells: Vec<u32> = (0..n * n)
+            .into_par_iter()
+            .filter(|&cell| {
+                let (fi, fj) = ((cell / n) as f32, (cell % n) as f32);
+                let axis = at(fi + 0.5, fj + 0.5);
+                // The farthest point of a cell from its centre is a corner (along a parallel
+                // or a meridian the distance grows towards the ends); grown for rounding.
+                let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)];
+                let spread = corners
+                    .iter()
+                    .map(|&(a, b)| axis.dot(at(fi + a, fj + b)).clamp(-1.0, 1.0).acos())
+                    .fold(0.0f32, f32::max);
+                let spread = spread * 1.01 + 1e-4;
+                let (cs, ss) = (spread.cos(), spread.sin());
+                cones.iter().zip(&half).any(|(c, &(h, ch, sh))| {
+                    h + spread >= std::f32::consts::PI
+                        || axis.dot(c.axis) >= ch * cs - sh * ss - 1e-6
+                })
+            })
+            .collect();
+        let all = (n * n) as usize;
+        (!cells.is_empty() && cells.len() < all).then_some(ProjectionMap { cells })
+    }
+
+    /// Returns the fraction of the sphere of directions the kept cells cover.
+    pub fn fraction(&self) -> f32 {
+        self.cells.len() as f32 / (PROJECTION_SIDE * PROJECTION_SIDE) as f32
+    }
+
+    /// Returns a direction uniform over the kept cells from `u` in [0, 1)³: `u.2` picks the
+    /// cell, `u.0` and `u.1` place the direction in it as [`crate::light::uniform_sphere`] does.
+    fn sample(&self, u: (f32, f32, f32)) -> Vec3A {
+        let k = ((u.2 * self.cells.len() as f32) as usize).min(self.cells.len() - 1);
+        let (i, j) = (
+            self.cells[k] / PROJECTION_SIDE,
+            self.cells[k] % PROJECTION_SIDE,
+        );
+        let n = PROJECTION_SIDE as f32;
+        crate::light::uniform_sphere(((i as f32 + u.0) / n, (j as f32 + u.1) / n))
+    }
+}
+
+/// Most targets whose boxes a projection map cuts into pieces.
+const PROJECTION_SPLIT_TARGETS: usize = 64;
+
+/// Returns `t`'s box cut into 4 pieces along each side at least a quarter of its longest
+/// (at most 64 pieces), each a target of its own.
+fn split_target(t: &Target) -> Vec<Target> {
+    let b = t.bounds;
+    let size = b.max - b.min;
+    let longest = size.max_element();
+    let parts = |e: f32| if e >= 0.25 * longest { 4 } else { 1 };
+    let n = [parts(size.x), parts(size.y), parts(size.z)];
+    let mut out = Vec::new();
+    for i in 0..n[0] {
+        for j in 0..n[1] {
+            for k in 0..n[2] {
+                let lo = Vec3A::new(i as f32, j as f32, k as f32);
+                let count = Vec3A::new(n[0] as f32, n[1] as f32, n[2] as f32);
+                let min = b.min + size * lo / count;
+                let max = (b.min + size * (lo + 1.0) / count).min(b.max);
+                // Grown a hair so the pieces overlap: rounding leaves no gap between them.
+                let grow = Vec3A::splat(1e-4 * longest + 1e-6);
+                let (min, max) = (min - grow, max + grow);
+                let c = (min + max) * 0.5;
+                out.push(Target {
+                    centre: c,
+                    radius: (max - c).length() * 1.001 + 1e-6,
+                    bounds: crate::accel::Bounds { min, max },
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Returns the projection map of each light for global photons: point lights only (an area
+/// light's photons leave from every point of it, and it mostly faces the scene anyway).
+pub fn projection_maps(scene: &Scene) -> Vec<Option<ProjectionMap>> {
+    let whole = targets_where(scene, |inst| inst.bounds.is_finite());
+    // A few objects: each box cut into up to 4 × 4 × 4 pieces along its long sides, whose
+    // cones hug it closer than one cone around its corners (a square's corner cone is half as
+    // wide again as the square).
+    let targets = if whole.len() <= PROJECTION_SPLIT_TARGETS {
+        whole.iter().flat_map(split_target).collect()
+    } else {
+        whole
+    };
+    let unbounded = scene.instances.iter().any(|i| !i.bounds.is_finite());
+    scene
+        .lights
+        .iter()
+        .map(|l| match l.shape {
+            crate::light::Shape::Point { position } if !unbounded => {
+                ProjectionMap::new(position, &targets)
+            }
+            _ => None,
+        })
+        .collect()
+}
+
 /// Traces the photons of `kind` for every light: `budget[l]` emitted by light `l`.
 pub fn trace_map(scene: &Scene, budget: &[u64], kind: MapKind, seed: u64) -> TracedMap {
     trace_map_with(scene, budget, kind, seed, &NoProgress)
@@ -295,6 +501,11 @@ pub fn trace_map_with(
     } else {
         Vec::new()
     };
+    let projections = if kind == MapKind::Global {
+        projection_maps(scene)
+    } else {
+        vec![None; scene.lights.len()]
+    };
     let mut out = TracedMap::default();
     if kind == MapKind::Caustic && targets.is_empty() {
         out.per_light = vec![LightCounts::default(); scene.lights.len()];
@@ -309,6 +520,7 @@ pub fn trace_map_with(
     for (l, light) in scene.lights.iter().enumerate() {
         let n = budget.get(l).copied().unwrap_or(0);
         let chunks = n.div_ceil(CHUNK);
+        let projection = projections[l].as_ref();
         // Every thread claims the next chunk in turn, and whoever finishes the chunk next in
         // order appends it and any finished after it: the stream takes the chunks in order,
         // and only the few chunks in flight wait outside it (see `crate::photon::stream`).
@@ -318,6 +530,7 @@ pub fn trace_map_with(
             waiting: BTreeMap::new(),
             counts: LightCounts {
                 emitted: n,
+                kept_ppm: projection.map_or(0, |p| (p.fraction() * 1e6).round() as u32),
                 ..LightCounts::default()
             },
             stream: std::mem::take(&mut out.photons),
@@ -330,7 +543,7 @@ pub fn trace_map_with(
                 if c >= chunks {
                     break;
                 }
-                let (mut photons, mut on_specular) = (Vec::new(), 0);
+                let (mut photons, mut on_specular, mut met) = (Vec::new(), 0, 0);
                 cones.clear();
                 // Asked to stop: the chunks left are not traced (the frame is dropped).
                 if !progress.should_stop() {
@@ -342,16 +555,17 @@ pub fn trace_map_with(
                             light,
                             n,
                             kind,
-                            (&targets, &mut cones),
+                            (&targets, &mut cones, projection),
                             &mut rng,
                             &mut photons,
                         );
                         on_specular += u64::from(hit == FirstHit::Specular);
+                        met += u64::from(hit != FirstHit::Nothing);
                     }
                     progress.advance(CHUNK.min(n - c * CHUNK));
                 }
                 let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
-                done.finish(c, photons, on_specular);
+                done.finish(c, photons, (on_specular, met));
             }
         });
         let done = done.into_inner().unwrap_or_else(|e| e.into_inner());
@@ -367,19 +581,21 @@ pub fn trace_map_with(
 struct InOrder {
     /// The chunk the stream takes next.
     next: u64,
-    /// Chunks finished before `next`: their photons and how many met a specular surface first.
-    waiting: BTreeMap<u64, (Vec<Staged>, u64)>,
+    /// Chunks finished before `next`: their photons, how many met a specular surface first and
+    /// how many met any surface.
+    waiting: BTreeMap<u64, (Vec<Staged>, (u64, u64))>,
     counts: LightCounts,
     stream: PhotonStream,
 }
 
 impl InOrder {
     /// Takes chunk `c`, and appends it with every waiting chunk after it once it is next.
-    fn finish(&mut self, c: u64, photons: Vec<Staged>, on_specular: u64) {
-        self.waiting.insert(c, (photons, on_specular));
-        while let Some((photons, on_specular)) = self.waiting.remove(&self.next) {
+    fn finish(&mut self, c: u64, photons: Vec<Staged>, first: (u64, u64)) {
+        self.waiting.insert(c, (photons, first));
+        while let Some((photons, (on_specular, met))) = self.waiting.remove(&self.next) {
             self.counts.stored += photons.len() as u64;
             self.counts.first_hit_specular += on_specular;
+            self.counts.met_surface += met;
             self.stream.extend_from_slice(&photons);
             self.next += 1;
         }
@@ -398,7 +614,8 @@ enum FirstHit {
 }
 
 /// Traces one photon of `light` (one of `n`), appending what it stores to `out`; returns what
-/// it met first. A caustic photon aims through the cones around `aim.0`'s targets from where
+/// it met first. A global photon of a point light leaves through the light's projection map
+/// when it has one ([`ProjectionMap`]). A caustic photon aims through the cones around `aim.0`'s targets from where
 /// it leaves the light, kept in `aim.1`: made afresh for each photon of an area or sphere light,
 /// and once for a point light, whose photons all leave from the same place.
 fn trace_one(
@@ -406,7 +623,7 @@ fn trace_one(
     light: &Light,
     n: u64,
     kind: MapKind,
-    (targets, cones): (&[Target], &mut Vec<Cone>),
+    (targets, cones, projection): (&[Target], &mut Vec<Cone>, Option<&ProjectionMap>),
     rng: &mut Rng,
     out: &mut Vec<Staged>,
 ) -> FirstHit {
@@ -418,7 +635,14 @@ fn trace_one(
     ];
     let e = light.emit(u);
     let (dir, mut power) = match kind {
-        MapKind::Global => (e.dir, light.flux() / n as f32),
+        // Through the projection map's cells, with the flux of the directions it keeps.
+        MapKind::Global => match projection {
+            Some(map) => (
+                map.sample((u[0], u[1], u[2])),
+                light.flux() * (map.fraction() / n as f32),
+            ),
+            None => (e.dir, light.flux() / n as f32),
+        },
         MapKind::Caustic => {
             // Aim at one specular object's cone, chosen by solid angle; weight by 1 / density.
             if cones.is_empty() || light.is_area() {

@@ -470,12 +470,17 @@ fn the_specular_depth_follows_nested_dielectrics() {
     );
     let p = plan_with(
         &build_scene(&d, &d.renders[0]).unwrap(),
-        GiMode::Auto,
+        GiMode::On,
         &disabling(Effect::Refraction),
         true,
     );
     assert_eq!(
         p.features.specular_depth, 0,
         "opaque black shells: nothing specular"
+    );
+    assert_eq!(
+        p.decision(Effect::Caustics).unwrap().why,
+        Why::NoSpecular,
+        "no caustic map for glass turned opaque"
     );
 }

@@ -357,7 +357,26 @@ pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: boo
         on: photon_maps,
         why,
     });
-    let specular = specular_targets(scene).len();
+    // Specular as the passes will see it: with refraction disabled a clear glass turns opaque.
+    let refracts = overrides.get(Effect::Refraction).unwrap_or_else(|| {
+        scene
+            .placed_materials()
+            .iter()
+            .any(|m| m.transparency > 0.0)
+    });
+    let specular = if refracts {
+        specular_targets(scene).len()
+    } else {
+        scene
+            .instances
+            .iter()
+            .filter(|inst| {
+                let ids = scene.instance_materials(inst);
+                ids.iter()
+                    .any(|&m| scene.materials[m as usize].is_reflective())
+            })
+            .count()
+    };
     let auto = match (photon_maps, specular) {
         (false, _) => (false, Why::NoPhotonMaps),
         (true, 0) => (false, Why::NoSpecular),

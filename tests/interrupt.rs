@@ -138,7 +138,7 @@ fn a_stopped_progressive_render_keeps_the_mean_of_its_finished_passes() {
 mod signals {
     use super::common::{caustic, out_dir};
     use super::scene;
-    use std::os::unix::process::ExitStatusExt;
+    use std::os::unix::process::{CommandExt, ExitStatusExt};
     use std::path::{Path, PathBuf};
     use std::process::{Child, Stdio};
     use std::time::Duration;
@@ -156,14 +156,25 @@ mod signals {
     /// Starts `caustic render scene.lua ARGS` in `dir`, waits until the script has started and
     /// `settle` more (time for the scene to be built and rows to be rendered; the tests hold
     /// whatever was reached by then), and returns the process.
+    ///
+    /// The child starts with SIGINT at its default action whatever this process inherited: a
+    /// test run launched in the background of a non-interactive shell has SIGINT ignored, and
+    /// `--no-partial` (which installs no handler) would then keep ignoring it.
     fn start(dir: &Path, args: &[&str], settle: Duration) -> Child {
-        let child = caustic()
+        let mut command = caustic();
+        command
             .current_dir(dir)
             .args(["render", "scene.lua", "-q"])
             .args(args)
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
+            .stderr(Stdio::piped());
+        // SAFETY: between fork and exec only the async-signal-safe `signal` runs.
+        unsafe {
+            command.pre_exec(|| {
+                libc::signal(libc::SIGINT, libc::SIG_DFL);
+                Ok(())
+            });
+        }
+        let child = command.spawn().unwrap();
         while !dir.join("started").exists() {
             std::thread::sleep(Duration::from_millis(10));
         }

@@ -484,3 +484,62 @@ fn the_specular_depth_follows_nested_dielectrics() {
         "no caustic map for glass turned opaque"
     );
 }
+
+/// `--stats` prints the plan with the time of the phases each decision ran: the maps' trace
+/// and build, the precomputation and cache, the shadow rays, the camera pass, and the global
+/// photons' share that met a surface through the lamp's projection map (a point light over a
+/// scene it sees in part of its directions). The times are whatever they were; the test reads
+/// that each is there and that the counts add up.
+#[test]
+fn stats_print_the_plan_with_each_decisions_phase() {
+    let dir = common::out_dir("plan-stats");
+    std::fs::write(dir.join("scene.lua"), PLAIN).unwrap();
+    let out = caustic()
+        .current_dir(&dir)
+        .args(["render", "scene.lua", "-q", "--stats", "--photons", "4000"])
+        .args(["--caustic-photons", "4000", "-o", "x.png"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    let line = |start: &str| {
+        text.lines()
+            .map(str::trim)
+            .find(|l| l.starts_with(start))
+            .unwrap_or_else(|| panic!("no line '{start}' in:\n{text}"))
+            .to_string()
+    };
+    let seconds = |l: &str, after: &str| -> f64 {
+        let rest = &l[l.find(after).unwrap_or_else(|| panic!("{l}")) + after.len()..];
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let global = line("photon-maps: on (a light has power or num_photons)");
+    let caustics = line("caustics: on (1 specular or refractive objects)");
+    assert!(seconds(&global, "built in ") >= 0.0);
+    assert!(seconds(&caustics, "built in ") >= 0.0);
+    let gathering = line("final-gathering: on (--indirect gather)");
+    assert!(
+        gathering.contains("irradiance cache") && gathering.contains("gathers in the camera pass")
+    );
+    assert_eq!(
+        line("soft-shadows: off"),
+        "soft-shadows: off (point lights only)"
+    );
+    assert!(seconds(&line("camera pass: "), "camera pass: ") > 0.0);
+    assert_eq!(
+        line("specular depth: "),
+        "specular depth: 12 (the default; 0 nested dielectric layers need at most 2)"
+    );
+    let photons = line("global photons: ");
+    assert!(
+        photons.contains("projection maps kept light 1"),
+        "{photons}"
+    );
+    let met: f64 = photons["global photons: ".len()..]
+        .split('%')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(met > 50.0 && met <= 100.0, "{photons}");
+}

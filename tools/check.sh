@@ -40,11 +40,17 @@ fi
 
 # The crate's minimum Rust (Cargo.toml's rust-version).
 need=$(sed -n 's/^rust-version = "\([0-9.]*\)"/\1/p' Cargo.toml)
-if ! command -v cargo >/dev/null 2>&1; then
+# `cargo --version`, not `command -v cargo`: rustup's cargo is on PATH even with no toolchain
+# installed, and only fails when run.
+if ! cargo --version >/dev/null 2>&1; then
   if command -v rustup >/dev/null 2>&1; then
     say "no Rust toolchain; installing stable through rustup"
-    rustup toolchain install stable --profile minimal --component rustfmt,clippy
-    rustup default stable
+    if ! rustup toolchain install stable --profile minimal --component rustfmt,clippy ||
+      ! rustup default stable; then
+      say "rustup could not install the stable toolchain (it downloads from" \
+        "static.rust-lang.org): install Rust $need or later (https://rustup.rs)"
+      exit 1
+    fi
   else
     say "no cargo on PATH and no rustup to install it: install Rust $need or later" \
       "(https://rustup.rs)"

@@ -256,7 +256,7 @@ mod signals {
             .find(|(k, _)| k == "caustic-partial")
             .map(|(_, v)| v.clone())
             .unwrap_or_else(|| panic!("no caustic-partial chunk in {text:?}"));
-        let rows = rgb.chunks_exact(160 * 3);
+        let rows = rgb.as_chunks::<{ 160 * 3 }>().0.iter();
         let lit = rows.clone().filter(|r| r.iter().all(|&c| c > 0)).count();
         let black = rows.filter(|r| r.iter().all(|&c| c == 0)).count();
         assert_eq!(lit + black, 120, "a row half rendered");

@@ -305,7 +305,7 @@ fn assemble(mode: Mode, idx: &[u32]) -> Vec<[u32; 3]> {
             .map(|i| [idx[i], idx[i + 1 + i % 2], idx[i + 2 - i % 2]])
             .collect(),
         Mode::TriangleFan => (0..n).map(|i| [idx[i + 1], idx[i + 2], idx[0]]).collect(),
-        _ => idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        _ => idx.as_chunks::<3>().0.to_vec(),
     }
 }
 

@@ -118,16 +118,19 @@ fn merge(models: &[tobj::Model], path: &Path) -> Result<MeshData, ObjError> {
         if m.indices.len() % 3 != 0 {
             return Err(fault("triangulation left an incomplete triangle"));
         }
-        let xyz = |c: &[f32]| Vec3::new(c[0], c[1], c[2]);
-        mesh.positions.extend(m.positions.chunks_exact(3).map(xyz));
+        let xyz = |c: &[f32; 3]| Vec3::from(*c);
+        mesh.positions
+            .extend(m.positions.as_chunks::<3>().0.iter().map(xyz));
         if has_normals {
-            mesh.normals.extend(m.normals.chunks_exact(3).map(xyz));
+            mesh.normals
+                .extend(m.normals.as_chunks::<3>().0.iter().map(xyz));
         }
         if has_uvs {
-            let uv = |c: &[f32]| Vec2::new(c[0], c[1]);
-            mesh.uvs.extend(m.texcoords.chunks_exact(2).map(uv));
+            let uv = |c: &[f32; 2]| Vec2::from(*c);
+            mesh.uvs
+                .extend(m.texcoords.as_chunks::<2>().0.iter().map(uv));
         }
-        for corners in m.indices.chunks_exact(3) {
+        for corners in m.indices.as_chunks::<3>().0 {
             let mut triangle = [0u32; 3];
             for (slot, &index) in triangle.iter_mut().zip(corners) {
                 if index as usize >= count {

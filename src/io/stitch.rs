@@ -151,7 +151,7 @@ fn read_png_tile(path: &Path) -> Result<Tile> {
         .next_frame(&mut rgb)
         .map_err(|e| fail(format!("truncated or corrupt PNG: {e}")))?;
     rgb.truncate(width as usize * height as usize * 3);
-    let pixels = rgb.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let pixels = rgb.as_chunks::<3>().0.to_vec();
     Ok(Tile {
         path: path.to_path_buf(),
         window,

@@ -403,7 +403,7 @@ fn read_map<R: Read>(r: &mut Input<R>, what: &str, size: u64) -> Result<CountedM
     while pos.len() < n {
         let k = CHUNK.min(n - pos.len());
         r.bytes(&mut buf[..12 * k], what)?;
-        pos.extend(buf[..12 * k].chunks_exact(12).map(|p| {
+        pos.extend(buf[..12 * k].as_chunks::<12>().0.iter().map(|p| {
             let f = |i: usize| f32::from_le_bytes([p[i], p[i + 1], p[i + 2], p[i + 3]]);
             [f(0), f(4), f(8)]
         }));
@@ -415,8 +415,10 @@ fn read_map<R: Read>(r: &mut Input<R>, what: &str, size: u64) -> Result<CountedM
             r.bytes(&mut buf[..4 * k], what)?;
             v.extend(
                 buf[..4 * k]
-                    .chunks_exact(4)
-                    .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+                    .as_chunks::<4>()
+                    .0
+                    .iter()
+                    .map(|b| u32::from_le_bytes(*b)),
             );
         }
         Ok(v)

@@ -39,8 +39,10 @@ fn fail<T>(path: &Path, message: impl Into<String>) -> Result<T, FileError> {
 /// Returns the little-endian `u32` words of `bytes` (whose length is a multiple of 4).
 fn words(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
     bytes
-        .chunks_exact(4)
-        .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+        .as_chunks::<4>()
+        .0
+        .iter()
+        .map(|w| u32::from_le_bytes(*w))
 }
 
 /// Returns the whole file, or an error naming it.
@@ -96,12 +98,17 @@ pub fn read_mesh(path: &Path) -> Result<MeshData, FileError> {
     check_size(path, bytes.len(), 16 + 12 * nv + 12 * nt)?;
     let pos_end = 16 + 12 * nv as usize;
     let floats: Vec<f32> = words(&bytes[16..pos_end]).map(f32::from_bits).collect();
-    let positions: Vec<Vec3> = floats.chunks_exact(3).map(Vec3::from_slice).collect();
+    let positions: Vec<Vec3> = floats
+        .as_chunks::<3>()
+        .0
+        .iter()
+        .map(|&p| Vec3::from(p))
+        .collect();
     if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
         return fail(path, format!("vertex {bad} is not finite"));
     }
     let idx: Vec<u32> = words(&bytes[pos_end..]).collect();
-    let triangles: Vec<[u32; 3]> = idx.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+    let triangles: Vec<[u32; 3]> = idx.as_chunks::<3>().0.to_vec();
     if let Some(bad) = triangles
         .iter()
         .position(|t| t.iter().any(|&i| i as u64 >= nv))
@@ -177,7 +184,9 @@ pub fn read_rays(path: &Path) -> Result<RaySet, FileError> {
     check_size(path, bytes.len(), 32 + 32 * count as u64)?;
     let floats: Vec<f32> = words(&bytes[32..]).map(f32::from_bits).collect();
     let rays = floats
-        .chunks_exact(8)
+        .as_chunks::<8>()
+        .0
+        .iter()
         .map(|r| RayRecord {
             origin: [r[0], r[1], r[2]],
             tmin: r[3],

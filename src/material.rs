@@ -126,11 +126,6 @@ impl Material {
         self.transparency > 0.0 || (self.transparency < 1.0 && self.ks.max_element() > 0.0)
     }
 
-    /// Returns true when the material bends shading normals (bump map or Perlin noise).
-    pub fn perturbs_normals(&self) -> bool {
-        self.bump.is_some() || self.perlin_scale > 0.0
-    }
-
     /// Returns the shading normal at a hit: `ns` bent by the bump map (in the frame of `dpdu`)
     /// and by Perlin noise at world point `p`, never tilted past the surface's geometric
     /// hemisphere (`ng`, same side as `ns`), so a surface never looks lit from behind.

@@ -211,7 +211,7 @@ fn print_plan(frame: &crate::frame::Frame, secs: f64) {
         let phase = match (d.effect, d.on, photons) {
             (Effect::PhotonMaps, true, Some(p)) => format!(
                 "; global map traced and built in {:.3} s",
-                s(p.trace_time + p.build_time - p.caustic_time)
+                s((p.trace_time + p.build_time).saturating_sub(p.caustic_time))
             ),
             (Effect::Caustics, true, Some(p)) => {
                 format!(

@@ -41,7 +41,6 @@
 
 use super::Integrator;
 use super::eye::MAX_DEPTH;
-use crate::photon::trace::specular_targets;
 use crate::scene::{Features, Scene};
 use std::fmt;
 
@@ -358,25 +357,24 @@ pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: boo
         why,
     });
     // Specular as the passes will see it: with refraction disabled a clear glass turns opaque.
-    let refracts = overrides.get(Effect::Refraction).unwrap_or_else(|| {
-        scene
-            .placed_materials()
-            .iter()
-            .any(|m| m.transparency > 0.0)
-    });
-    let specular = if refracts {
-        specular_targets(scene).len()
-    } else {
-        scene
-            .instances
-            .iter()
-            .filter(|inst| {
-                let ids = scene.instance_materials(inst);
-                ids.iter()
-                    .any(|&m| scene.materials[m as usize].is_reflective())
+    let materials = scene.placed_materials();
+    let refracts = overrides
+        .get(Effect::Refraction)
+        .unwrap_or_else(|| materials.iter().any(|m| m.transparency > 0.0));
+    let specular = scene
+        .instances
+        .iter()
+        .filter(|inst| {
+            scene.instance_materials(inst).iter().any(|&m| {
+                let m = &scene.materials[m as usize];
+                if refracts {
+                    m.is_specular()
+                } else {
+                    m.is_reflective()
+                }
             })
-            .count()
-    };
+        })
+        .count();
     let auto = match (photon_maps, specular) {
         (false, _) => (false, Why::NoPhotonMaps),
         (true, 0) => (false, Why::NoSpecular),
@@ -427,7 +425,6 @@ pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: boo
         on: soft_shadows,
         why,
     });
-    let materials = scene.placed_materials();
     let mut material_effect = |effect, has: &dyn Fn(&crate::material::Material) -> bool, vain| {
         let n = materials.iter().filter(|m| has(m)).count();
         let auto = if n > 0 {

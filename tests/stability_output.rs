@@ -290,3 +290,35 @@ fn exporters_write_through_links_keep_modes_and_refuse_fifos() {
         std::fs::remove_file(&link).unwrap();
     }
 }
+
+/// `caustic render --stats | head` closes the pipe before the statistics are all written: the
+/// process then ends quietly by SIGPIPE, as any Unix tool does, not with a panic. The read end
+/// is closed before the process starts, so its first line meets a closed pipe.
+#[test]
+fn a_closed_stdout_ends_the_process_quietly() {
+    use std::os::fd::{FromRawFd, OwnedFd};
+    use std::os::unix::process::ExitStatusExt;
+    let (dir, script) = setup("closed-stdout");
+    let mut fds = [0; 2];
+    // SAFETY: pipe writes two new descriptors into the array it is given.
+    assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+    // SAFETY: both descriptors were just made and are owned here alone.
+    let (read, write) = unsafe { (OwnedFd::from_raw_fd(fds[0]), OwnedFd::from_raw_fd(fds[1])) };
+    drop(read);
+    let out = caustic()
+        .current_dir(&dir)
+        .args(["render", "--stats", "-o", "out.png"])
+        .arg(&script)
+        .stdout(std::process::Stdio::from(write))
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(
+        out.status.signal(),
+        Some(libc::SIGPIPE),
+        "{:?}: {stderr}",
+        out.status
+    );
+}

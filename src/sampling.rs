@@ -20,6 +20,9 @@ pub enum Pass {
     Point = 3,
     /// The irradiance cache's records, keyed by the pixel whose centre ray found them.
     Cache = 4,
+    /// Which of a pixel's samples follows its weak branches ([`crate::render::Share`]), keyed
+    /// by the pixel.
+    Share = 5,
 }
 
 /// Returns the key of image-plane position `(x, y)` for [`Pass::Point`] streams.

@@ -24,6 +24,9 @@ pub struct RenderStats {
     /// gathered afresh (no record served them).
     pub cached: u64,
     pub gathered: u64,
+    /// Surfaces reached by weak branches that this sample did not shade: another sample of the
+    /// pixel shaded its own ([`crate::render::Share`]).
+    pub weak_skipped: u64,
     /// Rows of the window left black because the render was asked to stop
     /// ([`crate::progress::Progress::should_stop`]).
     pub rows_skipped: u64,
@@ -46,6 +49,7 @@ impl RenderStats {
         self.nonfinite_samples += o.nonfinite_samples;
         self.cached += o.cached;
         self.gathered += o.gathered;
+        self.weak_skipped += o.weak_skipped;
         self.rows_skipped += o.rows_skipped;
     }
 }
@@ -72,6 +76,8 @@ pub struct RayCounts {
     /// gathered afresh (no record served them).
     pub cached: u64,
     pub gathered: u64,
+    /// Surfaces reached by weak branches left unshaded ([`crate::render::Share`]).
+    pub weak_skipped: u64,
 }
 
 impl RayCounts {
@@ -87,6 +93,7 @@ impl RayCounts {
         self.nonfinite += o.nonfinite;
         self.cached += o.cached;
         self.gathered += o.gathered;
+        self.weak_skipped += o.weak_skipped;
     }
 }
 

@@ -168,6 +168,14 @@ pub fn print_stats(
         rstats.depth_capped,
         rstats.nonfinite_samples
     );
+    if rstats.weak_skipped > 0 {
+        println!(
+            "  weak branches (under {}% of a sample): {} surfaces left unshaded, shaded instead by one sample of their pixel in up to {}",
+            crate::render::WEAK_BRANCH * 100.0,
+            rstats.weak_skipped,
+            crate::render::WEAK_SHARERS
+        );
+    }
     // Thread time summed over workers, against wall time times the workers.
     let busy = secs * rayon::current_num_threads() as f64;
     println!(

@@ -24,6 +24,12 @@
 //! `q`, so the estimate stays unbiased (nested glass shells, a ray bouncing between mirrors).
 //! [`MAX_PATH_DEPTH`] is a hard safety cap; paths stopped there are counted
 //! ([`RayCounts::depth_capped`]) and reported by `--stats`.
+//!
+//! A split branch that leaves the path under [`WEAK_BRANCH`] of its sample (a Fresnel
+//! reflection off water, a glossy tile's 4% mirror) is followed by one of every four samples of
+//! the pixel, at four times its weight, and skipped by the others ([`Share`]): unbiased, and on
+//! the final scene it removes 41% of the diffuse points, their caustic lookups and shadow rays,
+//! for a few percent of the light.
 
 use super::irradiance_cache::Probe;
 use super::photon_map::Gi;
@@ -32,7 +38,7 @@ use crate::camera::Camera;
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::material::bsdf::{Bsdf, Split};
 use crate::material::medium::{Crossing, MediumStack};
-use crate::render::Radiance;
+use crate::render::{Radiance, Share, WEAK_BRANCH};
 use crate::sampling::{Rng, stratified_2d};
 use crate::scene::Scene;
 use crate::scene::interaction::{Interaction, Needs};
@@ -60,16 +66,41 @@ pub struct PathState {
     /// rays and specular paths from them, false after a reflection whose Phong highlight
     /// already stands for the lights' reflection.
     pub sees_emitters: bool,
+    /// How this sample shares weak branches with the other samples of its pixel.
+    pub share: Share,
 }
 
 impl PathState {
     /// Returns the state of a camera ray (in air).
     pub fn camera() -> PathState {
+        PathState::camera_sample(Share::All)
+    }
+
+    /// Returns the state of a camera ray (in air) of a sample that shares weak branches by
+    /// `share`.
+    pub fn camera_sample(share: Share) -> PathState {
         PathState {
             depth: 0,
             weight: 1.0,
             media: MediumStack::air(),
             sees_emitters: true,
+            share,
+        }
+    }
+
+    /// Returns the factor on the radiance of a deterministically split branch of relative
+    /// weight `weight`, and the branch's share. A branch that makes the path weak
+    /// ([`WEAK_BRANCH`]) shades its surface in one sample of the pixel in
+    /// [`WEAK_SHARERS`](crate::render::WEAK_SHARERS), at that many times its weight, and only
+    /// counts the emitters it sees in the others ([`Share`]); below it, every branch is followed.
+    fn branch(&self, weight: f32) -> (f32, Share) {
+        if self.weight * weight >= WEAK_BRANCH {
+            return (1.0, self.share);
+        }
+        match self.share {
+            Share::Carry(n) => (n, Share::Surfaces(n)),
+            Share::Skip => (1.0, Share::Emitters),
+            Share::All | Share::Surfaces(_) | Share::Emitters => (1.0, Share::All),
         }
     }
 
@@ -97,7 +128,13 @@ impl PathState {
             weight: self.weight * weight,
             media,
             sees_emitters: self.sees_emitters,
+            share: self.share,
         }
+    }
+
+    /// Returns this state with `share`.
+    fn shared(self, share: Share) -> PathState {
+        PathState { share, ..self }
     }
 }
 
@@ -149,6 +186,16 @@ impl Radiance for Tracer<'_> {
     fn radiance(&self, ray: &Ray, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
         self.radiance(ray, PathState::camera(), rng, counts)
     }
+
+    fn radiance_shared(
+        &self,
+        ray: &Ray,
+        share: Share,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
+        self.radiance(ray, PathState::camera_sample(share), rng, counts)
+    }
 }
 
 impl Tracer<'_> {
@@ -161,6 +208,12 @@ impl Tracer<'_> {
         counts: &mut RayCounts,
     ) -> Vec3A {
         let (mut ray, mut state, mut scale) = (*ray, state, 1.0);
+        // A weak branch of the sample that shades it: what it sees before a surface counts once
+        // over the pixel's samples, as in those that do not shade it (see `Share`).
+        let seen_scale = match state.share {
+            Share::Surfaces(n) => 1.0 / n,
+            _ => 1.0,
+        };
         // A loop, not recursion, across false interfaces: a hundred nested shells of index 1
         // must not take a hundred stack frames.
         loop {
@@ -169,14 +222,25 @@ impl Tracer<'_> {
             if state.sees_emitters {
                 let tmax = hit.map_or(ray.tmax, |h| h.t);
                 if let Some(radiance) = emitter_seen(self.scene, &ray, tmax) {
-                    return scale * radiance;
+                    return seen_scale * scale * radiance;
                 }
             }
             let Some(hit) = hit else {
-                return scale * background(self.camera, ray.dir);
+                return seen_scale * scale * background(self.camera, ray.dir);
             };
-            let clock = counts.timing.then_some(&mut counts.material_nanos);
-            let it = self.scene.interaction(&ray, &hit, Needs::Full, clock);
+            let skip = state.share == Share::Emitters;
+            let (needs, clock) = if skip {
+                counts.weak_skipped += 1;
+                // Only a transparent surface can be a false interface to see through.
+                if self.scene.materials[hit.material as usize].transparency <= 0.0 {
+                    return Vec3A::ZERO;
+                }
+                (Needs::Albedo, None)
+            } else {
+                let clock = counts.timing.then_some(&mut counts.material_nanos);
+                (Needs::Full, clock)
+            };
+            let it = self.scene.interaction(&ray, &hit, needs, clock);
             let t = it.bsdf.material.transparency;
             let mut out = Vec3A::ZERO;
             if let Some(crossing) = it.bsdf.crossing(&state.media) {
@@ -196,7 +260,20 @@ impl Tracer<'_> {
                     scale /= q;
                     continue;
                 }
+                if skip {
+                    return Vec3A::ZERO;
+                }
+                // The surface a carried weak branch reaches: shaded in full, every branch below.
+                if let Share::Surfaces(_) = state.share {
+                    state.share = Share::All;
+                }
                 out += t * self.dielectric(&it, &crossing, state, rng, counts);
+            }
+            if skip {
+                return Vec3A::ZERO;
+            }
+            if let Share::Surfaces(_) = state.share {
+                state.share = Share::All;
             }
             if t < 1.0 {
                 out += (1.0 - t) * self.opaque(&it, state, rng, counts);
@@ -278,19 +355,24 @@ impl Tracer<'_> {
         if !mat.is_reflective() {
             return colour;
         }
-        let q = if state.splits(self.scene.features.specular_depth) {
-            (state.weight * weight > MIN_WEIGHT).then_some(1.0)
+        let (q, gain, share) = if state.splits(self.scene.features.specular_depth) {
+            let (gain, share) = state.branch(weight);
+            (
+                (state.weight * weight > MIN_WEIGHT).then_some(1.0),
+                gain,
+                share,
+            )
         } else {
-            state.roulette(weight, rng, counts)
+            (state.roulette(weight, rng, counts), 1.0, state.share)
         };
         if let Some(q) = q {
             let wr = bsdf.reflected();
             let ray = Ray::new(offset_ray_origin(p, bsdf.ng, wr), wr);
             counts.secondary += 1;
-            let mut child = state.child(weight / q, state.media);
+            let mut child = state.child(weight / q, state.media).shared(share);
             // A Phong highlight already reflects the lights; the mirror image would count them twice.
             child.sees_emitters &= mat.shininess <= 0.0;
-            colour += mat.ks / q * self.radiance(&ray, child, rng, counts);
+            colour += gain * mat.ks / q * self.radiance(&ray, child, rng, counts);
         }
         colour
     }
@@ -313,19 +395,23 @@ impl Tracer<'_> {
         }
         let mut out = Vec3A::ZERO;
         if f > 0.0 && state.weight * f > MIN_WEIGHT {
+            let (gain, share) = state.branch(f);
             let wr = split.reflected;
             let ray = Ray::new(offset_ray_origin(p, ng, wr), wr);
             counts.secondary += 1;
-            out += f * self.radiance(&ray, state.child(f, state.media), rng, counts);
+            let child = state.child(f, state.media).shared(share);
+            out += gain * f * self.radiance(&ray, child, rng, counts);
         }
         if f < 1.0
             && state.weight * (1.0 - f) > MIN_WEIGHT
             && let Some(wt) = split.refracted
         {
+            let (gain, share) = state.branch(1.0 - f);
             let ray = Ray::new(offset_ray_origin(p, ng, wt), wt);
             counts.secondary += 1;
-            let radiance = self.radiance(&ray, state.child(1.0 - f, crossing.after), rng, counts);
-            out += (1.0 - f) * split.radiance_scale * radiance;
+            let child = state.child(1.0 - f, crossing.after).shared(share);
+            let radiance = self.radiance(&ray, child, rng, counts);
+            out += gain * (1.0 - f) * split.radiance_scale * radiance;
         }
         out
     }

@@ -11,7 +11,7 @@
 //! corners. Flat areas thus cost about one ray per pixel, and edges up to `(2^d + 1)²`. It draws
 //! no random numbers, so it is deterministic by construction.
 
-use super::{PassOptions, Radiance, Sampling};
+use super::{PassOptions, Radiance, Sampling, Share, WEAK_SHARERS};
 use crate::camera::Camera;
 use crate::sampling::{Pass, Rng, point_key, stratified_2d};
 use crate::stats::RayCounts;
@@ -91,9 +91,22 @@ impl<'a> PixelSampler<'a> {
 
     /// Returns the radiance along the camera ray through image-plane position `(x, y)`.
     fn trace(&self, x: f32, y: f32, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
+        self.trace_shared(x, y, Share::All, rng, counts)
+    }
+
+    /// [`PixelSampler::trace`] for a sample that shares its pixel's weak branches by `share`.
+    fn trace_shared(
+        &self,
+        x: f32,
+        y: f32,
+        share: Share,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
         counts.primary += 1;
         let ray = self.camera.ray(x, y);
-        finite_or_dropped(self.integrator.radiance(&ray, rng, counts), counts)
+        let radiance = self.integrator.radiance_shared(&ray, share, rng, counts);
+        finite_or_dropped(radiance, counts)
     }
 
     /// Returns the radiance through `(x, y)` with the random stream of that image-plane point, so
@@ -124,9 +137,21 @@ impl<'a> PixelSampler<'a> {
                 } else {
                     stratified_2d(&mut rng, spp)
                 };
+                // One sample in `sharers` follows the weak branches (see `Share`).
+                let sharers = spp.min(WEAK_SHARERS);
+                let first = Rng::new(self.opts.seed, Pass::Share, index).below(sharers);
                 let sum: Vec3A = positions
                     .iter()
-                    .map(|&(u, v)| self.trace(x as f32 + u, y as f32 + v, &mut rng, counts))
+                    .enumerate()
+                    .map(|(i, &(u, v))| {
+                        let share = match sharers {
+                            1 => Share::All,
+                            n if (i as u32 + first).is_multiple_of(n) => Share::Carry(n as f32),
+                            _ => Share::Skip,
+                        };
+                        let (x, y) = (x as f32 + u, y as f32 + v);
+                        self.trace_shared(x, y, share, &mut rng, counts)
+                    })
                     .sum();
                 sum / spp as f32
             }

@@ -337,7 +337,13 @@ impl Tracer<'_> {
     ) -> Vec3A {
         let (p, bsdf) = (it.surf.p, &it.bsdf);
         let mat = bsdf.material;
-        let mut colour = self.direct(p, bsdf, rng, counts);
+        // Inside a transparent solid, with every light outside all of them, every shadow ray
+        // would meet the solid's boundary: no light arrives directly.
+        let mut colour = if state.media.is_air() || !self.scene.lights_clear_of_media {
+            self.direct(p, bsdf, rng, counts)
+        } else {
+            Vec3A::ZERO
+        };
         match self.diffuse {
             DiffuseTerm::Ambient(ambient) => colour += ambient * bsdf.kd,
             DiffuseTerm::Photons(gi) => {

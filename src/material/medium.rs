@@ -43,6 +43,11 @@ impl MediumStack {
         MediumStack::default()
     }
 
+    /// Returns true when the ray is inside no transparent solid.
+    pub fn is_air(&self) -> bool {
+        self.len == 0
+    }
+
     /// Returns the index of the medium the ray is in.
     pub fn ior(&self) -> f32 {
         self.entries[..self.len as usize]

@@ -97,6 +97,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         tlas,
         stats,
         transparent: Vec::new(),
+        lights_clear_of_media: false,
         features: super::types::Features::GENERAL,
     };
     scene.transparent = scene
@@ -111,7 +112,28 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         })
         .map(|(i, inst)| (i as u32, inst.bounds))
         .collect();
+    scene.lights_clear_of_media = scene.lights.iter().all(|light| {
+        let b = light_bounds(light);
+        scene
+            .transparent
+            .iter()
+            .all(|(_, t)| (b.max.cmplt(t.min) | b.min.cmpgt(t.max)).any())
+    });
     Ok(scene)
+}
+
+/// Returns a box holding every point of `light` (an area light's with room to spare).
+fn light_bounds(light: &Light) -> Bounds {
+    use crate::light::Shape;
+    let (centre, half) = match light.shape {
+        Shape::Point { position } => (position, Vec3A::ZERO),
+        Shape::Area { centre, u, v, .. } => (centre, u.abs() + v.abs()),
+        Shape::Sphere { centre, radius } => (centre, Vec3A::splat(radius)),
+    };
+    Bounds {
+        min: centre - half,
+        max: centre + half,
+    }
 }
 
 /// What a render's root places in the world, by kind, without building anything.

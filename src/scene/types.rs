@@ -89,6 +89,11 @@ pub struct Scene {
     /// fewer than two, no two transparent solids can touch and [`Scene::touching`] is skipped;
     /// otherwise it runs only at hits inside another one's bounds.
     pub transparent: Vec<(u32, Bounds)>,
+    /// Whether every light lies outside the world bounds of every transparent instance. Then a
+    /// point inside a transparent solid sees no light directly: a shadow ray from it must cross
+    /// the solid's boundary, which blocks it (the light through it is the caustic map's), so
+    /// the eye path casts none ([`Scene::lights_clear_of_media`]).
+    pub lights_clear_of_media: bool,
     /// What of its materials and lights the passes simulate: the effect plan's choice, applied
     /// by [`Scene::apply`] before any pass runs; [`Features::GENERAL`] until then.
     pub features: Features,

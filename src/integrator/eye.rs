@@ -183,17 +183,7 @@ pub struct Tracer<'a> {
 }
 
 impl Radiance for Tracer<'_> {
-    fn radiance(&self, ray: &Ray, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
-        self.radiance(ray, PathState::camera(), rng, counts)
-    }
-
-    fn radiance_shared(
-        &self,
-        ray: &Ray,
-        share: Share,
-        rng: &mut Rng,
-        counts: &mut RayCounts,
-    ) -> Vec3A {
+    fn radiance(&self, ray: &Ray, share: Share, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
         self.radiance(ray, PathState::camera_sample(share), rng, counts)
     }
 }

@@ -105,7 +105,7 @@ impl<'a> PixelSampler<'a> {
     ) -> Vec3A {
         counts.primary += 1;
         let ray = self.camera.ray(x, y);
-        let radiance = self.integrator.radiance_shared(&ray, share, rng, counts);
+        let radiance = self.integrator.radiance(&ray, share, rng, counts);
         finite_or_dropped(radiance, counts)
     }
 

@@ -33,22 +33,10 @@ use std::time::{Duration, Instant};
 
 /// What an integrator answers for the camera pass: the radiance arriving along a camera ray.
 pub trait Radiance: Sync {
-    /// Returns the radiance arriving at `ray`'s origin along it, drawing from `rng` and counting
-    /// the rays it traces in `counts`.
-    fn radiance(&self, ray: &Ray, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A;
-
-    /// [`Radiance::radiance`] for one sample of a pixel whose samples share its weak branches
-    /// as `share` says. An integrator that does not split paths ignores it.
-    fn radiance_shared(
-        &self,
-        ray: &Ray,
-        share: Share,
-        rng: &mut Rng,
-        counts: &mut RayCounts,
-    ) -> Vec3A {
-        let _ = share;
-        self.radiance(ray, rng, counts)
-    }
+    /// Returns the radiance arriving at `ray`'s origin along it for one camera sample that
+    /// shares its pixel's weak branches as `share` says ([`Share::All`]: follow everything),
+    /// drawing from `rng` and counting the rays it traces in `counts`.
+    fn radiance(&self, ray: &Ray, share: Share, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A;
 }
 
 /// How the samples of one pixel share the *weak branches* of their eye paths: the reflections

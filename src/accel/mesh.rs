@@ -137,7 +137,7 @@ impl MeshGeom {
             ray,
             #[inline(always)]
             |r, leaf| {
-                super::counters::triangles(self.bvh.leaves()[leaf as usize].count);
+                super::counters::triangles(|| self.bvh.leaves()[leaf as usize].count);
                 let block = &self.blocks[leaf as usize];
                 let hit = if scalar {
                     block.closest_scalar(&shear, r.tmin, r.tmax)
@@ -165,7 +165,7 @@ impl MeshGeom {
             ray,
             #[inline(always)]
             |r, leaf| {
-                super::counters::triangles(self.bvh.leaves()[leaf as usize].count);
+                super::counters::triangles(|| self.bvh.leaves()[leaf as usize].count);
                 let block = &self.blocks[leaf as usize];
                 found = if scalar {
                     block.any_scalar(&shear, r.tmin, r.tmax)

@@ -12,9 +12,14 @@ use caustic::scene::build::build_scene;
 /// A pool: a diffuse floor and a diffuse block under a closed body of water, a point light
 /// above it at `light_y`, a camera looking down through the surface and at a wall above it.
 fn pool(light_y: f32) -> String {
+    pool_of(light_y, "gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.33)")
+}
+
+/// [`pool`] with the water's material given as Lua.
+fn pool_of(light_y: f32, water: &str) -> String {
     format!(
         "stone = gr.material({{0.6, 0.5, 0.4}}, {{0, 0, 0}}, 0)
-water = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 1.33)
+water = {water}
 root = gr.node('root')
 floor = gr.cube('floor'); floor:set_material(stone)
 floor:scale(4, 0.2, 4); floor:translate(-2, -1.2, -2); root:add_child(floor)
@@ -75,4 +80,18 @@ fn a_light_inside_the_waters_bounds_keeps_every_shadow_ray() {
     let (slow, slow_rays, _) = render(&src, false);
     assert!(!decided);
     assert_eq!((fast, fast_rays), (slow, slow_rays));
+}
+
+#[test]
+fn water_that_is_partly_opaque_renders_the_same_frame_with_the_shortcut() {
+    // Half-opaque water (t = 0.5, a diffuse kd): paths inside it meet its walls from within and
+    // shade their opaque half. Such a point is on the solid's boundary, not inside it; the
+    // shortcut leaves it alone (its inward-facing side sees no outside light either way), and
+    // the frame must equal the one traced with every shadow ray.
+    let src = pool_of(2.0, "gr.material({0.3, 0.5, 0.6}, {0, 0, 0}, 0, 0.5, 1.33)");
+    let (fast, fast_rays, decided) = render(&src, true);
+    let (slow, slow_rays, _) = render(&src, false);
+    assert!(decided);
+    assert_eq!(fast, slow, "the shortcut changed a pixel");
+    assert!(fast_rays < slow_rays, "{fast_rays} against {slow_rays}");
 }

@@ -327,9 +327,11 @@ impl Tracer<'_> {
     ) -> Vec3A {
         let (p, bsdf) = (it.surf.p, &it.bsdf);
         let mat = bsdf.material;
-        // Inside a transparent solid, with every light outside all of them, every shadow ray
-        // would meet the solid's boundary: no light arrives directly.
-        let mut colour = if state.media.is_air() || !self.scene.lights_clear_of_media {
+        // At an opaque surface inside a transparent solid, with every light outside all of
+        // them, every shadow ray would meet the solid's boundary: no light arrives directly.
+        // A partly transparent surface is that boundary itself, not inside it: it keeps its rays.
+        let inside = !state.media.is_air() && mat.transparency <= 0.0;
+        let mut colour = if !inside || !self.scene.lights_clear_of_media {
             self.direct(p, bsdf, rng, counts)
         } else {
             Vec3A::ZERO

@@ -219,51 +219,50 @@ impl Tracer<'_> {
                 return seen_scale * scale * background(self.camera, ray.dir);
             };
             let skip = state.share == Share::Emitters;
-            let (needs, clock) = if skip {
+            // Only a transparent surface can be a false interface to see through.
+            let mat = &self.scene.materials[hit.material as usize];
+            if skip && mat.transparency <= 0.0 {
                 counts.weak_skipped += 1;
-                // Only a transparent surface can be a false interface to see through.
-                if self.scene.materials[hit.material as usize].transparency <= 0.0 {
-                    return Vec3A::ZERO;
-                }
-                (Needs::Albedo, None)
-            } else {
-                let clock = counts.timing.then_some(&mut counts.material_nanos);
-                (Needs::Full, clock)
-            };
-            let it = self.scene.interaction(&ray, &hit, needs, clock);
-            let t = it.bsdf.material.transparency;
-            let mut out = Vec3A::ZERO;
-            if let Some(crossing) = it.bsdf.crossing(&state.media) {
-                if crossing.is_false() {
-                    // The boundary of a solid inside a denser one: no surface here, go straight on.
-                    let q = if state.splits(self.scene.features.specular_depth) {
-                        1.0
-                    } else {
-                        match state.roulette(1.0, rng, counts) {
-                            Some(q) => q,
-                            None => return Vec3A::ZERO,
-                        }
-                    };
-                    ray = Ray::new(offset_ray_origin(it.surf.p, it.surf.ng, ray.dir), ray.dir);
-                    counts.secondary += 1;
-                    state = state.child(1.0 / q, crossing.after);
-                    scale /= q;
-                    continue;
-                }
-                if skip {
-                    return Vec3A::ZERO;
-                }
-                // The surface a carried weak branch reaches: shaded in full, every branch below.
-                if let Share::Surfaces(_) = state.share {
-                    state.share = Share::All;
-                }
-                out += t * self.dielectric(&it, &crossing, state, rng, counts);
-            }
-            if skip {
                 return Vec3A::ZERO;
             }
+            let (needs, clock) = if skip {
+                (Needs::Albedo, None)
+            } else {
+                (
+                    Needs::Full,
+                    counts.timing.then_some(&mut counts.material_nanos),
+                )
+            };
+            let it = self.scene.interaction(&ray, &hit, needs, clock);
+            let crossing = it.bsdf.crossing(&state.media);
+            if let Some(c) = crossing.as_ref().filter(|c| c.is_false()) {
+                // The boundary of a solid inside a denser one: no surface here, go straight on.
+                let q = if state.splits(self.scene.features.specular_depth) {
+                    1.0
+                } else {
+                    match state.roulette(1.0, rng, counts) {
+                        Some(q) => q,
+                        None => return Vec3A::ZERO,
+                    }
+                };
+                ray = Ray::new(offset_ray_origin(it.surf.p, it.surf.ng, ray.dir), ray.dir);
+                counts.secondary += 1;
+                state = state.child(1.0 / q, c.after);
+                scale /= q;
+                continue;
+            }
+            if skip {
+                counts.weak_skipped += 1;
+                return Vec3A::ZERO;
+            }
+            // The surface a carried weak branch reaches: shaded in full, every branch below.
             if let Share::Surfaces(_) = state.share {
                 state.share = Share::All;
+            }
+            let t = it.bsdf.material.transparency;
+            let mut out = Vec3A::ZERO;
+            if let Some(crossing) = &crossing {
+                out += t * self.dielectric(&it, crossing, state, rng, counts);
             }
             if t < 1.0 {
                 out += (1.0 - t) * self.opaque(&it, state, rng, counts);

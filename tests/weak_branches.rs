@@ -41,23 +41,15 @@ struct Counts {
 fn render(ks: f32, sky: bool, spp: u32, name: &str) -> (Vec<Vec3A>, Counts) {
     let dir = common::out_dir(name);
     std::fs::write(dir.join("scene.lua"), mirror_scene(ks, sky)).unwrap();
-    let out = common::caustic()
-        .current_dir(&dir)
-        .args([
-            "render",
-            "scene.lua",
-            "-q",
-            "--stats",
-            "--spp",
-            &spp.to_string(),
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let spp = spp.to_string();
+    let out = common::run_ok(common::caustic().current_dir(&dir).args([
+        "render",
+        "scene.lua",
+        "-q",
+        "--stats",
+        "--spp",
+        &spp,
+    ]));
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
     let line = |start: &str| {
         text.lines()

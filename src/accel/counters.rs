@@ -149,6 +149,14 @@ pub fn thread_total() -> (u64, u64) {
     })
 }
 
+/// Returns [`thread_total`] and resets this thread's counts (for benchmarks that count one
+/// phase at a time on the calling thread).
+pub fn thread_total_reset() -> (u64, u64) {
+    let total = thread_total();
+    let _ = take();
+    total
+}
+
 /// Returns this thread's counts by kind and resets them.
 fn take() -> ByKind {
     TALLY.with(|t| {

@@ -1,13 +1,16 @@
 //! Traversal benchmark against the Embree reference harness (`../shared/bench/README.md`).
 //!
 //! ```text
-//! bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--kernel K] [--builder B]
-//!                 [--count] MESH RAYS [RAYS...]
+//! bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--tiles N] [--kernel K]
+//!                 [--builder B] [--count] MESH RAYS [RAYS...]
 //! ```
 //!
 //! `--count` turns on the traversal counters that `--stats` and `--heatmap` read
 //! ([`caustic::accel::counters`]), to measure what counting costs: run with and without it. With
 //! it, single-threaded `TRACE` lines also give `nodes_per_ray` and `tris_per_ray` (triangles tested).
+//!
+//! `--tiles N` also traces each image's rays (primary sets) on one thread in `N`×`N` tiles, the
+//! order of a tiled renderer, to measure what ordering camera rays gains over scanlines.
 //!
 //! `--kernel scalar|sse2|avx2` picks the BVH node test (default: the fastest the CPU runs);
 //! `--builder sah|ploc` the BVH builder (default: `sah`, the one meshes use); the report's
@@ -51,13 +54,14 @@ struct Options {
     build_reps: usize,
     verify: Option<usize>,
     mt: usize,
+    tiles: usize,
     kernel: Kernel,
     builder: Builder,
     mesh: PathBuf,
     rays: Vec<PathBuf>,
 }
 
-const USAGE: &str = "usage: bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] \
+const USAGE: &str = "usage: bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--tiles N] \
                      [--kernel scalar|sse2|avx2] [--builder sah|ploc] [--count] MESH RAYS [RAYS...]";
 
 fn parse_args() -> Result<Options, String> {
@@ -66,6 +70,7 @@ fn parse_args() -> Result<Options, String> {
         build_reps: 3,
         verify: None,
         mt: 2,
+        tiles: 0,
         kernel: Kernel::best(),
         builder: Builder::BinnedSah,
         mesh: PathBuf::new(),
@@ -84,6 +89,7 @@ fn parse_args() -> Result<Options, String> {
             "--build-reps" => o.build_reps = num("--build-reps")?.max(1),
             "--verify" => o.verify = Some(num("--verify")?),
             "--mt" => o.mt = num("--mt")?,
+            "--tiles" => o.tiles = num("--tiles")?.clamp(1, 4096),
             "--kernel" => {
                 o.kernel = match args.next().as_deref() {
                     Some("scalar") => Kernel::Scalar,
@@ -178,6 +184,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .transpose()?;
     for set in &sets {
         ctx.trace_set(set, None);
+        if o.tiles > 0 && set.width > 0 {
+            ctx.trace_set(&in_tiles(set, o.tiles), None);
+        }
         if let Some(pool) = &pool {
             ctx.trace_set(set, Some((pool, o.mt)));
         }
@@ -187,6 +196,29 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         verify(&ctx, &data, set, k);
     }
     Ok(())
+}
+
+/// Returns an image's rays reordered into `n`×`n` tiles, tile after tile in rows and each tile's
+/// rays row by row: the order in which a tiled renderer traces its camera rays. Its `TRACE`
+/// lines name the set `RAYS@tilesN`; `sum_t` may differ in the last digits from file order
+/// (the same hits, added in another order).
+fn in_tiles(set: &RaySet, n: usize) -> RaySet {
+    let (w, h) = (set.width as usize, set.height as usize);
+    let mut rays = Vec::with_capacity(set.rays.len());
+    for ty in (0..h).step_by(n) {
+        for tx in (0..w).step_by(n) {
+            for y in ty..(ty + n).min(h) {
+                rays.extend_from_slice(&set.rays[y * w + tx..y * w + (tx + n).min(w)]);
+            }
+        }
+    }
+    let mut path = set.path.clone().into_os_string();
+    path.push(format!("@tiles{n}"));
+    RaySet {
+        path: path.into(),
+        rays,
+        ..set.clone()
+    }
 }
 
 /// Returns the report's `quality`: the build configuration and the node-test kernel.

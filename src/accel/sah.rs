@@ -406,7 +406,15 @@ fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: u
         let subs: Vec<(u32, Sub)> = jobs
             .into_par_iter()
             .map(|(mine, at, local)| {
-                let mut s = Sub::default();
+                // Room for the leaves and nodes such a range makes (n/3.95 leaves, a few
+                // under four triangles each, and about n/20 nodes), so that building does not
+                // grow the arrays by copying.
+                let n = local.len();
+                let mut s = Sub {
+                    nodes: Vec::with_capacity(n / 16 + 4),
+                    leaves: Vec::with_capacity(n / 4 + n / 32 + 4),
+                    depth: 0,
+                };
                 let root = subtree(mine, at, local, &mut s, level + 1);
                 (root, s)
             })

@@ -70,15 +70,12 @@ impl MeshGeom {
             .par_iter()
             .map(|&p| p.into())
             .collect_into_vec(&mut positions);
-        let boxes: Vec<Bounds> = data
-            .triangles
-            .par_iter()
-            .map(|t| {
-                t.iter()
-                    .fold(Bounds::EMPTY, |b, &i| b.grow(positions[i as usize]))
-            })
-            .collect();
-        let bvh = Bvh::build_with(&boxes, builder);
+        let box_of = |t: usize| {
+            data.triangles[t]
+                .iter()
+                .fold(Bounds::EMPTY, |b, &i| b.grow(positions[i as usize]))
+        };
+        let bvh = Bvh::build_by(data.triangles.len(), box_of, builder);
         let mut triangles = crate::mem::huge_vec(bvh.len());
         bvh.order()
             .par_iter()
@@ -108,9 +105,9 @@ impl MeshGeom {
                 }
             })
             .collect_into_vec(&mut blocks);
-        let bounds = boxes
-            .par_iter()
-            .copied()
+        let bounds = (0..data.triangles.len())
+            .into_par_iter()
+            .map(box_of)
             .reduce(|| Bounds::EMPTY, Bounds::union);
         MeshGeom {
             positions,

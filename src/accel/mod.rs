@@ -133,29 +133,34 @@ impl Bvh {
 
     /// Builds a BVH over `boxes`, which must all be finite, with `builder`.
     pub fn build_with(boxes: &[Bounds], builder: Builder) -> Bvh {
-        debug_assert!(boxes.iter().all(Bounds::is_finite));
-        if boxes.len() < 2 {
-            return Bvh {
-                inner: None,
-                len: boxes.len(),
-            };
+        Bvh::build_by(boxes.len(), |i| boxes[i], builder)
+    }
+
+    /// Builds a BVH over `len` primitives whose boxes `box_of(i)` gives (all finite), with
+    /// `builder`, without an array of boxes: the binned SAH builder asks for each box once, as
+    /// it makes its references. For a big mesh that array was 32 bytes a triangle written, faulted
+    /// in and read back for nothing.
+    pub fn build_by(len: usize, box_of: impl Fn(usize) -> Bounds + Sync, builder: Builder) -> Bvh {
+        if len < 2 {
+            return Bvh { inner: None, len };
         }
         let inner = match builder {
             Builder::Ploc => {
-                let aabbs: Vec<Aabb> = boxes
-                    .iter()
-                    .map(|b| {
+                let aabbs: Vec<Aabb> = (0..len)
+                    .map(|i| {
+                        let b = box_of(i);
+                        debug_assert!(b.is_finite());
                         let p = b.padded();
                         Aabb::new(p.min, p.max)
                     })
                     .collect();
                 ploc::build(&aabbs)
             }
-            Builder::BinnedSah => sah::build(boxes),
+            Builder::BinnedSah => sah::build(len, box_of),
         };
         Bvh {
             inner: Some(inner),
-            len: boxes.len(),
+            len,
         }
     }
 

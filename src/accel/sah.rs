@@ -435,14 +435,15 @@ fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: u
     me as u32
 }
 
-/// Builds an 8-wide BVH over `boxes` (at least two, all finite), each padded as
-/// [`Bounds::padded`] says.
-pub(super) fn build(boxes: &[Bounds]) -> WideBvh {
-    let mut prims = crate::mem::huge_vec(boxes.len());
-    boxes
-        .par_iter()
-        .enumerate()
-        .map(|(i, b)| {
+/// Builds an 8-wide BVH over the `len` boxes `box_of` gives (at least two, all finite), each
+/// padded as [`Bounds::padded`] says.
+pub(super) fn build(len: usize, box_of: impl Fn(usize) -> Bounds + Sync) -> WideBvh {
+    let mut prims = crate::mem::huge_vec(len);
+    (0..len)
+        .into_par_iter()
+        .map(|i| {
+            let b = box_of(i);
+            debug_assert!(b.is_finite());
             let b = b.padded();
             let mut lo = Vec4::from((b.min, 0.0));
             lo.w = f32::from_bits(i as u32);

@@ -308,10 +308,13 @@ fn partition(s: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> (usize, Side
         if i >= j {
             return (i, l, r);
         }
-        // s[i] goes right and s[j - 1] left: swap them, and count each on its side.
-        s.swap(i, j - 1);
-        l.add(&s[i]);
-        r.add(&s[j - 1]);
+        // s[i] goes right and s[j - 1] left: swap them, and count each on its side (from the
+        // values in hand: read back after the swap, each waited for its own store).
+        let (a, b) = (s[i], s[j - 1]);
+        l.add(&b);
+        r.add(&a);
+        s[i] = b;
+        s[j - 1] = a;
         i += 1;
         j -= 1;
     }

@@ -10,7 +10,8 @@
 //! it, single-threaded `TRACE` lines also give `nodes_per_ray` and `tris_per_ray` (triangles tested).
 //!
 //! `--tiles N` also traces each image's rays (primary sets) on one thread in `N`×`N` tiles, the
-//! order of a tiled renderer, to measure what ordering camera rays gains over scanlines.
+//! order of a tiled renderer, to measure what ordering camera rays gains over scanlines (modes
+//! `intersect1_tilesN` and `occluded1_tilesN`).
 //!
 //! `--kernel scalar|sse2|avx2` picks the BVH node test (default: the fastest the CPU runs);
 //! `--builder sah|ploc` the BVH builder (default: `sah`, the one meshes use); the report's
@@ -183,12 +184,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         })
         .transpose()?;
     for set in &sets {
-        ctx.trace_set(set, None);
+        ctx.trace_set(set, None, "");
         if o.tiles > 0 && set.width > 0 {
-            ctx.trace_set(&in_tiles(set, o.tiles), None);
+            ctx.trace_set(&in_tiles(set, o.tiles), None, &format!("_tiles{}", o.tiles));
         }
         if let Some(pool) = &pool {
-            ctx.trace_set(set, Some((pool, o.mt)));
+            ctx.trace_set(set, Some((pool, o.mt)), "");
         }
         let k = o
             .verify
@@ -200,8 +201,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
 
 /// Returns an image's rays reordered into `n`×`n` tiles, tile after tile in rows and each tile's
 /// rays row by row: the order in which a tiled renderer traces its camera rays. Its `TRACE`
-/// lines name the set `RAYS@tilesN`; `sum_t` may differ in the last digits from file order
-/// (the same hits, added in another order).
+/// lines have modes `intersect1_tilesN` and `occluded1_tilesN`, which `make_table.py` puts in
+/// columns of their own; `sum_t` may differ in the last digits from file order (the same hits,
+/// added in another order).
 fn in_tiles(set: &RaySet, n: usize) -> RaySet {
     let (w, h) = (set.width as usize, set.height as usize);
     let mut rays = Vec::with_capacity(set.rays.len());
@@ -212,12 +214,12 @@ fn in_tiles(set: &RaySet, n: usize) -> RaySet {
             }
         }
     }
-    let mut path = set.path.clone().into_os_string();
-    path.push(format!("@tiles{n}"));
     RaySet {
-        path: path.into(),
+        path: set.path.clone(),
+        kind: set.kind,
+        width: set.width,
+        height: set.height,
         rays,
-        ..set.clone()
     }
 }
 
@@ -379,7 +381,8 @@ impl Ctx<'_> {
     }
 
     /// Times both queries over one ray set and prints their `TRACE` lines.
-    fn trace_set(&self, set: &RaySet, mt: Option<(&rayon::ThreadPool, usize)>) {
+    /// `order` names the ray order in the mode (`""` for file order).
+    fn trace_set(&self, set: &RaySet, mt: Option<(&rayon::ThreadPool, usize)>, order: &str) {
         for occluded in [false, true] {
             let pool = mt.map(|m| m.0);
             // The untimed warm-up gives the checksums in file order, as Embree's primID. The
@@ -403,7 +406,7 @@ impl Ctx<'_> {
             let n = set.rays.len() as f64;
             let base = if occluded { "occluded1" } else { "intersect1" };
             let mode = match mt {
-                None => base.to_string(),
+                None => format!("{base}{order}"),
                 Some((_, k)) => format!("{base}_{k}t"),
             };
             let (best, med) = (clock::min(&wall), clock::median(&wall));

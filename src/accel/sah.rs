@@ -21,8 +21,11 @@
 //!   maxima do not depend on the order of the reduction, so the tree is the same for any number
 //!   of threads.
 //!
-//! Measured on the wave mesh (2-core VM, `bench_traversal`): 0.80–0.92 s on one thread and
-//! 0.46–0.57 s on two; 3.95 triangles per leaf, 5.4 children per node, 53 B per triangle; primary
+//! Measured on the wave mesh (2-core VM, `bench_traversal`): first 0.80–0.92 s on one thread and
+//! 0.46–0.57 s on two; since the subtrees reserve their arrays, the boxes come from a function
+//! instead of an array and the partition stops reading back what it swapped, 0.55–0.67 s and
+//! 0.30–0.37 s (Embree 3's binned SAH, the same day: 0.58–0.72 s and 0.29–0.33 s). 3.95
+//! triangles per leaf, 5.4 children per node, 55 B per triangle with the mesh's blocks; primary
 //! rays 4.5–5.3 Mrays/s against 3.5–3.7 from the PLOC tree. Without pairs nodes averaged 3.2
 //! children (ranges of five to eight triangles became nodes of two leaves) and the BVH took
 //! 72 B per triangle.

@@ -145,7 +145,8 @@ impl MeshGeom {
 
     /// Returns the closest triangle hit by an object-space ray and its barycentrics.
     pub fn intersect(&self, ray: &Ray) -> Option<(u32, TriangleHit)> {
-        let shear = RayShear::new(ray);
+        // Made at the first leaf: most random rays miss the mesh's box and never need it.
+        let mut shear = None;
         let scalar = self.bvh.kernel() == Kernel::Scalar;
         let mut best = None;
         self.bvh.closest_leaf(
@@ -154,10 +155,11 @@ impl MeshGeom {
             |r, leaf| {
                 super::counters::triangles(|| self.bvh.leaves()[leaf as usize].count);
                 let block = &self.blocks[leaf as usize];
+                let shear = shear.get_or_insert_with(|| RayShear::new(ray));
                 let hit = if scalar {
-                    block.tris.closest_scalar(&shear, r.tmin, r.tmax)
+                    block.tris.closest_scalar(shear, r.tmin, r.tmax)
                 } else {
-                    block.tris.closest(&shear, r.tmin, r.tmax)
+                    block.tris.closest(shear, r.tmin, r.tmax)
                 };
                 match hit {
                     Some((lane, h)) => {
@@ -173,7 +175,7 @@ impl MeshGeom {
 
     /// Returns the `t` of some triangle on the ray within `(tmin, tmax)` (any hit, not the closest).
     pub fn any_hit(&self, ray: &Ray) -> Option<f32> {
-        let shear = RayShear::new(ray);
+        let mut shear = None;
         let scalar = self.bvh.kernel() == Kernel::Scalar;
         let mut found = None;
         self.bvh.any_leaf(
@@ -182,10 +184,11 @@ impl MeshGeom {
             |r, leaf| {
                 super::counters::triangles(|| self.bvh.leaves()[leaf as usize].count);
                 let block = &self.blocks[leaf as usize];
+                let shear = shear.get_or_insert_with(|| RayShear::new(ray));
                 found = if scalar {
-                    block.tris.any_scalar(&shear, r.tmin, r.tmax)
+                    block.tris.any_scalar(shear, r.tmin, r.tmax)
                 } else {
-                    block.tris.any(&shear, r.tmin, r.tmax)
+                    block.tris.any(shear, r.tmin, r.tmax)
                 };
                 found.is_some()
             },

@@ -11,12 +11,15 @@
 //! ```
 
 use crate::accel::tri4::Tri4;
+#[cfg(target_arch = "x86_64")]
+use crate::accel::tri4::{self, LANES};
 use crate::accel::{Bounds, Builder, Bvh, Kernel};
 use crate::geometry::Ray;
 use crate::geometry::mesh::MeshData;
 use crate::geometry::triangle::{RayShear, TriangleHit};
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// A BVH leaf's triangles as traversal reads them: their corners, and the BVH-order index of
 /// the first, so that a hit names its triangle from the cache lines just tested. Looking it up in
@@ -147,27 +150,20 @@ impl MeshGeom {
     pub fn intersect(&self, ray: &Ray) -> Option<(u32, TriangleHit)> {
         // Made at the first leaf: most random rays miss the mesh's box and never need it.
         let mut shear = None;
-        let scalar = self.bvh.kernel() == Kernel::Scalar;
+        let kernel = self.bvh.kernel();
         let mut best = None;
         self.bvh.closest_leaf(
             ray,
             #[inline(always)]
-            |r, leaf| {
-                super::counters::triangles(|| self.bvh.leaves()[leaf as usize].count);
-                let block = &self.blocks[leaf as usize];
+            |r, ids| {
+                self.count(&ids);
                 let shear = shear.get_or_insert_with(|| RayShear::new(ray));
-                let hit = if scalar {
-                    block.tris.closest_scalar(shear, r.tmin, r.tmax)
-                } else {
-                    block.tris.closest(shear, r.tmin, r.tmax)
-                };
-                match hit {
-                    Some((lane, h)) => {
-                        best = Some((block.first + lane, h));
-                        h.t
-                    }
-                    None => f32::INFINITY,
+                let blocks = &self.blocks[ids.start as usize..ids.end as usize];
+                let (found, tmax) = closest_in(blocks, kernel, shear, r.tmin, r.tmax);
+                if found.is_some() {
+                    best = found;
                 }
+                tmax
             },
         );
         best
@@ -176,23 +172,93 @@ impl MeshGeom {
     /// Returns the `t` of some triangle on the ray within `(tmin, tmax)` (any hit, not the closest).
     pub fn any_hit(&self, ray: &Ray) -> Option<f32> {
         let mut shear = None;
-        let scalar = self.bvh.kernel() == Kernel::Scalar;
+        let kernel = self.bvh.kernel();
         let mut found = None;
         self.bvh.any_leaf(
             ray,
             #[inline(always)]
-            |r, leaf| {
-                super::counters::triangles(|| self.bvh.leaves()[leaf as usize].count);
-                let block = &self.blocks[leaf as usize];
+            |r, ids| {
+                self.count(&ids);
                 let shear = shear.get_or_insert_with(|| RayShear::new(ray));
-                found = if scalar {
-                    block.tris.any_scalar(shear, r.tmin, r.tmax)
-                } else {
-                    block.tris.any(shear, r.tmin, r.tmax)
-                };
+                let blocks = &self.blocks[ids.start as usize..ids.end as usize];
+                found = any_in(blocks, kernel, shear, r.tmin, r.tmax);
                 found.is_some()
             },
         );
         found
     }
+
+    /// Counts the triangle tests of leaves `ids` (when counting is on).
+    #[inline(always)]
+    fn count(&self, ids: &Range<u32>) {
+        super::counters::triangles(|| {
+            let leaves = &self.bvh.leaves()[ids.start as usize..ids.end as usize];
+            leaves.iter().map(|l| l.count).sum()
+        });
+    }
+}
+
+/// Returns the closest hit among one block or a pair (its triangle and hit) and the `t` the ray
+/// ends at: the hit's, or infinity. The AVX2 kernel tests a pair's eight lanes at once; the
+/// others test the blocks one after the other, which finds the same hit (lowest lane on a tie).
+#[inline(always)]
+fn closest_in(
+    blocks: &[Block],
+    kernel: Kernel,
+    shear: &RayShear,
+    tmin: f32,
+    tmax: f32,
+) -> (Option<(u32, TriangleHit)>, f32) {
+    #[cfg(target_arch = "x86_64")]
+    if let [a, b] = blocks
+        && kernel == Kernel::Avx2
+    {
+        // SAFETY: the kernel is `Avx2` only where the CPU has AVX2 (`Bvh::set_kernel`).
+        let hit = unsafe { tri4::closest_pair(&a.tris, &b.tris, shear, tmin, tmax) };
+        return match hit {
+            Some((lane, h)) => {
+                let block = if lane < LANES as u32 { a } else { b };
+                (Some((block.first + lane % LANES as u32, h)), h.t)
+            }
+            None => (None, f32::INFINITY),
+        };
+    }
+    let mut best = None;
+    let mut tmax = tmax;
+    for block in blocks {
+        let hit = if kernel == Kernel::Scalar {
+            block.tris.closest_scalar(shear, tmin, tmax)
+        } else {
+            block.tris.closest(shear, tmin, tmax)
+        };
+        if let Some((lane, h)) = hit {
+            best = Some((block.first + lane, h));
+            tmax = h.t;
+        }
+    }
+    let t = best.map_or(f32::INFINITY, |(_, h)| h.t);
+    (best, t)
+}
+
+/// Returns the `t` of some hit among one block or a pair, the first in lane order.
+#[inline(always)]
+fn any_in(blocks: &[Block], kernel: Kernel, shear: &RayShear, tmin: f32, tmax: f32) -> Option<f32> {
+    #[cfg(target_arch = "x86_64")]
+    if let [a, b] = blocks
+        && kernel == Kernel::Avx2
+    {
+        // SAFETY: as in `closest_in`.
+        return unsafe { tri4::any_pair(&a.tris, &b.tris, shear, tmin, tmax) };
+    }
+    for block in blocks {
+        let t = if kernel == Kernel::Scalar {
+            block.tris.any_scalar(shear, tmin, tmax)
+        } else {
+            block.tris.any(shear, tmin, tmax)
+        };
+        if t.is_some() {
+            return t;
+        }
+    }
+    None
 }

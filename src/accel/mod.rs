@@ -40,6 +40,7 @@ pub use wide::{Kernel, Leaf};
 use crate::geometry::Ray;
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
+use std::ops::Range;
 use wide::WideBvh;
 
 /// How a [`Bvh`] is built.
@@ -208,28 +209,29 @@ impl Bvh {
             .map_or(k.min(Kernel::best()), |b| b.set_kernel(k))
     }
 
-    /// Finds the closest hit leaf by leaf: `leaf_fn(ray, leaf)` returns the smallest `t` in the
-    /// ray's `(tmin, tmax)` among the primitives of leaf `leaf` (an index into [`Bvh::leaves`]),
-    /// or infinity; the ray it sees has the closest `t` found so far as its `tmax`.
+    /// Finds the closest hit leaf by leaf: `leaf_fn(ray, ids)` returns the smallest `t` in the
+    /// ray's `(tmin, tmax)` among the primitives of leaves `ids` (indices into [`Bvh::leaves`]:
+    /// one leaf, or two that the builder put side by side, five to eight primitives tested
+    /// together), or infinity; the ray it sees has the closest `t` found so far as its `tmax`.
     #[inline]
-    pub fn closest_leaf(&self, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, u32) -> f32) {
+    pub fn closest_leaf(&self, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32) {
         match &self.inner {
             Some(bvh) => bvh.closest(ray, leaf_fn),
             None => {
                 if self.len == 1 {
-                    leaf_fn(ray, 0);
+                    leaf_fn(ray, 0..1);
                 }
             }
         }
     }
 
-    /// Returns true when `leaf_fn(ray, leaf)` reports a hit in the ray's `(tmin, tmax)` for some
-    /// leaf (an index into [`Bvh::leaves`]).
+    /// Returns true when `leaf_fn(ray, ids)` reports a hit in the ray's `(tmin, tmax)` among
+    /// leaves `ids` (as for [`Bvh::closest_leaf`]) for some run the ray reaches.
     #[inline]
-    pub fn any_leaf(&self, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, u32) -> bool) -> bool {
+    pub fn any_leaf(&self, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool) -> bool {
         match &self.inner {
             Some(bvh) => bvh.any(ray, leaf_fn),
-            None => self.len == 1 && leaf_fn(ray, 0),
+            None => self.len == 1 && leaf_fn(ray, 0..1),
         }
     }
 
@@ -243,10 +245,9 @@ impl Bvh {
     ) -> Option<(usize, f32)> {
         let leaves = self.leaves();
         let mut best = None;
-        self.closest_leaf(ray, |r, leaf| {
-            let l = leaves[leaf as usize];
+        self.closest_leaf(ray, |r, ids| {
             let mut r = *r;
-            for i in l.first as usize..(l.first + l.count) as usize {
+            for i in ids.flat_map(|id| leaves[id as usize].range()) {
                 let t = hit_fn(&r, i);
                 if t > r.tmin && t < r.tmax {
                     best = Some((i, t));
@@ -262,9 +263,9 @@ impl Bvh {
     #[inline]
     pub fn any(&self, ray: &Ray, mut hit_fn: impl FnMut(&Ray, usize) -> f32) -> bool {
         let leaves = self.leaves();
-        self.any_leaf(ray, |r, leaf| {
-            let l = leaves[leaf as usize];
-            (l.first as usize..(l.first + l.count) as usize).any(|i| hit_fn(r, i) < r.tmax)
+        self.any_leaf(ray, |r, ids| {
+            ids.flat_map(|id| leaves[id as usize].range())
+                .any(|i| hit_fn(r, i) < r.tmax)
         })
     }
 }

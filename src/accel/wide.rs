@@ -12,6 +12,7 @@
 use super::stack::{Entry, Stack};
 use crate::geometry::Ray;
 use glam::Vec3A;
+use std::ops::Range;
 
 /// Children per node.
 pub(super) const WIDTH: usize = 8;
@@ -24,7 +25,7 @@ pub(super) const PAIR: u32 = 1 << 30;
 
 /// Returns the leaf ids of a leaf child: one, or two with [`PAIR`].
 #[inline(always)]
-pub(super) fn leaf_ids(child: u32) -> std::ops::Range<u32> {
+pub(super) fn leaf_ids(child: u32) -> Range<u32> {
     let id = child & !(LEAF | PAIR);
     id..id + 1 + (child & PAIR != 0) as u32
 }
@@ -69,6 +70,13 @@ pub struct Leaf {
     pub first: u32,
     /// The number of primitives, 1 to [`super::MAX_LEAF`].
     pub count: u32,
+}
+
+impl Leaf {
+    /// The leaf's BVH-order primitives.
+    pub fn range(&self) -> Range<usize> {
+        self.first as usize..(self.first + self.count) as usize
+    }
 }
 
 /// The SIMD code that tests a node's eight boxes.
@@ -140,11 +148,11 @@ impl WideBvh {
         self.kernel
     }
 
-    /// Finds the closest hit: `leaf_fn(ray, leaf)` returns the smallest `t` below the ray's
-    /// current `tmax` among the leaf's primitives, or infinity; the ray it sees carries the
-    /// closest `t` so far as `tmax`.
+    /// Finds the closest hit: `leaf_fn(ray, ids)` returns the smallest `t` below the ray's
+    /// current `tmax` among the primitives of leaves `ids` (one leaf, or a [`PAIR`]'s two), or
+    /// infinity; the ray it sees carries the closest `t` so far as `tmax`.
     #[inline(always)]
-    pub(super) fn closest(&self, ray: &Ray, leaf_fn: impl FnMut(&Ray, u32) -> f32) {
+    pub(super) fn closest(&self, ray: &Ray, leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32) {
         match self.kernel {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `kernel` is `Avx2` only where `Kernel::best` detected AVX2.
@@ -155,9 +163,10 @@ impl WideBvh {
         }
     }
 
-    /// Returns true when `leaf_fn(ray, leaf)` reports a hit for some leaf the ray reaches.
+    /// Returns true when `leaf_fn(ray, ids)` reports a hit for some run of leaves (one, or a
+    /// [`PAIR`]'s two) the ray reaches.
     #[inline(always)]
-    pub(super) fn any(&self, ray: &Ray, leaf_fn: impl FnMut(&Ray, u32) -> bool) -> bool {
+    pub(super) fn any(&self, ray: &Ray, leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool) -> bool {
         match self.kernel {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `kernel` is `Avx2` only where `Kernel::best` detected AVX2.
@@ -172,20 +181,24 @@ impl WideBvh {
 /// [`closest_with`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn closest_avx2(bvh: &WideBvh, ray: &Ray, leaf_fn: impl FnMut(&Ray, u32) -> f32) {
+fn closest_avx2(bvh: &WideBvh, ray: &Ray, leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32) {
     closest_with::<Avx2>(bvh, ray, leaf_fn)
 }
 
 /// [`any_with`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn any_avx2(bvh: &WideBvh, ray: &Ray, leaf_fn: impl FnMut(&Ray, u32) -> bool) -> bool {
+fn any_avx2(bvh: &WideBvh, ray: &Ray, leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool) -> bool {
     any_with::<Avx2>(bvh, ray, leaf_fn)
 }
 
 /// Closest-hit traversal with node test `T`.
 #[inline(always)]
-fn closest_with<T: NodeTest>(bvh: &WideBvh, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, u32) -> f32) {
+fn closest_with<T: NodeTest>(
+    bvh: &WideBvh,
+    ray: &Ray,
+    mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32,
+) {
     let pre = SlabRay::new(ray);
     let mut r = *ray;
     Stack::with_capacity(
@@ -226,11 +239,9 @@ fn closest_with<T: NodeTest>(bvh: &WideBvh, ray: &Ray, mut leaf_fn: impl FnMut(&
                         continue;
                     }
                 } else {
-                    for id in leaf_ids(cur.child) {
-                        let t = leaf_fn(&r, id);
-                        if t < r.tmax {
-                            r.tmax = t;
-                        }
+                    let t = leaf_fn(&r, leaf_ids(cur.child));
+                    if t < r.tmax {
+                        r.tmax = t;
                     }
                 }
                 loop {
@@ -253,7 +264,7 @@ fn closest_with<T: NodeTest>(bvh: &WideBvh, ray: &Ray, mut leaf_fn: impl FnMut(&
 fn any_with<T: NodeTest>(
     bvh: &WideBvh,
     ray: &Ray,
-    mut leaf_fn: impl FnMut(&Ray, u32) -> bool,
+    mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool,
 ) -> bool {
     let pre = SlabRay::new(ray);
     Stack::with_capacity(
@@ -280,7 +291,7 @@ fn any_with<T: NodeTest>(
                         }
                         continue;
                     }
-                } else if leaf_ids(cur).any(|id| leaf_fn(ray, id)) {
+                } else if leaf_fn(ray, leaf_ids(cur)) {
                     return true;
                 }
                 match stack.pop() {

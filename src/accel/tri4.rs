@@ -6,7 +6,7 @@
 //! exactly zero (a ray through an edge or a vertex) is redone by the scalar test, which falls back
 //! to double precision there (Woop et al. 2013, §3.3).
 //!
-//! One generic test ([`lanes`]) runs on four lanes (SSE2) or eight (AVX): a BVH leaf of five to
+//! One generic test (`lanes`) runs on four lanes (SSE2) or eight (AVX): a BVH leaf of five to
 //! eight triangles is a pair of blocks, which the AVX2 traversal kernel tests as one 8-wide
 //! block ([`closest_pair`], [`any_pair`]) instead of two 4-wide ones. A block with no lane whose
 //! edge functions share a sign returns before the division: most blocks a ray reaches are such.

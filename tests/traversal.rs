@@ -272,6 +272,49 @@ fn wave_height_field_matches_brute_force() {
     );
 }
 
+/// A mesh long enough that the builder opens its top nodes by parallel halving (2^18
+/// references or more) agrees with brute force, and builds the same tree on one and two threads.
+#[test]
+fn large_height_field_matches_brute_force_and_builds_alike_on_one_and_two_threads() {
+    let data = height_field(380); // 2 · 379² = 287 282 triangles
+    assert!(data.triangles.len() >= 1 << 18);
+    let build = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| MeshGeom::new(&data, 0))
+    };
+    let (one, two) = (build(1), build(2));
+    assert_eq!(
+        one.bvh.order(),
+        two.bvh.order(),
+        "the triangle order differs"
+    );
+    let leaves = |g: &MeshGeom| {
+        g.bvh
+            .leaves()
+            .iter()
+            .map(|l| (l.first, l.count))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(leaves(&one), leaves(&two), "the leaves differ");
+    let mut rng = Rng(17);
+    let rays: Vec<Ray> = (0..300)
+        .map(|_| {
+            let o = Vec3A::new(rng.uniform(-0.6, 0.6), 0.5, rng.uniform(-0.6, 0.6));
+            let mut d = rng.unit_vector();
+            d.y = -d.y.abs().max(0.6); // steep enough to meet the surface inside [-1, 1]²
+            Ray::new(o, d)
+        })
+        .collect();
+    let hits = check_kernel(&data, &two, &rays);
+    assert!(
+        hits > 200,
+        "only {hits} of 300 rays hit: the test is too weak"
+    );
+}
+
 #[test]
 fn rays_at_closed_cube_vertices_and_edges_never_escape() {
     let data = closed_cube(24);

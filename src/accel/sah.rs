@@ -19,7 +19,12 @@
 //! - ranges of [`PAR_BIN`] or more are binned by all threads, and subtrees of [`PAR_TREE`] or
 //!   more are built in parallel into their own arrays, then appended; binning sums, minima and
 //!   maxima do not depend on the order of the reduction, so the tree is the same for any number
-//!   of threads.
+//!   of threads;
+//! - a node of [`PAR_NODE`] or more references is opened by halving three times over, the two
+//!   sides of each split at once, rather than by splitting the largest child seven times in a
+//!   row: at the root the seven serial partitions over 64 MB of references kept the other
+//!   threads idle (70 of the 365 ms on two threads). On the wave mesh both ways choose the same
+//!   eight children (the checksums are equal).
 //!
 //! Measured on the wave mesh (2-core VM, `bench_traversal`): first 0.80–0.92 s on one thread and
 //! 0.46–0.57 s on two; since the subtrees reserve their arrays, the boxes come from a function
@@ -40,6 +45,8 @@ use rayon::prelude::*;
 const BINS: usize = 16;
 /// Ranges at least this long are binned in parallel.
 const PAR_BIN: usize = 1 << 16;
+/// Nodes of ranges at least this long are opened by [`halve`], in parallel.
+const PAR_NODE: usize = 1 << 18;
 /// Subtrees at least this long are built in parallel.
 const PAR_TREE: usize = 1 << 12;
 
@@ -232,9 +239,9 @@ impl Bins {
     }
 }
 
-/// Splits `r` in two non-empty ranges, reordering `prims[r.start..r.end]` (at least two).
-fn split(prims: &mut [PrimRef], r: &Range) -> (Range, Range) {
-    let part = &mut prims[r.start..r.end];
+/// Splits `r` in two non-empty ranges, reordering `part`, its references (at least two).
+fn split(part: &mut [PrimRef], r: &Range) -> (Range, Range) {
+    debug_assert_eq!(part.len(), r.len());
     let binner = Binner::new(&r.cent);
     let (mid, left, right) = match Bins::of(part, &binner).best() {
         Some((axis, plane)) => partition(part, |p| binner.bins(p)[axis] < plane),
@@ -260,6 +267,19 @@ fn split(prims: &mut [PrimRef], r: &Range) -> (Range, Range) {
         range(left, r.start, r.start + mid),
         range(right, r.start + mid, r.end),
     )
+}
+
+/// Splits `r`, whose references are `part`, into two, then each side `depth - 1` times over, the
+/// two sides of each split at once; ranges of [`MAX_LEAF`] or fewer are not split.
+fn halve(part: &mut [PrimRef], r: Range, depth: u32) -> Vec<Range> {
+    if depth == 0 || r.len() <= MAX_LEAF {
+        return vec![r];
+    }
+    let (a, b) = split(part, &r);
+    let (pa, pb) = part.split_at_mut(a.len());
+    let (mut x, y) = rayon::join(|| halve(pa, a, depth - 1), || halve(pb, b, depth - 1));
+    x.extend(y);
+    x
 }
 
 /// The bounds and centroid bounds of some references.
@@ -372,8 +392,13 @@ fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: u
         });
         return LEAF | PAIR | id;
     }
-    // Open the child with the largest surface until there are eight.
-    let mut kids = vec![r];
+    // Open the child with the largest surface until there are eight; a long range is halved three
+    // times instead, both sides of each split at once.
+    let mut kids = if r.len() >= PAR_NODE {
+        halve(&mut prims[r.start..r.end], r, WIDTH.ilog2())
+    } else {
+        vec![r]
+    };
     while kids.len() < WIDTH {
         let widest = kids
             .iter()
@@ -381,7 +406,7 @@ fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: u
             .filter(|(_, k)| k.len() > MAX_LEAF)
             .max_by(|a, b| a.1.bounds.half_area().total_cmp(&b.1.bounds.half_area()));
         let Some((at, _)) = widest else { break };
-        let (a, b) = split(prims, &kids[at]);
+        let (a, b) = split(&mut prims[kids[at].start..kids[at].end], &kids[at]);
         kids[at] = a;
         kids.push(b);
     }

@@ -20,6 +20,8 @@
 //!   more are built in parallel into their own arrays, then appended; binning sums, minima and
 //!   maxima do not depend on the order of the reduction, so the tree is the same for any number
 //!   of threads;
+//! - the partition decides a reference's side by comparing its scaled centroid with the plane
+//!   ([`Binner::left_of`]) instead of computing its bins on every axis;
 //! - a node of [`PAR_NODE`] or more references is opened by halving three times over, the two
 //!   sides of each split at once, rather than by splitting the largest child seven times in a
 //!   row: at the root the seven serial partitions over 64 MB of references kept the other
@@ -156,6 +158,16 @@ impl Binner {
         #[cfg(not(target_arch = "x86_64"))]
         [k.x as usize, k.y as usize, k.z as usize, 0]
     }
+
+    /// The test `bins(p)[axis] < plane` for `plane` in `1..BINS`, without the conversion to
+    /// integers: a bin is the truncation of a scaled offset that is at least 0, so it is below
+    /// the whole number `plane` exactly when the offset is, and clamping to the last bin never
+    /// moves a reference across `plane`. The partition's test; 4–7% of the whole build.
+    #[inline(always)]
+    fn left_of(&self, axis: usize, plane: usize) -> impl Fn(&PrimRef) -> bool + use<> {
+        let (origin, scale, plane) = (self.origin[axis], self.scale[axis], plane as f32);
+        move |p| (centroid2(p)[axis] - origin) * scale < plane
+    }
 }
 
 /// Per axis and bin: the union of the boxes and the count of the references binned there.
@@ -244,7 +256,10 @@ fn split(part: &mut [PrimRef], r: &Range) -> (Range, Range) {
     debug_assert_eq!(part.len(), r.len());
     let binner = Binner::new(&r.cent);
     let (mid, left, right) = match Bins::of(part, &binner).best() {
-        Some((axis, plane)) => partition(part, |p| binner.bins(p)[axis] < plane),
+        Some((axis, plane)) => {
+            let left = binner.left_of(axis, plane);
+            partition(part, left)
+        }
         None => {
             // All centroids in one bin on every axis (equal, or too close for f32 to separate):
             // any split costs the same, so halve the range by position along the widest axis.
@@ -509,4 +524,96 @@ pub(super) fn build(len: usize, box_of: impl Fn(usize) -> Bounds + Sync) -> Wide
         .map(prim_index)
         .collect_into_vec(&mut order);
     WideBvh::new(sub.nodes, sub.leaves, order, sub.depth)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::mix64;
+
+    /// The partition's test agrees with the bins for every axis and plane: on random
+    /// references, on references at each bin's edge and one float step either side of it, and at
+    /// the ends of the centroids' extent, in boxes from tiny to huge and flat.
+    #[test]
+    fn left_of_agrees_with_bins() {
+        let mut state = 7u64;
+        let mut unit = || {
+            state = mix64(state);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let extents = [
+            (
+                Vec4::new(-1.0, 0.0, 3.0, 0.0),
+                Vec4::new(1.0, 1e-6, 3.5, 0.0),
+            ),
+            (
+                Vec4::new(1e6, -1e7, 0.0, 0.0),
+                Vec4::new(1e6 + 3.0, 1e7, 0.0, 0.0),
+            ),
+            (
+                Vec4::new(1e-30, 0.1, -0.3, 0.0),
+                Vec4::new(3e-30, 0.1 + 1e-7, 0.3, 0.0),
+            ),
+        ];
+        let (mut checked, mut lefts) = (0u64, 0u64);
+        for (lo, hi) in extents {
+            let cent = Box4 { lo, hi };
+            let binner = Binner::new(&cent);
+            // Twice the centroids, as `centroid2` makes them, inside [lo, hi].
+            let mut points: Vec<Vec4> = (0..2000)
+                .map(|_| lo + (hi - lo) * Vec4::new(unit(), unit(), unit(), 0.0))
+                .collect();
+            for j in 0..=BINS {
+                let edge = lo + (hi - lo) * (j as f32 / BINS as f32);
+                let step = |v: Vec4, f: fn(f32) -> f32| Vec4::new(f(v.x), f(v.y), f(v.z), 0.0);
+                points.extend([edge, step(edge, f32::next_up), step(edge, f32::next_down)]);
+            }
+            points.extend([lo, hi]);
+            // Points whose scaled offset is exactly a plane, where `<` and `<=` part.
+            let mut exact = 0;
+            for plane in 1..BINS {
+                let mut at = lo + Vec4::splat(plane as f32) / binner.scale.max(Vec4::splat(1e-30));
+                for _ in 0..8 {
+                    let k = (at - binner.origin) * binner.scale;
+                    for axis in 0..3 {
+                        if k[axis] == plane as f32 {
+                            let mut q = (lo + hi) * 0.5;
+                            q[axis] = at[axis];
+                            points.push(q);
+                            exact += 1;
+                        }
+                        at[axis] = if k[axis] < plane as f32 {
+                            at[axis].next_up()
+                        } else {
+                            at[axis].next_down()
+                        };
+                    }
+                }
+            }
+            assert!(exact >= BINS, "only {exact} points on a plane");
+            for c in points {
+                let c = c.clamp(lo, hi);
+                // Only `lo + hi` matters to the bins: make it exactly `c`.
+                let p = PrimRef {
+                    lo: c,
+                    hi: Vec4::ZERO,
+                };
+                assert_eq!(centroid2(&p), c);
+                let bins = binner.bins(&p);
+                for (axis, &bin) in bins[..3].iter().enumerate() {
+                    for plane in 1..BINS {
+                        let left = binner.left_of(axis, plane)(&p);
+                        assert_eq!(left, bin < plane, "{c:?} axis {axis} plane {plane}");
+                        checked += 1;
+                        lefts += left as u64;
+                    }
+                }
+            }
+        }
+        // Both answers occur often: the test is not vacuous.
+        assert!(
+            lefts > checked / 4 && lefts < 3 * checked / 4,
+            "{lefts} of {checked}"
+        );
+    }
 }

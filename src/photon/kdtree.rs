@@ -194,22 +194,25 @@ impl PhotonMap {
             debug_assert!(ok, "photon at {:?}", s.pos);
             ok
         };
-        let max_exponent = blocks
+        // One pass: each block's finite photons and their largest power exponent.
+        let counted: Vec<(usize, i32)> = blocks
             .par_iter()
-            .flat_map_iter(|b| b.iter())
-            .filter(finite)
-            .map(|s| store::power_exponent(Vec3A::from_array(s.power)))
-            .max()
-            .unwrap_or(i32::MIN);
+            .map(|b| {
+                b.iter().filter(finite).fold((0, i32::MIN), |(k, e), s| {
+                    (
+                        k + 1,
+                        e.max(store::power_exponent(Vec3A::from_array(s.power))),
+                    )
+                })
+            })
+            .collect();
+        let max_exponent = counted.iter().map(|c| c.1).max().unwrap_or(i32::MIN);
         let codec = PowerCodec::new(max_exponent);
         // Each block's finite photons, capped so that at most u32::MAX are kept in all.
         let mut room = u32::MAX as usize;
-        let takes: Vec<usize> = blocks
-            .par_iter()
-            .map(|b| b.iter().filter(finite).count())
-            .collect::<Vec<_>>()
-            .into_iter()
-            .map(|k| {
+        let takes: Vec<usize> = counted
+            .iter()
+            .map(|&(k, _)| {
                 let take = k.min(room);
                 room -= take;
                 take

@@ -32,7 +32,7 @@
 //! distance passes the bound.
 
 use super::store::{self, AXIS_NONE, PowerCodec};
-use super::stream::{BLOCK, PhotonStream, Staged};
+use super::stream::{BLOCK, PhotonStream, Staged, Tally};
 use super::{Photon, PhotonId, PhotonMap};
 use glam::{BVec3A, Vec3A};
 
@@ -188,31 +188,19 @@ impl PhotonMap {
     /// map's arrays from the end, their pages given back as they go.
     pub fn from_stream(stream: PhotonStream) -> PhotonMap {
         use rayon::prelude::*;
-        let blocks = stream.blocks;
+        let (blocks, tallies) = (stream.blocks, stream.tallies);
         let finite = |s: &&Staged| {
             let ok = s.is_finite();
             debug_assert!(ok, "photon at {:?}", s.pos);
             ok
         };
-        // One pass: each block's finite photons and their largest power exponent.
-        let counted: Vec<(usize, i32)> = blocks
-            .par_iter()
-            .map(|b| {
-                b.iter().filter(finite).fold((0, i32::MIN), |(k, e), s| {
-                    (
-                        k + 1,
-                        e.max(store::power_exponent(Vec3A::from_array(s.power))),
-                    )
-                })
-            })
-            .collect();
-        let max_exponent = counted.iter().map(|c| c.1).max().unwrap_or(i32::MIN);
-        let codec = PowerCodec::new(max_exponent);
+        let max_exponent = tallies.iter().map(|t| t.max_exponent).max();
+        let codec = PowerCodec::new(max_exponent.unwrap_or(i32::MIN));
         // Each block's finite photons, capped so that at most u32::MAX are kept in all.
         let mut room = u32::MAX as usize;
-        let takes: Vec<usize> = counted
+        let takes: Vec<usize> = tallies
             .iter()
-            .map(|&(k, _)| {
+            .map(|&Tally { finite: k, .. }| {
                 let take = k.min(room);
                 room -= take;
                 take

@@ -76,8 +76,22 @@ fn bits(h: Option<(u32, TriangleHit)>) -> Option<(u32, [u32; 3])> {
 
 /// Checks `rays` through the BVH against brute force with every kernel, and the kernels against
 /// each other bit for bit; returns how many rays hit.
+/// Asserts that the mesh's bounds are those of its triangles' corners (made as the blocks are).
+fn assert_bounds(data: &MeshData, geom: &MeshGeom) {
+    let (lo, hi) = data.triangles.iter().flatten().fold(
+        (Vec3A::INFINITY, Vec3A::NEG_INFINITY),
+        |(lo, hi), &i| {
+            let p = Vec3A::from(data.positions[i as usize]);
+            (lo.min(p), hi.max(p))
+        },
+    );
+    let got = (geom.bounds.min, geom.bounds.max);
+    assert_eq!(got, (lo, hi), "the mesh's bounds");
+}
+
 fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
     let mut geom = MeshGeom::new(data, 0);
+    assert_bounds(data, &geom);
     let mut first: Option<Vec<_>> = None;
     let mut hits = 0;
     for kernel in KERNELS {
@@ -291,6 +305,7 @@ fn large_height_field_matches_brute_force_and_builds_alike_on_one_and_two_thread
         two.bvh.order(),
         "the triangle order differs"
     );
+    assert_bounds(&data, &two);
     let leaves = |g: &MeshGeom| {
         g.bvh
             .leaves()

@@ -191,8 +191,9 @@ fn pow2(e: i32) -> f64 {
 /// exponent field gives the smallest `e` with `m < 2^e`, and its mantissa rounds up to 512
 /// quanta of `2^(e - 9)` (so it needs `e + 1`) exactly when the top nine of its 23 fraction bits
 /// are all set (`256 (1 + f / 2^23) + 0.5 >= 512`). Equal to [`power_exponent_f64`] for every
-/// power (a test compares them); subnormal channels take that path. A pass over every photon
-/// of a map calls this twice: with the f64 division it took 15 ns a photon.
+/// power (a test compares them); subnormal channels take that path. Every photon of a map
+/// calls this twice, for its block's tally and for its encode: with the f64 division it took
+/// 15 ns a photon.
 #[inline]
 pub(super) fn power_exponent(p: Vec3A) -> i32 {
     debug_assert!(p.is_finite() && p.min_element() >= 0.0, "photon power {p}");

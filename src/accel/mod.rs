@@ -213,10 +213,19 @@ impl Bvh {
     /// ray's `(tmin, tmax)` among the primitives of leaves `ids` (indices into [`Bvh::leaves`]:
     /// one leaf, or two that the builder put side by side, five to eight primitives tested
     /// together), or infinity; the ray it sees has the closest `t` found so far as its `tmax`.
+    ///
+    /// `prefetch(ids)` is called for each leaf run the traversal puts on its stack, before
+    /// `leaf_fn` sees it (if it does): a hint to start loading the run's primitives, whose cache
+    /// misses then overlap the work on nearer children. Pass `|_| {}` when there is nothing to load.
     #[inline]
-    pub fn closest_leaf(&self, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32) {
+    pub fn closest_leaf(
+        &self,
+        ray: &Ray,
+        mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32,
+        prefetch: impl Fn(Range<u32>),
+    ) {
         match &self.inner {
-            Some(bvh) => bvh.closest(ray, leaf_fn),
+            Some(bvh) => bvh.closest(ray, leaf_fn, prefetch),
             None => {
                 if self.len == 1 {
                     leaf_fn(ray, 0..1);
@@ -226,11 +235,17 @@ impl Bvh {
     }
 
     /// Returns true when `leaf_fn(ray, ids)` reports a hit in the ray's `(tmin, tmax)` among
-    /// leaves `ids` (as for [`Bvh::closest_leaf`]) for some run the ray reaches.
+    /// leaves `ids` (as for [`Bvh::closest_leaf`], with the same `prefetch` hook) for some run the
+    /// ray reaches.
     #[inline]
-    pub fn any_leaf(&self, ray: &Ray, mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool) -> bool {
+    pub fn any_leaf(
+        &self,
+        ray: &Ray,
+        mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool,
+        prefetch: impl Fn(Range<u32>),
+    ) -> bool {
         match &self.inner {
-            Some(bvh) => bvh.any(ray, leaf_fn),
+            Some(bvh) => bvh.any(ray, leaf_fn, prefetch),
             None => self.len == 1 && leaf_fn(ray, 0..1),
         }
     }
@@ -245,17 +260,21 @@ impl Bvh {
     ) -> Option<(usize, f32)> {
         let leaves = self.leaves();
         let mut best = None;
-        self.closest_leaf(ray, |r, ids| {
-            let mut r = *r;
-            for i in ids.flat_map(|id| leaves[id as usize].range()) {
-                let t = hit_fn(&r, i);
-                if t > r.tmin && t < r.tmax {
-                    best = Some((i, t));
-                    r.tmax = t;
+        self.closest_leaf(
+            ray,
+            |r, ids| {
+                let mut r = *r;
+                for i in ids.flat_map(|id| leaves[id as usize].range()) {
+                    let t = hit_fn(&r, i);
+                    if t > r.tmin && t < r.tmax {
+                        best = Some((i, t));
+                        r.tmax = t;
+                    }
                 }
-            }
-            r.tmax
-        });
+                r.tmax
+            },
+            |_| {},
+        );
         best
     }
 
@@ -263,16 +282,21 @@ impl Bvh {
     #[inline]
     pub fn any(&self, ray: &Ray, mut hit_fn: impl FnMut(&Ray, usize) -> f32) -> bool {
         let leaves = self.leaves();
-        self.any_leaf(ray, |r, ids| {
-            ids.flat_map(|id| leaves[id as usize].range())
-                .any(|i| hit_fn(r, i) < r.tmax)
-        })
+        self.any_leaf(
+            ray,
+            |r, ids| {
+                ids.flat_map(|id| leaves[id as usize].range())
+                    .any(|i| hit_fn(r, i) < r.tmax)
+            },
+            |_| {},
+        )
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::cell::RefCell;
 
     fn unit_box(c: Vec3A) -> Bounds {
         Bounds {
@@ -333,6 +357,82 @@ mod tests {
                 assert_eq!(any, brute.is_finite(), "{what}");
             }
         }
+    }
+
+    /// The prefetch hook names leaf runs the traversal goes on to test: with an any-hit callback
+    /// that never reports a hit (nothing is culled), every run prefetched is then tested, and
+    /// every closest-hit prefetch is a run that exhaustive search tests too. Rays cross a grid of
+    /// boxes, so many nodes have several leaf children and the hook must be called.
+    #[test]
+    fn prefetched_leaf_runs_are_runs_the_traversal_tests() {
+        // Small boxes scattered through a cube: a node with eight children left over leaves of
+        // five to eight as pairs, and the hook must name both of a pair's leaves.
+        let mut x = 12345u32;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            (x >> 8) as f32 / (1 << 24) as f32 * 16.0
+        };
+        let grid: Vec<Bounds> = (0..20_000)
+            .map(|_| {
+                let c = Vec3A::new(next(), next(), next());
+                Bounds {
+                    min: c - 0.2,
+                    max: c + 0.2,
+                }
+            })
+            .collect();
+        let (mut prefetched_total, mut pairs) = (0, 0);
+        for kernel in [Kernel::Scalar, Kernel::Sse2, Kernel::Avx2] {
+            let mut bvh = Bvh::build_with(&grid, Builder::BinnedSah);
+            bvh.set_kernel(kernel);
+            for k in 0..300 {
+                let f = k as f32;
+                let ray = Ray::new(
+                    Vec3A::new(-5.0, 7.5, 7.5),
+                    Vec3A::new(1.0, (f * 0.37).sin() * 0.5, (f * 0.91).cos() * 0.5).normalize(),
+                );
+                let (tested, prefetched) = (RefCell::new(Vec::new()), RefCell::new(Vec::new()));
+                let hit = bvh.any_leaf(
+                    &ray,
+                    |_, ids| {
+                        tested.borrow_mut().push(ids);
+                        false
+                    },
+                    |ids| prefetched.borrow_mut().push(ids),
+                );
+                assert!(!hit);
+                let (tested, prefetched) = (tested.into_inner(), prefetched.into_inner());
+                for ids in &prefetched {
+                    pairs += (ids.len() == 2) as usize;
+                    assert!(
+                        tested.contains(ids),
+                        "{kernel:?}, ray {k}: {ids:?} never tested"
+                    );
+                }
+                prefetched_total += prefetched.len();
+                let closest_prefetched = RefCell::new(Vec::new());
+                bvh.closest_leaf(
+                    &ray,
+                    |r, ids| {
+                        // Each leaf reports a hit just beyond the ray's start, so later runs are
+                        // culled: prefetches must still name runs that exist.
+                        assert!(tested.contains(&ids));
+                        r.tmin + 1.0 + ids.start as f32 * 1e-3
+                    },
+                    |ids| closest_prefetched.borrow_mut().push(ids),
+                );
+                for ids in closest_prefetched.into_inner() {
+                    assert!(tested.contains(&ids), "{kernel:?}, ray {k}: {ids:?}");
+                }
+            }
+        }
+        assert!(
+            prefetched_total > 1000,
+            "the hook was called {prefetched_total} times"
+        );
+        assert!(pairs > 100, "{pairs} pairs prefetched");
     }
 
     #[test]

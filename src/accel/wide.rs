@@ -5,8 +5,9 @@
 //! on top (the single-ray scheme of Embree's BVH4/BVH8 kernels, Wald et al., "Embree: A Kernel
 //! Framework for Efficient CPU Ray Tracing", 2014). A popped entry is skipped when the closest hit
 //! found so far lies in front of it. Nodes are prefetched where the CPU cannot start the load by
-//! itself: a node's child references (the line that the slab test's mask indexes) and the inner
-//! children pushed on the stack. Every kernel ([`Kernel`]) evaluates the same IEEE operations
+//! itself: a node's child references (the line that the slab test's mask indexes), the inner
+//! children pushed on the stack, and, through the caller's `prefetch` hook, the primitives of the
+//! leaf children pushed there. Every kernel ([`Kernel`]) evaluates the same IEEE operations
 //! in the same order, so all of them visit the same nodes and report the same hits.
 
 use super::stack::{Entry, Stack};
@@ -150,30 +151,41 @@ impl WideBvh {
 
     /// Finds the closest hit: `leaf_fn(ray, ids)` returns the smallest `t` below the ray's
     /// current `tmax` among the primitives of leaves `ids` (one leaf, or a [`PAIR`]'s two), or
-    /// infinity; the ray it sees carries the closest `t` so far as `tmax`.
+    /// infinity; the ray it sees carries the closest `t` so far as `tmax`. `prefetch(ids)` is
+    /// told of each leaf child put on the stack, to start loading what `leaf_fn` will read.
     #[inline(always)]
-    pub(super) fn closest(&self, ray: &Ray, leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32) {
+    pub(super) fn closest(
+        &self,
+        ray: &Ray,
+        leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32,
+        prefetch: impl Fn(Range<u32>),
+    ) {
         match self.kernel {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `kernel` is `Avx2` only where `Kernel::best` detected AVX2.
-            Kernel::Avx2 => unsafe { closest_avx2(self, ray, leaf_fn) },
+            Kernel::Avx2 => unsafe { closest_avx2(self, ray, leaf_fn, prefetch) },
             #[cfg(target_arch = "x86_64")]
-            Kernel::Sse2 => closest_with::<Sse2>(self, ray, leaf_fn),
-            _ => closest_with::<Scalar>(self, ray, leaf_fn),
+            Kernel::Sse2 => closest_with::<Sse2>(self, ray, leaf_fn, prefetch),
+            _ => closest_with::<Scalar>(self, ray, leaf_fn, prefetch),
         }
     }
 
     /// Returns true when `leaf_fn(ray, ids)` reports a hit for some run of leaves (one, or a
-    /// [`PAIR`]'s two) the ray reaches.
+    /// [`PAIR`]'s two) the ray reaches; `prefetch` as for [`WideBvh::closest`].
     #[inline(always)]
-    pub(super) fn any(&self, ray: &Ray, leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool) -> bool {
+    pub(super) fn any(
+        &self,
+        ray: &Ray,
+        leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool,
+        prefetch: impl Fn(Range<u32>),
+    ) -> bool {
         match self.kernel {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `kernel` is `Avx2` only where `Kernel::best` detected AVX2.
-            Kernel::Avx2 => unsafe { any_avx2(self, ray, leaf_fn) },
+            Kernel::Avx2 => unsafe { any_avx2(self, ray, leaf_fn, prefetch) },
             #[cfg(target_arch = "x86_64")]
-            Kernel::Sse2 => any_with::<Sse2>(self, ray, leaf_fn),
-            _ => any_with::<Scalar>(self, ray, leaf_fn),
+            Kernel::Sse2 => any_with::<Sse2>(self, ray, leaf_fn, prefetch),
+            _ => any_with::<Scalar>(self, ray, leaf_fn, prefetch),
         }
     }
 }
@@ -181,15 +193,25 @@ impl WideBvh {
 /// [`closest_with`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn closest_avx2(bvh: &WideBvh, ray: &Ray, leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32) {
-    closest_with::<Avx2>(bvh, ray, leaf_fn)
+fn closest_avx2(
+    bvh: &WideBvh,
+    ray: &Ray,
+    leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32,
+    prefetch: impl Fn(Range<u32>),
+) {
+    closest_with::<Avx2>(bvh, ray, leaf_fn, prefetch)
 }
 
 /// [`any_with`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn any_avx2(bvh: &WideBvh, ray: &Ray, leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool) -> bool {
-    any_with::<Avx2>(bvh, ray, leaf_fn)
+fn any_avx2(
+    bvh: &WideBvh,
+    ray: &Ray,
+    leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool,
+    prefetch: impl Fn(Range<u32>),
+) -> bool {
+    any_with::<Avx2>(bvh, ray, leaf_fn, prefetch)
 }
 
 /// Closest-hit traversal with node test `T`.
@@ -198,6 +220,7 @@ fn closest_with<T: NodeTest>(
     bvh: &WideBvh,
     ray: &Ray,
     mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> f32,
+    prefetch: impl Fn(Range<u32>),
 ) {
     let pre = SlabRay::new(ray);
     let mut r = *ray;
@@ -229,6 +252,8 @@ fn closest_with<T: NodeTest>(
                             mask &= mask - 1;
                             if e.child & LEAF == 0 {
                                 prefetch_node(bvh, e.child);
+                            } else {
+                                prefetch(leaf_ids(e.child));
                             }
                             if e.t < near.t {
                                 std::mem::swap(&mut e, &mut near);
@@ -265,6 +290,7 @@ fn any_with<T: NodeTest>(
     bvh: &WideBvh,
     ray: &Ray,
     mut leaf_fn: impl FnMut(&Ray, Range<u32>) -> bool,
+    prefetch: impl Fn(Range<u32>),
 ) -> bool {
     let pre = SlabRay::new(ray);
     Stack::with_capacity(
@@ -285,6 +311,8 @@ fn any_with<T: NodeTest>(
                             let child = node.child[mask.trailing_zeros() as usize];
                             if child & LEAF == 0 {
                                 prefetch_node(bvh, child);
+                            } else {
+                                prefetch(leaf_ids(child));
                             }
                             stack.push(Entry { child, t: 0.0 });
                             mask &= mask - 1;

@@ -202,21 +202,12 @@ impl MeshGeom {
     /// children instead of waiting until the entry is popped.
     #[inline(always)]
     fn prefetch_leaf(&self, ids: Range<u32>) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            let base = self.blocks.as_ptr();
-            let start = base.wrapping_add(ids.start as usize) as usize & !63;
-            let end = base.wrapping_add(ids.end as usize) as usize;
-            // SAFETY: a prefetch is only a hint; it never faults.
-            unsafe {
-                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-                for line in (start..end).step_by(64) {
-                    _mm_prefetch::<_MM_HINT_T0>(line as *const i8);
-                }
-            }
+        let base = self.blocks.as_ptr();
+        let start = base.wrapping_add(ids.start as usize) as usize & !63;
+        let end = base.wrapping_add(ids.end as usize) as usize;
+        for line in (start..end).step_by(64) {
+            super::wide::prefetch_line(line as *const u8);
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = ids;
     }
 
     /// Counts the triangle tests of leaves `ids` (when counting is on).

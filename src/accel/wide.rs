@@ -337,15 +337,7 @@ fn any_with<T: NodeTest>(
 /// row per node.
 #[inline(always)]
 fn prefetch_children(node: &Node) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch is only a hint; it never faults, even on an invalid address (and this
-    // one is a live node's field).
-    unsafe {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        _mm_prefetch::<_MM_HINT_T0>(node.child.as_ptr().cast());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = node;
+    prefetch_line(node.child.as_ptr().cast());
 }
 
 /// Starts loading all four cache lines of inner node `child`, which the traversal has just put on
@@ -353,17 +345,24 @@ fn prefetch_children(node: &Node) {
 /// entry is popped.
 #[inline(always)]
 fn prefetch_node(bvh: &WideBvh, child: u32) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let p: *const i8 = bvh.nodes.as_ptr().wrapping_add(child as usize).cast();
-        // SAFETY: a prefetch is only a hint; it never faults.
-        unsafe {
-            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            for line in 0..4 {
-                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64 * line));
-            }
-        }
+    let p: *const u8 = bvh.nodes.as_ptr().wrapping_add(child as usize).cast();
+    for line in 0..4 {
+        prefetch_line(p.wrapping_add(64 * line));
     }
+}
+
+/// Starts loading the cache line holding `p`: a hint, which never faults, whatever `p` is (the
+/// one place the traversal and the mesh leaves issue prefetches).
+#[inline(always)]
+pub(super) fn prefetch_line(p: *const u8) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is only a hint; it never faults, even on an invalid address.
+    unsafe {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        _mm_prefetch::<_MM_HINT_T0>(p.cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// Returns `1/x`, or `±1/ε` for `|x| <= ε`, so slab distances stay finite (obvhs's rule), with

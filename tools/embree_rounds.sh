@@ -17,6 +17,7 @@
 #   REPS           timed passes per query and round (+1 warm-up)     [5]
 #   N              wave mesh grid size (N x N vertices, 2(N-1)^2 triangles) [1001]
 #   QUALITY        Embree build quality                              [medium]
+#   ISA            Embree's kernels (avx2, avx512, sse4.2 ...)       [Embree's choice: the widest]
 #   BENCH          the harness's folder                  [../shared/bench beside the checkout]
 #   DATA_DIR       where run.sh keeps its binaries, mesh and rays; what is missing is made
 #                  there with run.sh's commands                      [/tmp/embree_bench]
@@ -29,6 +30,7 @@ rounds="${ROUNDS:-8}"
 reps="${REPS:-5}"
 n="${N:-1001}"
 quality="${QUALITY:-medium}"
+isa="${ISA:-}"
 bench="${BENCH:-$here/../shared/bench}"
 data="${DATA_DIR:-/tmp/embree_bench}"
 ours="${CAUSTIC_BENCH:-$here/target/release/bench_traversal}"
@@ -57,8 +59,8 @@ incoherent="$data/incoherent_1048576_s12345.rays"
 logs="$(mktemp -d)"
 trap 'rm -rf "$logs"' EXIT
 run_embree() {
-  "$data/bin/embree_bench" --quality "$quality" --modes 1 --reps "$reps" --build-reps 1 \
-    --threads 1 "$mesh" "$incoherent" "$primary"
+  "$data/bin/embree_bench" --quality "$quality" ${isa:+--isa "$isa"} --modes 1 --reps "$reps" \
+    --build-reps 1 --threads 1 "$mesh" "$incoherent" "$primary"
 }
 run_ours() {
   "$ours" --mt 0 --reps "$reps" --build-reps 1 --verify 0 "$mesh" "$incoherent" "$primary"
@@ -77,7 +79,7 @@ for ((r = 1; r <= rounds; r++)); do
   echo "round $r of $rounds done" >&2
 done
 
-echo "caustic ($(basename "$ours")) against Embree 3 $quality, wave mesh N = $n, $rounds alternating rounds of $reps passes"
+echo "caustic ($(basename "$ours")) against Embree 3 $quality${isa:+ ($isa kernels)}, wave mesh N = $n, $rounds alternating rounds of $reps passes"
 echo
 echo "| rays | query | Embree Mrays/s, median [min-max] | caustic | caustic / Embree per round, median [min-max] | rounds caustic ahead |"
 echo "|---|---|---:|---:|---:|---:|"

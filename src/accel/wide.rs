@@ -452,28 +452,42 @@ pub(super) struct Scalar;
 impl NodeTest for Scalar {
     #[inline(always)]
     fn enter(s: &SlabRay, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
-        let p = &node.planes;
-        let mut tnear = [0.0f32; WIDTH];
-        let mut mask = 0;
-        // `max`/`min` spelled as comparisons to match the SIMD instructions lane for lane
-        // (`maxps a, b` returns `b` unless `a > b`); no operand is NaN here anyway.
-        let max = |a: f32, b: f32| if a > b { a } else { b };
-        let min = |a: f32, b: f32| if a < b { a } else { b };
-        for (c, tn) in tnear.iter_mut().enumerate() {
-            let d = |row: usize, axis: usize| p[row][c].mul_add(s.inv_dir[axis], -s.org_inv[axis]);
-            let near = max(
-                max(d(s.near[0], 0), d(s.near[1], 1)),
-                max(d(s.near[2], 2), s.tmin),
-            );
-            let far = min(
-                min(d(s.far[0], 0), d(s.far[1], 1)),
-                min(d(s.far[2], 2), tmax),
-            );
-            *tn = near;
-            mask |= ((near <= far) as u32) << c;
-        }
-        (mask, tnear)
+        enter_one_by_one(s, node, tmax, |p, axis| {
+            p.mul_add(s.inv_dir[axis], -s.org_inv[axis])
+        })
     }
+}
+
+/// The node test one child at a time, with `dist(plane, axis)` the ray's distance to a plane:
+/// the scalar kernel's, and in tests the SSE2 kernel's formula.
+#[inline(always)]
+fn enter_one_by_one(
+    s: &SlabRay,
+    node: &Node,
+    tmax: f32,
+    dist: impl Fn(f32, usize) -> f32,
+) -> (u32, [f32; WIDTH]) {
+    let p = &node.planes;
+    let mut tnear = [0.0f32; WIDTH];
+    let mut mask = 0;
+    // `max`/`min` spelled as comparisons to match the SIMD instructions lane for lane
+    // (`maxps a, b` returns `b` unless `a > b`); no operand is NaN here anyway.
+    let max = |a: f32, b: f32| if a > b { a } else { b };
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    for (c, tn) in tnear.iter_mut().enumerate() {
+        let d = |row: usize, axis: usize| dist(p[row][c], axis);
+        let near = max(
+            max(d(s.near[0], 0), d(s.near[1], 1)),
+            max(d(s.near[2], 2), s.tmin),
+        );
+        let far = min(
+            min(d(s.far[0], 0), d(s.far[1], 1)),
+            min(d(s.far[2], 2), tmax),
+        );
+        *tn = near;
+        mask |= ((near <= far) as u32) << c;
+    }
+    (mask, tnear)
 }
 
 /// The SSE2 node test: the two halves of the node, four children each.
@@ -596,24 +610,7 @@ mod tests {
     /// The SSE2 test's two roundings, `(p - origin) * inv_dir`, one child at a time.
     #[cfg(target_arch = "x86_64")]
     fn two_roundings(s: &SlabRay, node: &Node, tmax: f32) -> (u32, [f32; WIDTH]) {
-        let max = |a: f32, b: f32| if a > b { a } else { b };
-        let min = |a: f32, b: f32| if a < b { a } else { b };
-        let mut tnear = [0.0f32; WIDTH];
-        let mut mask = 0;
-        for (c, tn) in tnear.iter_mut().enumerate() {
-            let d = |row: usize, a: usize| (node.planes[row][c] - s.origin[a]) * s.inv_dir[a];
-            let near = max(
-                max(d(s.near[0], 0), d(s.near[1], 1)),
-                max(d(s.near[2], 2), s.tmin),
-            );
-            let far = min(
-                min(d(s.far[0], 0), d(s.far[1], 1)),
-                min(d(s.far[2], 2), tmax),
-            );
-            *tn = near;
-            mask |= ((near <= far) as u32) << c;
-        }
-        (mask, tnear)
+        enter_one_by_one(s, node, tmax, |p, a| (p - s.origin[a]) * s.inv_dir[a])
     }
 
     /// The scalar and AVX2 tests return the same mask and entry distances bit for bit; the SSE2

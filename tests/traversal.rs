@@ -10,6 +10,7 @@
 
 use caustic::accel::Kernel;
 use caustic::accel::mesh::MeshGeom;
+use caustic::accel::stream::Coherence;
 use caustic::geometry::Ray;
 use caustic::geometry::mesh::MeshData;
 use caustic::geometry::triangle::{self, RayShear, TriangleHit};
@@ -101,6 +102,7 @@ fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
             .iter()
             .map(|r| (bits(geom.intersect(r)), geom.any_hit(r).map(f32::to_bits)))
             .collect();
+        assert_streams_agree(&geom, rays, &results, used);
         match &first {
             None => first = Some(results),
             Some(f) => {
@@ -111,6 +113,44 @@ fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
         }
     }
     hits
+}
+
+/// A ray's closest hit ([`bits`]) and any hit (`t`'s bits).
+type RayResult = (Option<(u32, [u32; 3])>, Option<u32>);
+
+/// Asserts that the stream queries give, ray by ray and bit for bit, the single-ray `results`
+/// (`intersect`, `any_hit`), for the whole of `rays` as one stream and cut into streams of
+/// lengths that leave lanes idle, refill them mid-stream, or hold one ray.
+fn assert_streams_agree(geom: &MeshGeom, rays: &[Ray], results: &[RayResult], kernel: Kernel) {
+    let runs = [rays.len().max(1), 1, 3, 8, 37].map(|n| (n, Coherence::Incoherent));
+    for (len, coherence) in runs.into_iter().chain([(64, Coherence::Coherent)]) {
+        for (c, (rays, want)) in rays.chunks(len).zip(results.chunks(len)).enumerate() {
+            let mut closest = vec![
+                Some((
+                    7,
+                    TriangleHit {
+                        t: 1.0,
+                        b1: 0.0,
+                        b2: 0.0
+                    }
+                ));
+                rays.len()
+            ];
+            let mut any = vec![Some(1.0); rays.len()];
+            geom.intersect_stream(rays, &mut closest, coherence);
+            geom.any_hit_stream(rays, &mut any, coherence);
+            for (k, w) in want.iter().enumerate() {
+                let got = (bits(closest[k]), any[k].map(f32::to_bits));
+                assert_eq!(
+                    &got,
+                    w,
+                    "{kernel:?}: ray {} in {coherence:?} streams of {len}: the stream differs \
+                     from ray by ray",
+                    c * len + k
+                );
+            }
+        }
+    }
 }
 
 /// Checks `rays` through the BVH, with its current kernel, against brute force; returns how
@@ -324,10 +364,49 @@ fn large_height_field_matches_brute_force_and_builds_alike_on_one_and_two_thread
         })
         .collect();
     let hits = check_kernel(&data, &two, &rays);
+    let results: Vec<_> = rays
+        .iter()
+        .map(|r| (bits(two.intersect(r)), two.any_hit(r).map(f32::to_bits)))
+        .collect();
+    assert_streams_agree(&two, &rays, &results, two.bvh.kernel());
     assert!(
         hits > 200,
         "only {hits} of 300 rays hit: the test is too weak"
     );
+}
+
+/// A mesh of one triangle (a BVH without nodes) and an empty stream: the stream queries still
+/// answer ray by ray as the single-ray ones do.
+#[test]
+fn streams_over_a_single_triangle_and_empty_streams() {
+    let data = mesh(
+        vec![
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        ],
+        vec![[0, 1, 2]],
+    );
+    let geom = MeshGeom::new(&data, 0);
+    let mut rng = Rng(23);
+    let rays: Vec<Ray> = (0..50)
+        .map(|_| {
+            let o = Vec3A::new(rng.uniform(-1.5, 1.5), 1.0, rng.uniform(-1.5, 1.5));
+            Ray::new(o, Vec3A::new(0.0, -1.0, 0.0))
+        })
+        .collect();
+    let results: Vec<_> = rays
+        .iter()
+        .map(|r| (bits(geom.intersect(r)), geom.any_hit(r).map(f32::to_bits)))
+        .collect();
+    let hits = results.iter().filter(|r| r.0.is_some()).count();
+    assert!(
+        (10..50).contains(&hits),
+        "{hits} of 50 rays hit: the test is too weak"
+    );
+    assert_streams_agree(&geom, &rays, &results, geom.bvh.kernel());
+    geom.intersect_stream(&[], &mut [], Coherence::Incoherent);
+    geom.any_hit_stream(&[], &mut [], Coherence::Incoherent);
 }
 
 #[test]

@@ -10,6 +10,7 @@
 //! cow = gr.mesh('cow', 'cow.obj')   -- one MeshGeom, however many nodes place it
 //! ```
 
+use crate::accel::stream::{Coherence, LANES as LANES_IN_FLIGHT};
 use crate::accel::tri4::Tri4;
 #[cfg(target_arch = "x86_64")]
 use crate::accel::tri4::{self, LANES};
@@ -161,9 +162,8 @@ impl MeshGeom {
             ray,
             #[inline(always)]
             |r, ids| {
-                self.count(&ids);
                 let shear = shear.get_or_insert_with(|| RayShear::new(ray));
-                let blocks = &self.blocks[ids.start as usize..ids.end as usize];
+                let blocks = self.leaf_blocks(ids);
                 let (found, tmax) = closest_in(blocks, kernel, shear, r.tmin, r.tmax);
                 if found.is_some() {
                     best = found;
@@ -185,9 +185,8 @@ impl MeshGeom {
             ray,
             #[inline(always)]
             |r, ids| {
-                self.count(&ids);
                 let shear = shear.get_or_insert_with(|| RayShear::new(ray));
-                let blocks = &self.blocks[ids.start as usize..ids.end as usize];
+                let blocks = self.leaf_blocks(ids);
                 found = any_in(blocks, kernel, shear, r.tmin, r.tmax);
                 found.is_some()
             },
@@ -195,6 +194,74 @@ impl MeshGeom {
             |id| self.prefetch_leaf(id),
         );
         found
+    }
+
+    /// [`MeshGeom::intersect`] for every ray of `rays`, into `out` (the same length): the same
+    /// hits, bit for bit. [`Coherence::Incoherent`] rays are traced several at once, so that
+    /// their cache misses overlap ([`crate::accel::stream`]); coherent ones one by one.
+    ///
+    /// # Panics
+    /// When `out` and `rays` differ in length.
+    pub fn intersect_stream(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<(u32, TriangleHit)>],
+        coherence: Coherence,
+    ) {
+        if one_by_one(rays, out, coherence, |r| self.intersect(r)) {
+            return;
+        }
+        let Some(mut shears) = LaneShears::new(rays) else {
+            return;
+        };
+        let kernel = self.bvh.kernel();
+        self.bvh.closest_leaf_stream(
+            rays,
+            #[inline(always)]
+            |lane, i, r, ids| {
+                let blocks = self.leaf_blocks(ids);
+                let (found, tmax) = closest_in(blocks, kernel, shears.get(lane, i), r.tmin, r.tmax);
+                if found.is_some() {
+                    out[i] = found;
+                }
+                tmax
+            },
+            #[inline(always)]
+            |id| self.prefetch_leaf(id),
+        );
+    }
+
+    /// [`MeshGeom::any_hit`] for every ray of `rays`, into `out` (the same length), traced as
+    /// [`MeshGeom::intersect_stream`] traces them.
+    ///
+    /// # Panics
+    /// When `out` and `rays` differ in length.
+    pub fn any_hit_stream(&self, rays: &[Ray], out: &mut [Option<f32>], coherence: Coherence) {
+        if one_by_one(rays, out, coherence, |r| self.any_hit(r)) {
+            return;
+        }
+        let Some(mut shears) = LaneShears::new(rays) else {
+            return;
+        };
+        let kernel = self.bvh.kernel();
+        self.bvh.any_leaf_stream(
+            rays,
+            #[inline(always)]
+            |lane, i, r, ids| {
+                let blocks = self.leaf_blocks(ids);
+                out[i] = any_in(blocks, kernel, shears.get(lane, i), r.tmin, r.tmax);
+                out[i].is_some()
+            },
+            #[inline(always)]
+            |id| self.prefetch_leaf(id),
+        );
+    }
+
+    /// The blocks of leaves `ids`, counted as triangle tests (when counting is on).
+    #[inline(always)]
+    fn leaf_blocks(&self, ids: Range<u32>) -> &[Block] {
+        self.count(&ids);
+        &self.blocks[ids.start as usize..ids.end as usize]
     }
 
     /// Starts loading every cache line of the blocks of leaves `ids`, a leaf child that the
@@ -217,6 +284,57 @@ impl MeshGeom {
             let leaves = &self.bvh.leaves()[ids.start as usize..ids.end as usize];
             leaves.iter().map(|l| l.count).sum()
         });
+    }
+}
+
+/// Answers a stream's rays one by one with `one` when they are coherent (returning true), or
+/// clears `out` for the stream traversal (returning false).
+///
+/// # Panics
+/// When `out` and `rays` differ in length.
+fn one_by_one<T>(
+    rays: &[Ray],
+    out: &mut [Option<T>],
+    coherence: Coherence,
+    one: impl Fn(&Ray) -> Option<T>,
+) -> bool {
+    assert_eq!(rays.len(), out.len(), "one result per ray");
+    if coherence == Coherence::Coherent {
+        for (r, o) in rays.iter().zip(out) {
+            *o = one(r);
+        }
+        return true;
+    }
+    out.fill_with(|| None);
+    false
+}
+
+/// Each stream lane's ray shear: made at the ray's first leaf, as [`MeshGeom::intersect`] makes
+/// it (most random rays miss the mesh's box and never need one).
+struct LaneShears<'a> {
+    rays: &'a [Ray],
+    /// Per lane: the ray whose shear it holds, and the shear.
+    made: [(usize, RayShear); LANES_IN_FLIGHT],
+}
+
+impl<'a> LaneShears<'a> {
+    /// Returns None for an empty stream.
+    fn new(rays: &'a [Ray]) -> Option<LaneShears<'a>> {
+        let first = RayShear::new(rays.first()?);
+        Some(LaneShears {
+            rays,
+            made: [(usize::MAX, first); LANES_IN_FLIGHT],
+        })
+    }
+
+    /// Returns ray `i`'s shear, traced in lane `lane`.
+    #[inline(always)]
+    fn get(&mut self, lane: usize, i: usize) -> &RayShear {
+        let s = &mut self.made[lane];
+        if s.0 != i {
+            *s = (i, RayShear::new(&self.rays[i]));
+        }
+        &s.1
     }
 }
 

@@ -32,6 +32,7 @@ pub mod mesh;
 mod ploc;
 mod sah;
 mod stack;
+pub mod stream;
 pub mod tri4;
 mod wide;
 
@@ -247,6 +248,52 @@ impl Bvh {
         match &self.inner {
             Some(bvh) => bvh.any(ray, leaf_fn, prefetch),
             None => self.len == 1 && leaf_fn(ray, 0..1),
+        }
+    }
+
+    /// [`Bvh::closest_leaf`] for every ray of `rays`, several in flight at once
+    /// ([`stream`]): `leaf_fn(lane, i, ray, ids)` is the leaf callback for ray `i`, traced in
+    /// lane `lane` (below [`stream::LANES`]). Each ray sees the calls that
+    /// [`Bvh::closest_leaf`] makes, in the same order; calls for different rays interleave, and
+    /// a lane's previous ray is done when the lane starts another.
+    #[inline]
+    pub fn closest_leaf_stream(
+        &self,
+        rays: &[Ray],
+        mut leaf_fn: impl FnMut(usize, usize, &Ray, Range<u32>) -> f32,
+        prefetch: impl Fn(Range<u32>),
+    ) {
+        match &self.inner {
+            Some(bvh) => bvh.closest_stream(rays, leaf_fn, prefetch),
+            None => {
+                if self.len == 1 {
+                    for (i, r) in rays.iter().enumerate() {
+                        leaf_fn(0, i, r, 0..1);
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`Bvh::any_leaf`] for every ray of `rays`, several in flight at once: `leaf_fn(lane, i,
+    /// ray, ids)` as for [`Bvh::closest_leaf_stream`]; a ray is done once its callback returns
+    /// true.
+    #[inline]
+    pub fn any_leaf_stream(
+        &self,
+        rays: &[Ray],
+        mut leaf_fn: impl FnMut(usize, usize, &Ray, Range<u32>) -> bool,
+        prefetch: impl Fn(Range<u32>),
+    ) {
+        match &self.inner {
+            Some(bvh) => bvh.any_stream(rays, leaf_fn, prefetch),
+            None => {
+                if self.len == 1 {
+                    for (i, r) in rays.iter().enumerate() {
+                        leaf_fn(0, i, r, 0..1);
+                    }
+                }
+            }
         }
     }
 

@@ -42,6 +42,17 @@ impl Stack<'_> {
         }
     }
 
+    /// A stack over `slots` holding the entries in `slots[..len]` (a stream lane's stack, kept
+    /// between the lane's steps).
+    ///
+    /// # Safety
+    /// `slots[..len]` must have been written, by a stack over the same slots or otherwise.
+    #[inline(always)]
+    pub unsafe fn over(slots: &mut [MaybeUninit<Entry>], len: usize) -> Stack<'_> {
+        debug_assert!(len <= slots.len());
+        Stack { slots, len }
+    }
+
     /// Returns the number of entries.
     #[inline(always)]
     pub fn len(&self) -> usize {

@@ -36,6 +36,7 @@
 //! 32 MB L3 beside 81 MB of triangle blocks.
 
 use super::stack::{Entry, Stack};
+use super::stream;
 use crate::geometry::Ray;
 use glam::Vec3A;
 use std::ops::Range;
@@ -219,6 +220,71 @@ impl WideBvh {
     }
 }
 
+impl WideBvh {
+    /// [`WideBvh::closest`] for each ray of a stream, [`super::stream::LANES`] rays in flight:
+    /// `leaf_fn(lane, i, ray, ids)` is the leaf callback for ray `i` of `rays`, traced in lane
+    /// `lane` (below `LANES`; a lane's previous ray is done when it starts another).
+    #[inline(always)]
+    pub(super) fn closest_stream(
+        &self,
+        rays: &[Ray],
+        leaf_fn: impl FnMut(usize, usize, &Ray, Range<u32>) -> f32,
+        prefetch: impl Fn(Range<u32>),
+    ) {
+        match self.kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `kernel` is `Avx2` only where `Kernel::best` detected AVX2 and FMA.
+            Kernel::Avx2 => unsafe { closest_stream_avx2(self, rays, leaf_fn, prefetch) },
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Sse2 => stream::closest_with::<Sse2>(self, rays, leaf_fn, prefetch),
+            _ => stream::closest_with::<Scalar>(self, rays, leaf_fn, prefetch),
+        }
+    }
+
+    /// [`WideBvh::any`] for each ray of a stream: `leaf_fn(lane, i, ray, ids)` as for
+    /// [`WideBvh::closest_stream`]; a ray is done once its callback returns true.
+    #[inline(always)]
+    pub(super) fn any_stream(
+        &self,
+        rays: &[Ray],
+        leaf_fn: impl FnMut(usize, usize, &Ray, Range<u32>) -> bool,
+        prefetch: impl Fn(Range<u32>),
+    ) {
+        match self.kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as in `closest_stream`.
+            Kernel::Avx2 => unsafe { any_stream_avx2(self, rays, leaf_fn, prefetch) },
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Sse2 => stream::any_with::<Sse2>(self, rays, leaf_fn, prefetch),
+            _ => stream::any_with::<Scalar>(self, rays, leaf_fn, prefetch),
+        }
+    }
+}
+
+/// [`stream::closest_with`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn closest_stream_avx2(
+    bvh: &WideBvh,
+    rays: &[Ray],
+    leaf_fn: impl FnMut(usize, usize, &Ray, Range<u32>) -> f32,
+    prefetch: impl Fn(Range<u32>),
+) {
+    stream::closest_with::<Avx2>(bvh, rays, leaf_fn, prefetch)
+}
+
+/// [`stream::any_with`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn any_stream_avx2(
+    bvh: &WideBvh,
+    rays: &[Ray],
+    leaf_fn: impl FnMut(usize, usize, &Ray, Range<u32>) -> bool,
+    prefetch: impl Fn(Range<u32>),
+) {
+    stream::any_with::<Avx2>(bvh, rays, leaf_fn, prefetch)
+}
+
 /// [`closest_with`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
@@ -266,30 +332,11 @@ fn closest_with<T: NodeTest>(
                     super::counters::node();
                     let node = &bvh.nodes[cur.child as usize];
                     prefetch_children(node);
-                    let (mut mask, tnear) = T::enter(&pre, node, r.tmax);
+                    let (mask, tnear) = T::enter(&pre, node, r.tmax);
                     if mask != 0 {
-                        let child = |c: u32| Entry {
-                            child: node.child[c as usize],
-                            t: tnear[c as usize],
-                        };
-                        // Continue with the nearest child; push the others, nearest on top.
-                        let mut near = child(mask.trailing_zeros());
-                        mask &= mask - 1;
-                        let base = stack.len();
-                        while mask != 0 {
-                            let mut e = child(mask.trailing_zeros());
-                            mask &= mask - 1;
-                            if e.child & LEAF == 0 {
-                                prefetch_node(bvh, e.child);
-                            } else {
-                                prefetch(leaf_ids(e.child));
-                            }
-                            if e.t < near.t {
-                                std::mem::swap(&mut e, &mut near);
-                            }
-                            stack.insert_sorted(base, e);
-                        }
-                        cur = near;
+                        cur = nearest_first(node, mask, &tnear, &mut stack, |e| {
+                            prefetch_entry(bvh, e, &prefetch)
+                        });
                         continue;
                     }
                 } else {
@@ -311,6 +358,36 @@ fn closest_with<T: NodeTest>(
             }
         },
     )
+}
+
+/// Returns the nearest of `node`'s children in `mask` (not empty), entered at `tnear`, and
+/// pushes the others on `stack`, nearest on top, telling `pushed` of each: the closest-hit
+/// traversal's order, for single rays and streams alike.
+#[inline(always)]
+pub(super) fn nearest_first(
+    node: &Node,
+    mut mask: u32,
+    tnear: &[f32; WIDTH],
+    stack: &mut Stack,
+    pushed: impl Fn(&Entry),
+) -> Entry {
+    let child = |c: u32| Entry {
+        child: node.child[c as usize],
+        t: tnear[c as usize],
+    };
+    let mut near = child(mask.trailing_zeros());
+    mask &= mask - 1;
+    let base = stack.len();
+    while mask != 0 {
+        let mut e = child(mask.trailing_zeros());
+        mask &= mask - 1;
+        pushed(&e);
+        if e.t < near.t {
+            std::mem::swap(&mut e, &mut near);
+        }
+        stack.insert_sorted(base, e);
+    }
+    near
 }
 
 /// Any-hit traversal with node test `T`: children in lane order, no sorting.
@@ -337,13 +414,12 @@ fn any_with<T: NodeTest>(
                         cur = node.child[mask.trailing_zeros() as usize];
                         mask &= mask - 1;
                         while mask != 0 {
-                            let child = node.child[mask.trailing_zeros() as usize];
-                            if child & LEAF == 0 {
-                                prefetch_node(bvh, child);
-                            } else {
-                                prefetch(leaf_ids(child));
-                            }
-                            stack.push(Entry { child, t: 0.0 });
+                            let e = Entry {
+                                child: node.child[mask.trailing_zeros() as usize],
+                                t: 0.0,
+                            };
+                            prefetch_entry(bvh, &e, &prefetch);
+                            stack.push(e);
                             mask &= mask - 1;
                         }
                         continue;
@@ -373,10 +449,21 @@ fn prefetch_children(node: &Node) {
 /// its stack: its misses then overlap the work on the nearer child instead of waiting until the
 /// entry is popped.
 #[inline(always)]
-fn prefetch_node(bvh: &WideBvh, child: u32) {
+pub(super) fn prefetch_node(bvh: &WideBvh, child: u32) {
     let p: *const u8 = bvh.nodes.as_ptr().wrapping_add(child as usize).cast();
     for line in 0..4 {
         prefetch_line(p.wrapping_add(64 * line));
+    }
+}
+
+/// Starts loading what stack entry `e` refers to: an inner node's four cache lines, or through
+/// the caller's `prefetch` hook a leaf run's primitives.
+#[inline(always)]
+pub(super) fn prefetch_entry(bvh: &WideBvh, e: &Entry, prefetch: &impl Fn(Range<u32>)) {
+    if e.child & LEAF == 0 {
+        prefetch_node(bvh, e.child);
+    } else {
+        prefetch(leaf_ids(e.child));
     }
 }
 

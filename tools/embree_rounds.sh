@@ -18,6 +18,8 @@
 #   N              wave mesh grid size (N x N vertices, 2(N-1)^2 triangles) [1001]
 #   QUALITY        Embree build quality                              [medium]
 #   ISA            Embree's kernels (avx2, avx512, sse4.2 ...)       [Embree's choice: the widest]
+#   MODES          Embree's query modes (1, 4, 8, 16, 1M): 1 single rays, 1M streams, the
+#                  others packets; caustic has single rays and streams [1,1M]
 #   BENCH          the harness's folder                  [../shared/bench beside the checkout]
 #   DATA_DIR       where run.sh keeps its binaries, mesh and rays; what is missing is made
 #                  there with run.sh's commands                      [/tmp/embree_bench]
@@ -31,10 +33,12 @@ reps="${REPS:-5}"
 n="${N:-1001}"
 quality="${QUALITY:-medium}"
 isa="${ISA:-}"
+modes="${MODES:-1,1M}"
 bench="${BENCH:-$here/../shared/bench}"
 data="${DATA_DIR:-/tmp/embree_bench}"
 ours="${CAUSTIC_BENCH:-$here/target/release/bench_traversal}"
 
+case "$modes" in *[!0-9M,]* | "") echo "MODES is a comma list of 1, 4, 8, 16, 1M" >&2; exit 2 ;; esac
 case "$rounds$reps$n" in *[!0-9]*) echo "ROUNDS, REPS and N must be whole numbers" >&2; exit 2 ;; esac
 if ((rounds < 1 || rounds > 100 || reps < 1 || reps > 100 || n < 2 || n > 4001)); then
   echo "ROUNDS and REPS must be 1 to 100, N 2 to 4001" >&2
@@ -59,7 +63,7 @@ incoherent="$data/incoherent_1048576_s12345.rays"
 logs="$(mktemp -d)"
 trap 'rm -rf "$logs"' EXIT
 run_embree() {
-  "$data/bin/embree_bench" --quality "$quality" ${isa:+--isa "$isa"} --modes 1 --reps "$reps" \
+  "$data/bin/embree_bench" --quality "$quality" ${isa:+--isa "$isa"} --modes "$modes" --reps "$reps" \
     --build-reps 1 --threads 1 "$mesh" "$incoherent" "$primary"
 }
 run_ours() {
@@ -88,6 +92,11 @@ sort -k3,3 -k4,4 -k1,1n "$logs/rates" | awk '
     for (i = 2; i <= k; i++) { t = a[i]; for (j = i - 1; j >= 1 && a[j] > t; j--) a[j + 1] = a[j]; a[j + 1] = t }
     return k % 2 ? a[(k + 1) / 2] : (a[k / 2] + a[k / 2 + 1]) / 2
   }
+  function query(m,   w) {          # intersect1 -> closest, occluded1M -> shadow, stream ...
+    w = m; sub(/^(intersect|occluded)/, "", w)
+    return (m ~ /^intersect/ ? "closest" : "shadow") \
+      (w == "1M" ? ", stream" : w == "1" ? "" : ", packets of " w)
+  }
   function flush(   k, ne, nc, nr, ahead, ke, kc) {
     if (key == "") return
     ne = nc = nr = ahead = 0
@@ -98,10 +107,18 @@ sort -k3,3 -k4,4 -k1,1n "$logs/rates" | awk '
         q[++nr] = rate[k, "caustic"] / rate[k, "embree"]; ahead += q[nr] >= 1
       }
     }
-    ke = med(e, ne); kc = med(c, nc)
     split(key, kk, SUBSEP)
+    if (ne == 0 || nc == 0) {      # a mode only one engine has (Embree packets)
+      if (ne) printf "| %s | %s | %.2f [%.2f-%.2f] | - | - | - |\n", kk[1], query(kk[2]),
+        med(e, ne), e[1], e[ne]
+      if (nc) printf "| %s | %s | - | %.2f [%.2f-%.2f] | - | - |\n", kk[1], query(kk[2]),
+        med(c, nc), c[1], c[nc]
+      delete rate; delete e; delete c; delete q; maxr = 0
+      return
+    }
+    ke = med(e, ne); kc = med(c, nc)
     printf "| %s | %s | %.2f [%.2f-%.2f] | %.2f [%.2f-%.2f] | **%.2fx** [%.2f-%.2f] | %d of %d |\n",
-      kk[1], kk[2] == "intersect1" ? "closest" : "shadow", ke, e[1], e[ne], kc, c[1], c[nc],
+      kk[1], query(kk[2]), ke, e[1], e[ne], kc, c[1], c[nc],
       med(q, nr), q[1], q[nr], ahead, nr
     delete rate; delete e; delete c; delete q; maxr = 0
   }

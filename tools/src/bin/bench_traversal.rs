@@ -2,8 +2,18 @@
 //!
 //! ```text
 //! bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--tiles N] [--kernel K]
-//!                 [--builder B] [--count] MESH RAYS [RAYS...]
+//!                 [--ab K1,K2] [--builder B] [--count] MESH RAYS [RAYS...]
 //! ```
+//!
+//! Besides single rays, each set is traced on one thread through the stream API
+//! ([`MeshGeom::intersect_stream`], [`MeshGeom::any_hit_stream`]) in streams of 256 rays, as the
+//! harness passes them to Embree's `rtcIntersect1M` (modes `intersect1M`, `occluded1M`), with
+//! the coherence the harness tells Embree: camera rays coherent, random rays incoherent.
+//!
+//! `--ab K1,K2` replaces the report with a comparison of two node-test kernels in one process:
+//! passes with `K1` and `K2` alternate, and `AB` lines give each kernel's times and the median of
+//! the per-pair ratios. A shared VM drifts by 10-30% within minutes, so separate runs cannot
+//! tell two kernels apart by a few percent; passes a fraction of a second apart can.
 //!
 //! `--count` turns on the traversal counters that `--stats` and `--heatmap` read
 //! ([`caustic::accel::counters`]), to measure what counting costs: run with and without it. With
@@ -34,10 +44,11 @@
 //! could differ from Embree's closed interval.
 
 use caustic::accel::mesh::MeshGeom;
+use caustic::accel::stream::Coherence;
 use caustic::accel::{Builder, Kernel};
 use caustic::geometry::Ray;
 use caustic::geometry::mesh::MeshData;
-use caustic_tools::benchfile::{RayRecord, RaySet, read_mesh, read_rays};
+use caustic_tools::benchfile::{RayKind, RayRecord, RaySet, read_mesh, read_rays};
 use caustic_tools::clock::{self, LoadProbe};
 use glam::Vec3A;
 use rayon::prelude::*;
@@ -57,13 +68,26 @@ struct Options {
     mt: usize,
     tiles: usize,
     kernel: Kernel,
+    /// `--ab K1,K2`: compare two kernels pass by pass instead of the usual report.
+    ab: Option<(Kernel, Kernel)>,
     builder: Builder,
     mesh: PathBuf,
     rays: Vec<PathBuf>,
 }
 
 const USAGE: &str = "usage: bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--tiles N] \
-                     [--kernel scalar|sse2|avx2] [--builder sah|ploc] [--count] MESH RAYS [RAYS...]";
+                     [--kernel K] [--ab K1,K2] [--builder sah|ploc] [--count] MESH RAYS [RAYS...] \
+                     (kernels: scalar, sse2, avx2)";
+
+/// Parses a kernel's name.
+fn kernel(name: Option<&str>) -> Result<Kernel, String> {
+    match name {
+        Some("scalar") => Ok(Kernel::Scalar),
+        Some("sse2") => Ok(Kernel::Sse2),
+        Some("avx2") => Ok(Kernel::Avx2),
+        k => Err(format!("a kernel is scalar, sse2 or avx2, got {k:?}")),
+    }
+}
 
 fn parse_args() -> Result<Options, String> {
     let mut o = Options {
@@ -73,6 +97,7 @@ fn parse_args() -> Result<Options, String> {
         mt: 2,
         tiles: 0,
         kernel: Kernel::best(),
+        ab: None,
         builder: Builder::BinnedSah,
         mesh: PathBuf::new(),
         rays: Vec::new(),
@@ -91,13 +116,19 @@ fn parse_args() -> Result<Options, String> {
             "--verify" => o.verify = Some(num("--verify")?),
             "--mt" => o.mt = num("--mt")?,
             "--tiles" => o.tiles = num("--tiles")?.clamp(1, 4096),
-            "--kernel" => {
-                o.kernel = match args.next().as_deref() {
-                    Some("scalar") => Kernel::Scalar,
-                    Some("sse2") => Kernel::Sse2,
-                    Some("avx2") => Kernel::Avx2,
-                    k => return Err(format!("--kernel wants scalar, sse2 or avx2, got {k:?}")),
+            "--kernel" => o.kernel = kernel(args.next().as_deref())?,
+            "--ab" => {
+                let v = args.next().unwrap_or_default();
+                let (a, b) = v
+                    .split_once(',')
+                    .ok_or(format!("--ab wants two kernels as K1,K2, got '{v}'"))?;
+                let (a, b) = (kernel(Some(a))?, kernel(Some(b))?);
+                for k in [a, b] {
+                    if k > Kernel::best() {
+                        return Err(format!("--ab: this CPU cannot run the {k:?} kernel"));
+                    }
                 }
+                o.ab = Some((a, b));
             }
             "--builder" => {
                 o.builder = match args.next().as_deref() {
@@ -163,6 +194,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         &quality(o.builder, o.kernel),
         o.build_reps,
     )?;
+    if let Some(ab) = o.ab {
+        for set in &sets {
+            compare_kernels(&mut geom, &mesh, set, ab, o.reps);
+        }
+        return Ok(());
+    }
     let kernel = geom.bvh.set_kernel(o.kernel);
     let quality = quality(o.builder, kernel);
     let ctx = Ctx {
@@ -197,6 +234,75 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         verify(&ctx, &data, set, k);
     }
     Ok(())
+}
+
+/// `--ab`: traces `set` with kernels `a` and `b` in turn, pass after pass on this thread, `reps`
+/// pairs per query (after one untimed pass of each), and prints an `AB` line per query: each
+/// kernel's best and median CPU time and the median of the per-pair ratios `a / b` (above 1:
+/// `b` is faster). A shared VM's speed drifts by 10-30% within minutes, so two kernels timed in
+/// separate runs cannot be told apart by a few percent; passes a fraction of a second apart can.
+/// Both kernels must find the same hits (`same=0` flags a difference).
+fn compare_kernels(
+    geom: &mut MeshGeom,
+    mesh: &str,
+    set: &RaySet,
+    (a, b): (Kernel, Kernel),
+    reps: usize,
+) {
+    for occluded in [false, true] {
+        let mut pass = |k: Kernel| {
+            geom.bvh.set_kernel(k);
+            let ctx = Ctx {
+                geom,
+                order: geom.bvh.order(),
+                mesh,
+                quality: "",
+                tris: 0,
+                reps: 1,
+            };
+            let c0 = clock::thread_cpu_s();
+            let s = ctx.pass(
+                &set.rays,
+                Query {
+                    occluded,
+                    stream: None,
+                },
+                false,
+                None,
+            );
+            (clock::thread_cpu_s() - c0, s)
+        };
+        let same = pass(a).1 == pass(b).1;
+        let (mut ta, mut tb, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..reps {
+            // Alternate which goes first, so neither always follows the other.
+            let (x, y) = if i % 2 == 0 {
+                (pass(a).0, pass(b).0)
+            } else {
+                let y = pass(b).0;
+                (pass(a).0, y)
+            };
+            ta.push(x);
+            tb.push(y);
+            ratio.push(x / y);
+        }
+        println!(
+            "AB mesh={mesh} rays={} kind={} mode={} a={a:?} b={b:?} reps={reps} a_best_s={:.6} \
+             a_med_s={:.6} b_best_s={:.6} b_med_s={:.6} ratio_a_over_b_med={:.4} ratio_min={:.4} \
+             ratio_max={:.4} same={}",
+            base_name(&set.path),
+            set.kind.name(),
+            if occluded { "occluded1" } else { "intersect1" },
+            clock::min(&ta),
+            clock::median(&ta),
+            clock::min(&tb),
+            clock::median(&tb),
+            clock::median(&ratio),
+            clock::min(&ratio),
+            ratio.iter().cloned().fold(f64::MIN, f64::max),
+            same as u8,
+        );
+    }
 }
 
 /// Returns an image's rays reordered into `n`×`n` tiles, tile after tile in rows and each tile's
@@ -297,6 +403,18 @@ struct Ctx<'a> {
     reps: usize,
 }
 
+/// Rays per stream in the `1M` modes, as the harness passes to `rtcIntersect1M`.
+const STREAM: usize = 256;
+
+/// What a pass asks of each ray.
+#[derive(Clone, Copy, Debug)]
+struct Query {
+    /// Any hit (`occluded`) rather than the closest.
+    occluded: bool,
+    /// Through the stream API, as Embree's `1M` modes, or ray by ray (`None`).
+    stream: Option<Coherence>,
+}
+
 /// Closest-hit checksums of a pass, in file order.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Sums {
@@ -354,21 +472,59 @@ impl Ctx<'_> {
         }
     }
 
-    /// Runs one closest-hit or any-hit pass over `rays`, on this thread or on `pool`, with
-    /// `sum_prim` in file order or BVH order (see [`Ctx::closest`]).
+    /// Closest-hit checksums of a stream pass ([`MeshGeom::intersect_stream`], in streams of
+    /// [`STREAM`] rays), as [`Ctx::closest`].
+    fn closest_stream(&self, rays: &[RayRecord], file_order: bool, coherence: Coherence) -> Sums {
+        let mut s = Sums::default();
+        let (mut buf, mut out) = (Vec::with_capacity(STREAM), vec![None; STREAM]);
+        for c in rays.chunks(STREAM) {
+            buf.clear();
+            buf.extend(c.iter().map(to_ray));
+            let out = &mut out[..c.len()];
+            self.geom.intersect_stream(&buf, out, coherence);
+            for (tri, h) in out.iter().flatten() {
+                s.hits += 1;
+                s.sum_t += h.t as f64;
+                s.sum_prim += if file_order {
+                    self.order[*tri as usize]
+                } else {
+                    *tri
+                } as u64;
+            }
+        }
+        s
+    }
+
+    fn occluded_stream(&self, rays: &[RayRecord], coherence: Coherence) -> Sums {
+        let mut hits = 0;
+        let (mut buf, mut out) = (Vec::with_capacity(STREAM), vec![None; STREAM]);
+        for c in rays.chunks(STREAM) {
+            buf.clear();
+            buf.extend(c.iter().map(to_ray));
+            let out = &mut out[..c.len()];
+            self.geom.any_hit_stream(&buf, out, coherence);
+            hits += out.iter().flatten().count() as u64;
+        }
+        Sums {
+            hits,
+            ..Sums::default()
+        }
+    }
+
+    /// Runs one closest-hit or any-hit pass over `rays`, ray by ray or in streams, on this
+    /// thread or on `pool`, with `sum_prim` in file order or BVH order (see [`Ctx::closest`]).
     fn pass(
         &self,
         rays: &[RayRecord],
-        occluded: bool,
+        q: Query,
         file_order: bool,
         pool: Option<&rayon::ThreadPool>,
     ) -> Sums {
-        let f = |c: &[RayRecord]| {
-            if occluded {
-                self.occluded(c)
-            } else {
-                self.closest(c, file_order)
-            }
+        let f = |c: &[RayRecord]| match (q.occluded, q.stream) {
+            (false, None) => self.closest(c, file_order),
+            (true, None) => self.occluded(c),
+            (false, Some(k)) => self.closest_stream(c, file_order, k),
+            (true, Some(k)) => self.occluded_stream(c, k),
         };
         match pool {
             None => f(rays),
@@ -383,21 +539,44 @@ impl Ctx<'_> {
     /// Times both queries over one ray set and prints their `TRACE` lines.
     /// `order` names the ray order in the mode (`""` for file order).
     fn trace_set(&self, set: &RaySet, mt: Option<(&rayon::ThreadPool, usize)>, order: &str) {
-        for occluded in [false, true] {
+        let mut queries = vec![
+            Query {
+                occluded: false,
+                stream: None,
+            },
+            Query {
+                occluded: true,
+                stream: None,
+            },
+        ];
+        if mt.is_none() && order.is_empty() {
+            // Streams, as Embree's `rtcIntersect1M` / `rtcOccluded1M` (modes `1M`), told the
+            // rays' coherence as the harness tells Embree.
+            let coherence = match set.kind {
+                RayKind::Primary => Coherence::Coherent,
+                RayKind::Incoherent => Coherence::Incoherent,
+            };
+            queries.extend(queries.clone().into_iter().map(|q| Query {
+                stream: Some(coherence),
+                ..q
+            }));
+        }
+        for q in queries {
+            let occluded = q.occluded;
             let pool = mt.map(|m| m.0);
             // The untimed warm-up gives the checksums in file order, as Embree's primID. The
             // timed passes sum BVH-order indices, which is what a tracer hands its caller (as
             // Embree's primID): mapping each hit back through the 8 MB order table is the
             // harness's business, and cost random rays a cache miss Embree's loop does not pay.
-            let first = self.pass(&set.rays, occluded, true, pool);
-            let timed = self.pass(&set.rays, occluded, false, pool);
+            let first = self.pass(&set.rays, q, true, pool);
+            let timed = self.pass(&set.rays, q, false, pool);
             let (mut wall, mut cpu) = (Vec::new(), Vec::new());
             let mut consistent = timed.hits == first.hits && timed.sum_t == first.sum_t;
             let l0 = LoadProbe::now();
             let _ = caustic::accel::counters::thread_total_reset();
             for _ in 0..self.reps {
                 let (c0, w0) = (clock::thread_cpu_s(), Instant::now());
-                let s = self.pass(&set.rays, occluded, false, pool);
+                let s = self.pass(&set.rays, q, false, pool);
                 wall.push(w0.elapsed().as_secs_f64());
                 cpu.push(clock::thread_cpu_s() - c0);
                 consistent &= s == timed;
@@ -406,6 +585,7 @@ impl Ctx<'_> {
             let n = set.rays.len() as f64;
             let base = if occluded { "occluded1" } else { "intersect1" };
             let mode = match mt {
+                None if q.stream.is_some() => format!("{base}M"),
                 None => format!("{base}{order}"),
                 Some((_, k)) => format!("{base}_{k}t"),
             };

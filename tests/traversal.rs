@@ -118,12 +118,15 @@ fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
 /// A ray's closest hit ([`bits`]) and any hit (`t`'s bits).
 type RayResult = (Option<(u32, [u32; 3])>, Option<u32>);
 
-/// Asserts that the stream queries give, ray by ray and bit for bit, the single-ray `results`
-/// (`intersect`, `any_hit`), for the whole of `rays` as one stream and cut into streams of
-/// lengths that leave lanes idle, refill them mid-stream, or hold one ray.
+/// Asserts that the stream queries give the single-ray `results` (`intersect`, `any_hit`), for
+/// the whole of `rays` as one stream and cut into streams of lengths that leave lanes idle,
+/// refill them mid-stream, or hold one ray: incoherent streams bit for bit; coherent ones
+/// (packets of eight, here of rays going anywhere: the hardest case for them) the same closest
+/// `t` bit for bit by a triangle really hit there, and the same occlusion.
 fn assert_streams_agree(geom: &MeshGeom, rays: &[Ray], results: &[RayResult], kernel: Kernel) {
     let runs = [rays.len().max(1), 1, 3, 8, 37].map(|n| (n, Coherence::Incoherent));
-    for (len, coherence) in runs.into_iter().chain([(64, Coherence::Coherent)]) {
+    let packets = [rays.len().max(1), 5, 64].map(|n| (n, Coherence::Coherent));
+    for (len, coherence) in runs.into_iter().chain(packets) {
         for (c, (rays, want)) in rays.chunks(len).zip(results.chunks(len)).enumerate() {
             let mut closest = vec![
                 Some((
@@ -141,13 +144,38 @@ fn assert_streams_agree(geom: &MeshGeom, rays: &[Ray], results: &[RayResult], ke
             geom.any_hit_stream(rays, &mut any, coherence);
             for (k, w) in want.iter().enumerate() {
                 let got = (bits(closest[k]), any[k].map(f32::to_bits));
-                assert_eq!(
-                    &got,
-                    w,
-                    "{kernel:?}: ray {} in {coherence:?} streams of {len}: the stream differs \
-                     from ray by ray",
+                let what = format!(
+                    "{kernel:?}: ray {} in {coherence:?} streams of {len}",
                     c * len + k
                 );
+                if coherence == Coherence::Incoherent {
+                    assert_eq!(&got, w, "{what}: the stream differs from ray by ray");
+                } else {
+                    // Packets: the same `t`, by the same or another triangle hit at exactly
+                    // that `t`; the same occlusion.
+                    assert_eq!(got.1.is_some(), w.1.is_some(), "{what}: any hit");
+                    if got.0 != w.0 {
+                        let (Some((tri, h)), Some((_, [t, _, _]))) = (closest[k], w.0) else {
+                            panic!("{what}: hit or miss differs from ray by ray");
+                        };
+                        assert_eq!(h.t.to_bits(), t, "{what}: t differs");
+                        let [a, b, c] =
+                            geom.triangles[tri as usize].map(|v| geom.positions[v as usize]);
+                        let own = triangle::intersect(
+                            &RayShear::new(&rays[k]),
+                            a,
+                            b,
+                            c,
+                            rays[k].tmin,
+                            rays[k].tmax,
+                        );
+                        assert_eq!(
+                            own.map(|o| [o.t, o.b1, o.b2].map(f32::to_bits)),
+                            Some([h.t, h.b1, h.b2].map(f32::to_bits)),
+                            "{what}: the hit is not its triangle's"
+                        );
+                    }
+                }
             }
         }
     }
@@ -407,6 +435,28 @@ fn streams_over_a_single_triangle_and_empty_streams() {
     assert_streams_agree(&geom, &rays, &results, geom.bvh.kernel());
     geom.intersect_stream(&[], &mut [], Coherence::Incoherent);
     geom.any_hit_stream(&[], &mut [], Coherence::Incoherent);
+}
+
+/// Camera rays over a height field, the packets' own case: a 64 x 64 image from a pinhole above,
+/// a fifth of the rays stopped short, through every kernel, as one coherent stream and as
+/// single rays, both against brute force.
+#[test]
+fn camera_ray_packets_match_single_rays() {
+    let data = height_field(65);
+    let eye = Vec3A::new(0.1, 1.5, 2.5);
+    let rays: Vec<Ray> = (0..64 * 64)
+        .map(|k| {
+            let (x, y) = ((k % 64) as f32 / 63.0 - 0.5, (k / 64) as f32 / 63.0 - 0.5);
+            let dir = Vec3A::new(1.6 * x, -0.55 - 1.2 * y, -1.0);
+            let ray = Ray::new(eye, dir);
+            if k % 5 == 0 { ray.with_tmax(2.6) } else { ray }
+        })
+        .collect();
+    let hits = check_agreement(&data, &rays);
+    assert!(
+        (1000..4000).contains(&hits),
+        "{hits} of 4096 camera rays hit: the test is too weak"
+    );
 }
 
 #[test]

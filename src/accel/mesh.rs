@@ -196,9 +196,12 @@ impl MeshGeom {
         found
     }
 
-    /// [`MeshGeom::intersect`] for every ray of `rays`, into `out` (the same length): the same
-    /// hits, bit for bit. [`Coherence::Incoherent`] rays are traced several at once, so that
-    /// their cache misses overlap ([`crate::accel::stream`]); coherent ones one by one.
+    /// [`MeshGeom::intersect`] for every ray of `rays`, into `out` (the same length).
+    /// [`Coherence::Incoherent`] rays are traced sixteen at a time, interleaved so that their
+    /// cache misses overlap ([`crate::accel::stream`]), and give the same hits bit for bit;
+    /// coherent ones in packets of eight that share each node's test (AVX2; one by one
+    /// elsewhere), and give the same `t` bit for bit, though where two triangles are hit at
+    /// exactly that `t` (a ray through a shared edge) the packet may name the other one.
     ///
     /// # Panics
     /// When `out` and `rays` differ in length.
@@ -208,53 +211,91 @@ impl MeshGeom {
         out: &mut [Option<(u32, TriangleHit)>],
         coherence: Coherence,
     ) {
-        if one_by_one(rays, out, coherence, |r| self.intersect(r)) {
-            return;
-        }
-        let Some(mut shears) = LaneShears::new(rays) else {
+        let Some(mut q) = StreamQuery::new(rays, out, self.bvh.kernel()) else {
             return;
         };
-        let kernel = self.bvh.kernel();
-        self.bvh.closest_leaf_stream(
-            rays,
-            #[inline(always)]
-            |lane, i, r, ids| {
-                let blocks = self.leaf_blocks(ids);
-                let (found, tmax) = closest_in(blocks, kernel, shears.get(lane, i), r.tmin, r.tmax);
-                if found.is_some() {
-                    out[i] = found;
-                }
-                tmax
-            },
-            #[inline(always)]
-            |id| self.prefetch_leaf(id),
-        );
+        match coherence {
+            Coherence::Incoherent => self.bvh.closest_leaf_stream(
+                rays,
+                #[inline(always)]
+                |lane, i, r, ids| self.closest_into(&mut q, lane, i, r, ids),
+                #[inline(always)]
+                |id| self.prefetch_leaf(id),
+            ),
+            Coherence::Coherent => self.bvh.closest_leaf_packets(
+                rays,
+                #[inline(always)]
+                |i, r, ids| self.closest_into(&mut q, i % LANES_IN_FLIGHT, i, r, ids),
+                #[inline(always)]
+                |id| self.prefetch_leaf(id),
+            ),
+        }
     }
 
     /// [`MeshGeom::any_hit`] for every ray of `rays`, into `out` (the same length), traced as
-    /// [`MeshGeom::intersect_stream`] traces them.
+    /// [`MeshGeom::intersect_stream`] traces them: incoherent rays give the same answers bit for
+    /// bit, coherent ones the same occlusion, though possibly another hit's `t`.
     ///
     /// # Panics
     /// When `out` and `rays` differ in length.
     pub fn any_hit_stream(&self, rays: &[Ray], out: &mut [Option<f32>], coherence: Coherence) {
-        if one_by_one(rays, out, coherence, |r| self.any_hit(r)) {
-            return;
-        }
-        let Some(mut shears) = LaneShears::new(rays) else {
+        let Some(mut q) = StreamQuery::new(rays, out, self.bvh.kernel()) else {
             return;
         };
-        let kernel = self.bvh.kernel();
-        self.bvh.any_leaf_stream(
-            rays,
-            #[inline(always)]
-            |lane, i, r, ids| {
-                let blocks = self.leaf_blocks(ids);
-                out[i] = any_in(blocks, kernel, shears.get(lane, i), r.tmin, r.tmax);
-                out[i].is_some()
-            },
-            #[inline(always)]
-            |id| self.prefetch_leaf(id),
-        );
+        match coherence {
+            Coherence::Incoherent => self.bvh.any_leaf_stream(
+                rays,
+                #[inline(always)]
+                |lane, i, r, ids| self.any_into(&mut q, lane, i, r, ids),
+                #[inline(always)]
+                |id| self.prefetch_leaf(id),
+            ),
+            Coherence::Coherent => self.bvh.any_leaf_packets(
+                rays,
+                #[inline(always)]
+                |i, r, ids| self.any_into(&mut q, i % LANES_IN_FLIGHT, i, r, ids),
+                #[inline(always)]
+                |id| self.prefetch_leaf(id),
+            ),
+        }
+    }
+
+    /// A stream's closest-hit leaf callback: tests leaves `ids` for ray `i` (`r`, with its
+    /// closest hit so far as `tmax`) in lane `lane`, keeps a hit in `q`'s results and returns
+    /// where the ray now ends.
+    #[inline(always)]
+    fn closest_into(
+        &self,
+        q: &mut StreamQuery<(u32, TriangleHit)>,
+        lane: usize,
+        i: usize,
+        r: &Ray,
+        ids: Range<u32>,
+    ) -> f32 {
+        let blocks = self.leaf_blocks(ids);
+        let shear = q.shears.get(lane, i);
+        let (found, tmax) = closest_in(blocks, q.kernel, shear, r.tmin, r.tmax);
+        if found.is_some() {
+            q.out[i] = found;
+        }
+        tmax
+    }
+
+    /// A stream's any-hit leaf callback, as [`MeshGeom::closest_into`]: returns whether ray `i`
+    /// hits a triangle of leaves `ids`.
+    #[inline(always)]
+    fn any_into(
+        &self,
+        q: &mut StreamQuery<f32>,
+        lane: usize,
+        i: usize,
+        r: &Ray,
+        ids: Range<u32>,
+    ) -> bool {
+        let blocks = self.leaf_blocks(ids);
+        let shear = q.shears.get(lane, i);
+        q.out[i] = any_in(blocks, q.kernel, shear, r.tmin, r.tmax);
+        q.out[i].is_some()
     }
 
     /// The blocks of leaves `ids`, counted as triangle tests (when counting is on).
@@ -287,30 +328,33 @@ impl MeshGeom {
     }
 }
 
-/// Answers a stream's rays one by one with `one` when they are coherent (returning true), or
-/// clears `out` for the stream traversal (returning false).
-///
-/// # Panics
-/// When `out` and `rays` differ in length.
-fn one_by_one<T>(
-    rays: &[Ray],
-    out: &mut [Option<T>],
-    coherence: Coherence,
-    one: impl Fn(&Ray) -> Option<T>,
-) -> bool {
-    assert_eq!(rays.len(), out.len(), "one result per ray");
-    if coherence == Coherence::Coherent {
-        for (r, o) in rays.iter().zip(out) {
-            *o = one(r);
-        }
-        return true;
-    }
-    out.fill_with(|| None);
-    false
+/// What a stream query's leaf callbacks share: the results, each lane's ray shear and the
+/// kernel.
+struct StreamQuery<'a, T> {
+    out: &'a mut [Option<T>],
+    shears: LaneShears<'a>,
+    kernel: Kernel,
 }
 
-/// Each stream lane's ray shear: made at the ray's first leaf, as [`MeshGeom::intersect`] makes
-/// it (most random rays miss the mesh's box and never need one).
+impl<'a, T> StreamQuery<'a, T> {
+    /// Clears `out` (one result per ray); None for an empty stream.
+    ///
+    /// # Panics
+    /// When `out` and `rays` differ in length.
+    fn new(rays: &'a [Ray], out: &'a mut [Option<T>], kernel: Kernel) -> Option<Self> {
+        assert_eq!(rays.len(), out.len(), "one result per ray");
+        out.fill_with(|| None);
+        Some(StreamQuery {
+            shears: LaneShears::new(rays)?,
+            out,
+            kernel,
+        })
+    }
+}
+
+/// Each stream lane's ray shear (a packet's rays take lanes by their index): made at the ray's
+/// first leaf, as [`MeshGeom::intersect`] makes it (most random rays miss the mesh's box and
+/// never need one).
 struct LaneShears<'a> {
     rays: &'a [Ray],
     /// Per lane: the ray whose shear it holds, and the shear.

@@ -12,7 +12,7 @@
 //! root. One ray's misses depend on each other (a node's children are known only once it has
 //! arrived); the misses of different rays do not.
 //!
-//! Each ray runs exactly the single-ray traversal of [`super::wide`] (the same node test, the
+//! Each ray runs exactly the single-ray traversal of `accel::wide` (the same node test, the
 //! same order of children, the same leaf calls in the same order), so a stream finds, ray by
 //! ray, the hits that [`super::Bvh::closest_leaf`] and [`super::Bvh::any_leaf`] find, bit for
 //! bit. Only the interleaving differs: the callbacks receive the lane and the ray's index, and
@@ -20,7 +20,8 @@
 
 use super::stack::{Entry, Stack};
 use super::wide::{
-    LEAF, NodeTest, SlabRay, WideBvh, leaf_ids, nearest_first, prefetch_entry, prefetch_node,
+    LEAF, Node, NodeTest, SlabRay, WIDTH, WideBvh, leaf_ids, nearest_first, prefetch_entry,
+    prefetch_node,
 };
 use crate::geometry::Ray;
 use glam::Vec3A;
@@ -32,10 +33,10 @@ use std::ops::Range;
 /// traces them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Coherence {
-    /// Rays that start together and point alike (camera rays of neighbouring pixels): traced
-    /// one after the other, each finding the nodes and triangles the one before it loaded.
-    /// Interleaving them only adds work: on the wave mesh camera rays took 0.18-0.22 s per
-    /// million interleaved against 0.15 s one by one.
+    /// Rays that start together and point alike (camera rays of neighbouring pixels, in
+    /// order): traced in packets of eight that share each node's test (`accel::packet`) where
+    /// the CPU has AVX2, else one by one. Interleaving them only added work: on the wave mesh
+    /// camera rays took 0.18-0.22 s per million interleaved against 0.15 s one by one.
     Coherent,
     /// Rays going anywhere (gather rays, photons, the harness's random rays): interleaved,
     /// [`LANES`] in flight.
@@ -173,6 +174,16 @@ fn run(bvh: &WideBvh, rays: &[Ray], mut step: impl FnMut(usize, &mut Lane, &mut 
     }
 }
 
+/// Lane `l`'s visit to its current node (inner): the node, and the children's mask and entry
+/// distances from test `T`.
+#[inline(always)]
+fn visit<'b, T: NodeTest>(bvh: &'b WideBvh, l: &Lane) -> (&'b Node, u32, [f32; WIDTH]) {
+    super::counters::node();
+    let node = &bvh.nodes[l.cur.child as usize];
+    let (mask, tnear) = T::enter(&l.pre, node, l.r.tmax);
+    (node, mask, tnear)
+}
+
 /// Closest-hit traversal of a stream with node test `T`: `leaf_fn(lane, i, ray, ids)` is
 /// [`WideBvh::closest`]'s leaf callback for ray `i` of `rays`, traced in lane `lane`.
 #[inline(always)]
@@ -182,31 +193,35 @@ pub(super) fn closest_with<T: NodeTest>(
     mut leaf_fn: impl FnMut(usize, usize, &Ray, Range<u32>) -> f32,
     prefetch: impl Fn(Range<u32>),
 ) {
-    run(bvh, rays, |k, l, stack| {
-        if l.cur.child & LEAF == 0 {
-            super::counters::node();
-            let node = &bvh.nodes[l.cur.child as usize];
-            let (mask, tnear) = T::enter(&l.pre, node, l.r.tmax);
-            if mask != 0 {
-                l.cur = nearest_first(node, mask, &tnear, stack, |_| {});
-                prefetch_entry(bvh, &l.cur, &prefetch);
-                return true;
+    run(
+        bvh,
+        rays,
+        // Inlined, or the node test's intrinsics are calls: any hits took 5 times as long.
+        #[inline(always)]
+        |k, l, stack| {
+            if l.cur.child & LEAF == 0 {
+                let (node, mask, tnear) = visit::<T>(bvh, l);
+                if mask != 0 {
+                    l.cur = nearest_first(node, mask, &tnear, stack, |_| {});
+                    prefetch_entry(bvh, &l.cur, &prefetch);
+                    return true;
+                }
+            } else {
+                let t = leaf_fn(k, l.ray, &l.r, leaf_ids(l.cur.child));
+                if t < l.r.tmax {
+                    l.r.tmax = t;
+                }
             }
-        } else {
-            let t = leaf_fn(k, l.ray, &l.r, leaf_ids(l.cur.child));
-            if t < l.r.tmax {
-                l.r.tmax = t;
+            while let Some(e) = stack.pop() {
+                if e.t <= l.r.tmax {
+                    l.cur = e;
+                    prefetch_entry(bvh, &e, &prefetch);
+                    return true;
+                }
             }
-        }
-        while let Some(e) = stack.pop() {
-            if e.t <= l.r.tmax {
-                l.cur = e;
-                prefetch_entry(bvh, &e, &prefetch);
-                return true;
-            }
-        }
-        false
-    })
+            false
+        },
+    )
 }
 
 /// Any-hit traversal of a stream with node test `T`: `leaf_fn(lane, i, ray, ids)` is
@@ -218,37 +233,41 @@ pub(super) fn any_with<T: NodeTest>(
     mut leaf_fn: impl FnMut(usize, usize, &Ray, Range<u32>) -> bool,
     prefetch: impl Fn(Range<u32>),
 ) {
-    run(bvh, rays, |k, l, stack| {
-        if l.cur.child & LEAF == 0 {
-            super::counters::node();
-            let node = &bvh.nodes[l.cur.child as usize];
-            let (mut mask, _) = T::enter(&l.pre, node, l.r.tmax);
-            if mask != 0 {
-                // As the single-ray traversal: children in lane order, no sorting.
-                let first = node.child[mask.trailing_zeros() as usize];
-                mask &= mask - 1;
-                while mask != 0 {
-                    let child = node.child[mask.trailing_zeros() as usize];
+    run(
+        bvh,
+        rays,
+        // Inlined, or the node test's intrinsics are calls: any hits took 5 times as long.
+        #[inline(always)]
+        |k, l, stack| {
+            if l.cur.child & LEAF == 0 {
+                let (node, mut mask, _) = visit::<T>(bvh, l);
+                if mask != 0 {
+                    // As the single-ray traversal: children in lane order, no sorting.
+                    let first = node.child[mask.trailing_zeros() as usize];
                     mask &= mask - 1;
-                    stack.push(Entry { child, t: 0.0 });
+                    while mask != 0 {
+                        let child = node.child[mask.trailing_zeros() as usize];
+                        mask &= mask - 1;
+                        stack.push(Entry { child, t: 0.0 });
+                    }
+                    l.cur = Entry {
+                        child: first,
+                        t: 0.0,
+                    };
+                    prefetch_entry(bvh, &l.cur, &prefetch);
+                    return true;
                 }
-                l.cur = Entry {
-                    child: first,
-                    t: 0.0,
-                };
-                prefetch_entry(bvh, &l.cur, &prefetch);
-                return true;
+            } else if leaf_fn(k, l.ray, &l.r, leaf_ids(l.cur.child)) {
+                return false;
             }
-        } else if leaf_fn(k, l.ray, &l.r, leaf_ids(l.cur.child)) {
-            return false;
-        }
-        match stack.pop() {
-            None => false,
-            Some(e) => {
-                l.cur = e;
-                prefetch_entry(bvh, &e, &prefetch);
-                true
+            match stack.pop() {
+                None => false,
+                Some(e) => {
+                    l.cur = e;
+                    prefetch_entry(bvh, &e, &prefetch);
+                    true
+                }
             }
-        }
-    })
+        },
+    )
 }

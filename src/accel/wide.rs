@@ -261,6 +261,46 @@ impl WideBvh {
     }
 }
 
+impl WideBvh {
+    /// [`WideBvh::closest`] for each ray of `rays`, in packets of [`super::packet::PACKET`]
+    /// where the kernel is AVX2, else one by one: `leaf_fn(i, ray, ids)` for ray `i`.
+    #[inline(always)]
+    pub(super) fn closest_packets(
+        &self,
+        rays: &[Ray],
+        mut leaf_fn: impl FnMut(usize, &Ray, Range<u32>) -> f32,
+        prefetch: impl Fn(Range<u32>),
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if self.kernel == Kernel::Avx2 {
+            // SAFETY: `kernel` is `Avx2` only where `Kernel::best` detected AVX2 and FMA.
+            return unsafe { super::packet::closest(self, rays, leaf_fn, prefetch) };
+        }
+        for (i, r) in rays.iter().enumerate() {
+            self.closest(r, |r, ids| leaf_fn(i, r, ids), &prefetch);
+        }
+    }
+
+    /// [`WideBvh::any`] for each ray of `rays`, in packets where the kernel is AVX2:
+    /// `leaf_fn(i, ray, ids)` for ray `i`, which is done once its callback returns true.
+    #[inline(always)]
+    pub(super) fn any_packets(
+        &self,
+        rays: &[Ray],
+        mut leaf_fn: impl FnMut(usize, &Ray, Range<u32>) -> bool,
+        prefetch: impl Fn(Range<u32>),
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if self.kernel == Kernel::Avx2 {
+            // SAFETY: as in `closest_packets`.
+            return unsafe { super::packet::any(self, rays, leaf_fn, prefetch) };
+        }
+        for (i, r) in rays.iter().enumerate() {
+            self.any(r, |r, ids| leaf_fn(i, r, ids), &prefetch);
+        }
+    }
+}
+
 /// [`stream::closest_with`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
@@ -497,13 +537,13 @@ fn safe_inverse(x: f32, size: f32) -> f32 {
 /// A ray prepared for slab tests: reciprocal direction and which plane of each axis comes first.
 pub(super) struct SlabRay {
     origin: [f32; 3],
-    inv_dir: [f32; 3],
+    pub(super) inv_dir: [f32; 3],
     /// `origin * inv_dir` per axis, which the fused slab test subtracts.
-    org_inv: [f32; 3],
+    pub(super) org_inv: [f32; 3],
     /// Per axis, the plane row (`Node::planes`) the ray meets first and last.
-    near: [usize; 3],
-    far: [usize; 3],
-    tmin: f32,
+    pub(super) near: [usize; 3],
+    pub(super) far: [usize; 3],
+    pub(super) tmin: f32,
 }
 
 impl SlabRay {

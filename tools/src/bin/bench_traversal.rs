@@ -10,9 +10,10 @@
 //! harness passes them to Embree's `rtcIntersect1M` (modes `intersect1M`, `occluded1M`), with
 //! the coherence the harness tells Embree: camera rays coherent, random rays incoherent.
 //!
-//! `--ab K1,K2` replaces the report with a comparison of two node-test kernels in one process:
-//! passes with `K1` and `K2` alternate, and `AB` lines give each kernel's times and the median of
-//! the per-pair ratios. A shared VM drifts by 10-30% within minutes, so separate runs cannot
+//! `--ab A,B` replaces the report with a comparison of two configurations in one process, each a
+//! node-test kernel, traced ray by ray (`avx2`) or through the stream API (`avx2/1M`): passes
+//! with `A` and `B` alternate, and `AB` lines give each one's times and the median of the
+//! per-pair ratios. A shared VM drifts by 10-30% within minutes, so separate runs cannot
 //! tell two kernels apart by a few percent; passes a fraction of a second apart can.
 //!
 //! `--count` turns on the traversal counters that `--stats` and `--heatmap` read
@@ -68,16 +69,43 @@ struct Options {
     mt: usize,
     tiles: usize,
     kernel: Kernel,
-    /// `--ab K1,K2`: compare two kernels pass by pass instead of the usual report.
-    ab: Option<(Kernel, Kernel)>,
+    /// `--ab A,B`: compare two configurations pass by pass instead of the usual report.
+    ab: Option<(Config, Config)>,
     builder: Builder,
     mesh: PathBuf,
     rays: Vec<PathBuf>,
 }
 
 const USAGE: &str = "usage: bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--tiles N] \
-                     [--kernel K] [--ab K1,K2] [--builder sah|ploc] [--count] MESH RAYS [RAYS...] \
-                     (kernels: scalar, sse2, avx2)";
+                     [--kernel K] [--ab A,B] [--builder sah|ploc] [--count] MESH RAYS [RAYS...] \
+                     (kernels K: scalar, sse2, avx2; configurations A, B: K or K/1M, the stream API)";
+
+/// What `--ab` compares: a node-test kernel, ray by ray or through the stream API (`K/1M`).
+#[derive(Clone, Copy, Debug)]
+struct Config {
+    kernel: Kernel,
+    stream: bool,
+}
+
+impl std::fmt::Display for Config {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let k = format!("{:?}", self.kernel).to_lowercase();
+        write!(f, "{k}{}", if self.stream { "/1M" } else { "" })
+    }
+}
+
+impl Config {
+    fn parse(s: &str) -> Result<Config, String> {
+        let (k, stream) = match s.strip_suffix("/1M") {
+            Some(k) => (k, true),
+            None => (s, false),
+        };
+        Ok(Config {
+            kernel: kernel(Some(k))?,
+            stream,
+        })
+    }
+}
 
 /// Parses a kernel's name.
 fn kernel(name: Option<&str>) -> Result<Kernel, String> {
@@ -121,10 +149,11 @@ fn parse_args() -> Result<Options, String> {
                 let v = args.next().unwrap_or_default();
                 let (a, b) = v
                     .split_once(',')
-                    .ok_or(format!("--ab wants two kernels as K1,K2, got '{v}'"))?;
-                let (a, b) = (kernel(Some(a))?, kernel(Some(b))?);
-                for k in [a, b] {
-                    if k > Kernel::best() {
+                    .ok_or(format!("--ab wants two configurations as A,B, got '{v}'"))?;
+                let (a, b) = (Config::parse(a)?, Config::parse(b)?);
+                for c in [a, b] {
+                    if c.kernel > Kernel::best() {
+                        let k = c.kernel;
                         return Err(format!("--ab: this CPU cannot run the {k:?} kernel"));
                     }
                 }
@@ -246,12 +275,12 @@ fn compare_kernels(
     geom: &mut MeshGeom,
     mesh: &str,
     set: &RaySet,
-    (a, b): (Kernel, Kernel),
+    (a, b): (Config, Config),
     reps: usize,
 ) {
     for occluded in [false, true] {
-        let mut pass = |k: Kernel| {
-            geom.bvh.set_kernel(k);
+        let mut pass = |c: Config| {
+            geom.bvh.set_kernel(c.kernel);
             let ctx = Ctx {
                 geom,
                 order: geom.bvh.order(),
@@ -265,7 +294,7 @@ fn compare_kernels(
                 &set.rays,
                 Query {
                     occluded,
-                    stream: None,
+                    stream: c.stream.then_some(set_coherence(set)),
                 },
                 false,
                 None,
@@ -287,7 +316,7 @@ fn compare_kernels(
             ratio.push(x / y);
         }
         println!(
-            "AB mesh={mesh} rays={} kind={} mode={} a={a:?} b={b:?} reps={reps} a_best_s={:.6} \
+            "AB mesh={mesh} rays={} kind={} mode={} a={a} b={b} reps={reps} a_best_s={:.6} \
              a_med_s={:.6} b_best_s={:.6} b_med_s={:.6} ratio_a_over_b_med={:.4} ratio_min={:.4} \
              ratio_max={:.4} same={}",
             base_name(&set.path),
@@ -401,6 +430,14 @@ struct Ctx<'a> {
     quality: &'a str,
     tris: usize,
     reps: usize,
+}
+
+/// The coherence the harness tells Embree of a set: camera rays coherent, random rays not.
+fn set_coherence(set: &RaySet) -> Coherence {
+    match set.kind {
+        RayKind::Primary => Coherence::Coherent,
+        RayKind::Incoherent => Coherence::Incoherent,
+    }
 }
 
 /// Rays per stream in the `1M` modes, as the harness passes to `rtcIntersect1M`.
@@ -552,12 +589,8 @@ impl Ctx<'_> {
         if mt.is_none() && order.is_empty() {
             // Streams, as Embree's `rtcIntersect1M` / `rtcOccluded1M` (modes `1M`), told the
             // rays' coherence as the harness tells Embree.
-            let coherence = match set.kind {
-                RayKind::Primary => Coherence::Coherent,
-                RayKind::Incoherent => Coherence::Incoherent,
-            };
             queries.extend(queries.clone().into_iter().map(|q| Query {
-                stream: Some(coherence),
+                stream: Some(set_coherence(set)),
                 ..q
             }));
         }

@@ -17,7 +17,6 @@
 
 #![cfg(target_arch = "x86_64")]
 
-use super::stack::Entry;
 use super::wide::{LEAF, Node, SlabRay, WIDTH, WideBvh, leaf_ids, prefetch_entry};
 use crate::geometry::Ray;
 use std::arch::x86_64::*;
@@ -58,20 +57,21 @@ impl Rays {
         }
         // SAFETY: the caller guarantees AVX.
         unsafe {
+            let inv = [load(&rows[0]), load(&rows[1]), load(&rows[2])];
+            // The sign bits of the inverse directions, ray by ray: a ray meets the max plane
+            // first where its inverse direction is negative (`SlabRay::new`).
+            let signs = [
+                _mm256_movemask_ps(inv[0]),
+                _mm256_movemask_ps(inv[1]),
+                _mm256_movemask_ps(inv[2]),
+            ];
+            let same = signs.iter().all(|&m| m == 0 || m == 0xff);
             Rays {
-                inv: [load(&rows[0]), load(&rows[1]), load(&rows[2])],
+                inv,
                 org_inv: [load(&rows[3]), load(&rows[4]), load(&rows[5])],
                 tmin: load(&rows[6]),
                 valid: (1u32 << rays.len()) - 1,
-                rows: {
-                    // The sign bits of the inverse directions, ray by ray: a ray meets the max
-                    // plane first where its inverse direction is negative (`SlabRay::new`).
-                    let same = |k: usize| {
-                        let m = _mm256_movemask_ps(load(&rows[k])) as u32 & 0xff;
-                        m == 0 || m == 0xff
-                    };
-                    (same(0) && same(1) && same(2)).then_some((pre[0].near, pre[0].far))
-                },
+                rows: same.then_some((pre[0].near, pre[0].far)),
             }
         }
     }
@@ -332,14 +332,7 @@ unsafe fn closest_packet(
                     while rest != 0 {
                         let e = &kids[rest.trailing_zeros() as usize];
                         rest &= rest - 1;
-                        prefetch_entry(
-                            bvh,
-                            &Entry {
-                                child: e.child,
-                                t: 0.0,
-                            },
-                            prefetch,
-                        );
+                        prefetch_entry(bvh, e.child, prefetch);
                         let mut j = stack.len();
                         stack.push(*e);
                         while j > base && stack[j - 1].key < e.key {
@@ -447,14 +440,7 @@ unsafe fn any_packet(
                         let top = 31 - rest.leading_zeros() as usize;
                         rest &= !(1 << top);
                         let e = &kids[top];
-                        prefetch_entry(
-                            bvh,
-                            &Entry {
-                                child: e.child,
-                                t: 0.0,
-                            },
-                            prefetch,
-                        );
+                        prefetch_entry(bvh, e.child, prefetch);
                         stack.push(*e);
                     }
                     cur = kids[first];

@@ -93,6 +93,18 @@ impl Stack<'_> {
         self.slots[j].write(e);
     }
 
+    /// Pops entries until one entered no further than `tmax` (a nearer hit culls the others),
+    /// and returns it, if any.
+    #[inline(always)]
+    pub fn pop_within(&mut self, tmax: f32) -> Option<Entry> {
+        while let Some(e) = self.pop() {
+            if e.t <= tmax {
+                return Some(e);
+            }
+        }
+        None
+    }
+
     /// Pops the top entry, if any.
     #[inline(always)]
     pub fn pop(&mut self) -> Option<Entry> {

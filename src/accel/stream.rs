@@ -20,8 +20,8 @@
 
 use super::stack::{Entry, Stack};
 use super::wide::{
-    LEAF, Node, NodeTest, SlabRay, WIDTH, WideBvh, leaf_ids, nearest_first, prefetch_entry,
-    prefetch_node,
+    LEAF, Node, NodeTest, SlabRay, WIDTH, WideBvh, first_in_lane_order, leaf_ids, nearest_first,
+    prefetch_entry, prefetch_node,
 };
 use crate::geometry::Ray;
 use glam::Vec3A;
@@ -203,7 +203,7 @@ pub(super) fn closest_with<T: NodeTest>(
                 let (node, mask, tnear) = visit::<T>(bvh, l);
                 if mask != 0 {
                     l.cur = nearest_first(node, mask, &tnear, stack, |_| {});
-                    prefetch_entry(bvh, &l.cur, &prefetch);
+                    prefetch_entry(bvh, l.cur.child, &prefetch);
                     return true;
                 }
             } else {
@@ -212,14 +212,12 @@ pub(super) fn closest_with<T: NodeTest>(
                     l.r.tmax = t;
                 }
             }
-            while let Some(e) = stack.pop() {
-                if e.t <= l.r.tmax {
-                    l.cur = e;
-                    prefetch_entry(bvh, &e, &prefetch);
-                    return true;
-                }
-            }
-            false
+            let Some(e) = stack.pop_within(l.r.tmax) else {
+                return false;
+            };
+            l.cur = e;
+            prefetch_entry(bvh, e.child, &prefetch);
+            true
         },
     )
 }
@@ -240,34 +238,23 @@ pub(super) fn any_with<T: NodeTest>(
         #[inline(always)]
         |k, l, stack| {
             if l.cur.child & LEAF == 0 {
-                let (node, mut mask, _) = visit::<T>(bvh, l);
+                let (node, mask, _) = visit::<T>(bvh, l);
                 if mask != 0 {
-                    // As the single-ray traversal: children in lane order, no sorting.
-                    let first = node.child[mask.trailing_zeros() as usize];
-                    mask &= mask - 1;
-                    while mask != 0 {
-                        let child = node.child[mask.trailing_zeros() as usize];
-                        mask &= mask - 1;
-                        stack.push(Entry { child, t: 0.0 });
-                    }
-                    l.cur = Entry {
-                        child: first,
-                        t: 0.0,
-                    };
-                    prefetch_entry(bvh, &l.cur, &prefetch);
+                    // As the single-ray traversal, whose pushes alone are prefetched.
+                    let child = first_in_lane_order(node, mask, stack, |_| {});
+                    l.cur = Entry { child, t: 0.0 };
+                    prefetch_entry(bvh, child, &prefetch);
                     return true;
                 }
             } else if leaf_fn(k, l.ray, &l.r, leaf_ids(l.cur.child)) {
                 return false;
             }
-            match stack.pop() {
-                None => false,
-                Some(e) => {
-                    l.cur = e;
-                    prefetch_entry(bvh, &e, &prefetch);
-                    true
-                }
-            }
+            let Some(e) = stack.pop() else {
+                return false;
+            };
+            l.cur = e;
+            prefetch_entry(bvh, e.child, &prefetch);
+            true
         },
     )
 }

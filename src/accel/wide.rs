@@ -375,7 +375,7 @@ fn closest_with<T: NodeTest>(
                     let (mask, tnear) = T::enter(&pre, node, r.tmax);
                     if mask != 0 {
                         cur = nearest_first(node, mask, &tnear, &mut stack, |e| {
-                            prefetch_entry(bvh, e, &prefetch)
+                            prefetch_entry(bvh, e.child, &prefetch)
                         });
                         continue;
                     }
@@ -385,15 +385,9 @@ fn closest_with<T: NodeTest>(
                         r.tmax = t;
                     }
                 }
-                loop {
-                    match stack.pop() {
-                        None => return,
-                        Some(e) if e.t <= r.tmax => {
-                            cur = e;
-                            break;
-                        }
-                        Some(_) => {}
-                    }
+                match stack.pop_within(r.tmax) {
+                    None => return,
+                    Some(e) => cur = e,
                 }
             }
         },
@@ -430,6 +424,27 @@ pub(super) fn nearest_first(
     near
 }
 
+/// Returns the first of `node`'s children in `mask` (not empty) and pushes the others in lane
+/// order, telling `pushed` of each: the any-hit traversal's order, for single rays and streams
+/// alike.
+#[inline(always)]
+pub(super) fn first_in_lane_order(
+    node: &Node,
+    mut mask: u32,
+    stack: &mut Stack,
+    pushed: impl Fn(u32),
+) -> u32 {
+    let first = node.child[mask.trailing_zeros() as usize];
+    mask &= mask - 1;
+    while mask != 0 {
+        let child = node.child[mask.trailing_zeros() as usize];
+        mask &= mask - 1;
+        pushed(child);
+        stack.push(Entry { child, t: 0.0 });
+    }
+    first
+}
+
 /// Any-hit traversal with node test `T`: children in lane order, no sorting.
 #[inline(always)]
 fn any_with<T: NodeTest>(
@@ -449,19 +464,11 @@ fn any_with<T: NodeTest>(
                     super::counters::node();
                     let node = &bvh.nodes[cur as usize];
                     prefetch_children(node);
-                    let (mut mask, _) = T::enter(&pre, node, ray.tmax);
+                    let (mask, _) = T::enter(&pre, node, ray.tmax);
                     if mask != 0 {
-                        cur = node.child[mask.trailing_zeros() as usize];
-                        mask &= mask - 1;
-                        while mask != 0 {
-                            let e = Entry {
-                                child: node.child[mask.trailing_zeros() as usize],
-                                t: 0.0,
-                            };
-                            prefetch_entry(bvh, &e, &prefetch);
-                            stack.push(e);
-                            mask &= mask - 1;
-                        }
+                        cur = first_in_lane_order(node, mask, &mut stack, |c| {
+                            prefetch_entry(bvh, c, &prefetch)
+                        });
                         continue;
                     }
                 } else if leaf_fn(ray, leaf_ids(cur)) {
@@ -496,14 +503,14 @@ pub(super) fn prefetch_node(bvh: &WideBvh, child: u32) {
     }
 }
 
-/// Starts loading what stack entry `e` refers to: an inner node's four cache lines, or through
-/// the caller's `prefetch` hook a leaf run's primitives.
+/// Starts loading what child reference `child` (as in [`Node::child`]) refers to: an inner
+/// node's four cache lines, or through the caller's `prefetch` hook a leaf run's primitives.
 #[inline(always)]
-pub(super) fn prefetch_entry(bvh: &WideBvh, e: &Entry, prefetch: &impl Fn(Range<u32>)) {
-    if e.child & LEAF == 0 {
-        prefetch_node(bvh, e.child);
+pub(super) fn prefetch_entry(bvh: &WideBvh, child: u32, prefetch: &impl Fn(Range<u32>)) {
+    if child & LEAF == 0 {
+        prefetch_node(bvh, child);
     } else {
-        prefetch(leaf_ids(e.child));
+        prefetch(leaf_ids(child));
     }
 }
 

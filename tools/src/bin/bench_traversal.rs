@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! bench_traversal [--reps N] [--build-reps N] [--verify K] [--mt N] [--tiles N] [--kernel K]
-//!                 [--ab K1,K2] [--builder B] [--count] MESH RAYS [RAYS...]
+//!                 [--ab A,B] [--builder B] [--count] MESH RAYS [RAYS...]
 //! ```
 //!
 //! Besides single rays, each set is traced on one thread through the stream API
@@ -225,7 +225,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     if let Some(ab) = o.ab {
         for set in &sets {
-            compare_kernels(&mut geom, &mesh, set, ab, o.reps);
+            compare(&mut geom, &mesh, set, ab, o.reps);
         }
         return Ok(());
     }
@@ -265,19 +265,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// `--ab`: traces `set` with kernels `a` and `b` in turn, pass after pass on this thread, `reps`
-/// pairs per query (after one untimed pass of each), and prints an `AB` line per query: each
-/// kernel's best and median CPU time and the median of the per-pair ratios `a / b` (above 1:
-/// `b` is faster). A shared VM's speed drifts by 10-30% within minutes, so two kernels timed in
-/// separate runs cannot be told apart by a few percent; passes a fraction of a second apart can.
-/// Both kernels must find the same hits (`same=0` flags a difference).
-fn compare_kernels(
-    geom: &mut MeshGeom,
-    mesh: &str,
-    set: &RaySet,
-    (a, b): (Config, Config),
-    reps: usize,
-) {
+/// `--ab`: traces `set` with configurations `a` and `b` in turn, pass after pass on this
+/// thread, `reps` pairs per query (after one untimed pass of each), and prints an `AB` line per
+/// query: each one's best and median CPU time and the median of the per-pair ratios `a / b`
+/// (above 1: `b` is faster). A shared VM's speed drifts by 10-30% within minutes, so two
+/// configurations timed in separate runs cannot be told apart by a few percent; passes a
+/// fraction of a second apart can. Both must find the same hits (`same=0` flags a difference).
+fn compare(geom: &mut MeshGeom, mesh: &str, set: &RaySet, (a, b): (Config, Config), reps: usize) {
     for occluded in [false, true] {
         let mut pass = |c: Config| {
             geom.bvh.set_kernel(c.kernel);
@@ -443,6 +437,16 @@ fn set_coherence(set: &RaySet) -> Coherence {
 /// Rays per stream in the `1M` modes, as the harness passes to `rtcIntersect1M`.
 const STREAM: usize = 256;
 
+/// Runs `f` on the file's rays as streams of [`STREAM`] rays, in order.
+fn in_streams(rays: &[RayRecord], mut f: impl FnMut(&[Ray])) {
+    let mut buf = Vec::with_capacity(STREAM);
+    for c in rays.chunks(STREAM) {
+        buf.clear();
+        buf.extend(c.iter().map(to_ray));
+        f(&buf);
+    }
+}
+
 /// What a pass asks of each ray.
 #[derive(Clone, Copy, Debug)]
 struct Query {
@@ -513,12 +517,10 @@ impl Ctx<'_> {
     /// [`STREAM`] rays), as [`Ctx::closest`].
     fn closest_stream(&self, rays: &[RayRecord], file_order: bool, coherence: Coherence) -> Sums {
         let mut s = Sums::default();
-        let (mut buf, mut out) = (Vec::with_capacity(STREAM), vec![None; STREAM]);
-        for c in rays.chunks(STREAM) {
-            buf.clear();
-            buf.extend(c.iter().map(to_ray));
-            let out = &mut out[..c.len()];
-            self.geom.intersect_stream(&buf, out, coherence);
+        let mut out = vec![None; STREAM];
+        in_streams(rays, |rays| {
+            let out = &mut out[..rays.len()];
+            self.geom.intersect_stream(rays, out, coherence);
             for (tri, h) in out.iter().flatten() {
                 s.hits += 1;
                 s.sum_t += h.t as f64;
@@ -528,20 +530,18 @@ impl Ctx<'_> {
                     *tri
                 } as u64;
             }
-        }
+        });
         s
     }
 
     fn occluded_stream(&self, rays: &[RayRecord], coherence: Coherence) -> Sums {
         let mut hits = 0;
-        let (mut buf, mut out) = (Vec::with_capacity(STREAM), vec![None; STREAM]);
-        for c in rays.chunks(STREAM) {
-            buf.clear();
-            buf.extend(c.iter().map(to_ray));
-            let out = &mut out[..c.len()];
-            self.geom.any_hit_stream(&buf, out, coherence);
+        let mut out = vec![None; STREAM];
+        in_streams(rays, |rays| {
+            let out = &mut out[..rays.len()];
+            self.geom.any_hit_stream(rays, out, coherence);
             hits += out.iter().flatten().count() as u64;
-        }
+        });
         Sums {
             hits,
             ..Sums::default()

@@ -47,6 +47,9 @@ pub enum Fault {
     /// A mesh file could not be read or parsed, is in a format caustic does not read, or holds
     /// data the scene cannot use (a non-finite vertex, mismatched per-triangle materials).
     MeshLoad,
+    /// The script reached for what the sandbox does not give scenes (`docs/security.md`): a
+    /// process, native code, a file outside its folders, a write, or more time than its budget.
+    Sandbox,
     /// Any other fault at a script line: a cycle, a singular CSG operand, an unreadable texture…
     Other,
 }

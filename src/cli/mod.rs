@@ -284,6 +284,29 @@ pub struct ScriptArgs {
     /// float when VALUE reads as one, true or false, else a string.
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = Global::parse)]
     pub define: Vec<Global>,
+    /// Stop the script after S seconds of its own running time (its renders not counted)
+    /// [default: 300].
+    #[arg(long, value_name = "S", value_parser = parse_script_time)]
+    pub script_time: Option<std::time::Duration>,
+    /// Let the scene read files in DIR and below it too (repeatable); a scene reads only its own
+    /// folder's tree by default (docs/security.md).
+    #[arg(long, value_name = "DIR")]
+    pub allow_read: Vec<PathBuf>,
+    /// Run the script with the whole Lua standard library (processes, files, native modules):
+    /// only for a script you wrote or trust (docs/security.md).
+    #[arg(long)]
+    pub trusted_script: bool,
+}
+
+/// Parses `--script-time`: seconds, positive, at most a week.
+fn parse_script_time(s: &str) -> Result<std::time::Duration, String> {
+    let secs: f64 = s
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    if !(secs > 0.0 && secs <= 604_800.0) {
+        return Err(format!("must be in (0, 604800] seconds, got {s}"));
+    }
+    Ok(std::time::Duration::from_secs_f64(secs))
 }
 
 impl ScriptArgs {
@@ -295,6 +318,10 @@ impl ScriptArgs {
                 DialectArg::Legacy => Dialect::Legacy,
             }),
             globals: self.define.clone(),
+            script_time: self.script_time,
+            allow_read: self.allow_read.clone(),
+            trusted: self.trusted_script,
+            watchdog: true,
             ..ScriptOptions::default()
         }
     }
@@ -554,7 +581,11 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
         count.set(count.get() + 1);
         let out = match &output {
-            None => r.output.clone(),
+            None => {
+                crate::lua::check_scene_output(&scene, &r.output)
+                    .map_err(|m| Error::fault_at(crate::error::Fault::Sandbox, &r.loc, m))?;
+                r.output.clone()
+            }
             Some(o) if count.get() == 1 => o.clone(),
             Some(_) => {
                 return Err(Error::at(

@@ -39,6 +39,8 @@ pub fn caller_loc(lua: &Lua) -> Loc {
         match found {
             None => break,
             Some(None) => continue,
+            // The sandbox's own Lua (`sandbox.lua`) is not where a script went wrong.
+            Some(Some((source, _))) if source == super::sandbox::PRELUDE_NAME => continue,
             Some(Some((source, line))) => {
                 let file = source.strip_prefix('@').unwrap_or(&source).to_string();
                 return Loc {

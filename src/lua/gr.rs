@@ -191,11 +191,20 @@ fn gr_water_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     new_node(lua, s, a, name, NodeKind::Mesh(id))
 }
 
+/// Returns the fault of a file the scene cannot read: outside its folders, or not found.
+pub(super) fn input_fault(message: &str) -> Fault {
+    if message.contains("outside the folders a scene may read") {
+        Fault::Sandbox
+    } else {
+        Fault::NotFound
+    }
+}
+
 /// Resolves a mesh file and checks its format; the file is read when a scene is built.
 pub(super) fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Result<MeshId> {
-    let Some(path) = s.resolve_input(given) else {
-        return Err(a.fault(Fault::NotFound, s.not_found("mesh file", given)));
-    };
+    let path = s
+        .resolve_input("mesh file", given)
+        .map_err(|m| a.fault(input_fault(&m), m))?;
     let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
     if let Some(&id) = s.mesh_cache.get(&key) {
         return Ok(id);
@@ -315,17 +324,15 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let mut image = |i: usize, what: &str| -> mlua::Result<Option<PathBuf>> {
         match a.opt_string(i)? {
             None => Ok(None),
-            Some(given) => match s.resolve_input(&given) {
-                Some(p) => Ok(Some(p)),
-                None if s.desc.missing_textures_warn => {
+            Some(given) => match s.resolve_input(what, &given) {
+                Ok(p) => Ok(Some(p)),
+                Err(m) if s.desc.missing_textures_warn => {
                     if s.warned_images.insert(given.clone()) {
-                        let message =
-                            format!("{}; rendering with kd instead", s.not_found(what, &given));
-                        s.warn(&a.loc, message);
+                        s.warn(&a.loc, format!("{m}; rendering with kd instead"));
                     }
                     Ok(None)
                 }
-                None => Err(a.fault(Fault::NotFound, s.not_found(what, &given))),
+                Err(m) => Err(a.fault(input_fault(&m), m)),
             },
         }
     };

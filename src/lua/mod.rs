@@ -67,6 +67,17 @@ pub struct ScriptOptions {
     /// Stop the script with [`Error::Interrupted`] once [`crate::interrupt::requested`] (the
     /// command line's Ctrl-C), rather than let it run to its end.
     pub interruptible: bool,
+    /// `--script-time`: how long the script may run, not counting its renders; `None` for
+    /// [`sandbox::DEFAULT_SCRIPT_TIME`].
+    pub script_time: Option<std::time::Duration>,
+    /// `--allow-read`: folders the scene may read besides its own ([`sandbox::Folders`]).
+    pub allow_read: Vec<PathBuf>,
+    /// `--trusted-script`: the whole Lua standard library, for a script the user trusts.
+    pub trusted: bool,
+    /// End the process (with the budget's message) when the script overruns its time inside
+    /// one library call that the Lua hook cannot stop ([`sandbox::watchdog`]); the command
+    /// line sets it, a library caller would rather not be ended.
+    pub watchdog: bool,
 }
 
 /// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
@@ -103,6 +114,18 @@ pub fn run_source_with(
     hook: RenderHook,
     options: ScriptOptions,
 ) -> Result<SceneDesc> {
+    let folders = Rc::new(sandbox::Folders::new(script_dir, &options.allow_read));
+    let budget = options.script_time.unwrap_or(sandbox::DEFAULT_SCRIPT_TIME);
+    let clock = sandbox::ScriptClock::start(budget, name);
+    // The script's clock stops while gr.render renders: only the script's own time counts.
+    let mut inner = hook;
+    let paused = std::sync::Arc::clone(&clock);
+    let hook: RenderHook = Box::new(move |desc, render| {
+        paused.pause();
+        let result = inner(desc, render);
+        paused.resume();
+        result
+    });
     let state = Rc::new(RefCell::new(State {
         desc: SceneDesc {
             missing_textures_warn: options.missing_textures_warn,
@@ -110,22 +133,35 @@ pub fn run_source_with(
         },
         warned_images: HashSet::new(),
         script_dir: script_dir.to_path_buf(),
+        folders: Rc::clone(&folders),
         hook,
         mesh_cache: HashMap::new(),
         dialect: options.dialect.unwrap_or_default(),
         watch: options.dialect.is_none().then(legacy::Watch::default),
     }));
     let limit = options.memory_limit.unwrap_or(sandbox::MAX_LUA_MEMORY);
-    let (lua, lines) =
-        sandbox::new_lua(limit, script_dir, options.interruptible).map_err(convert_error)?;
+    let limits = sandbox::Limits {
+        memory: limit,
+        interruptible: options.interruptible,
+        trusted: options.trusted,
+    };
+    let (lua, lines) = sandbox::new_lua(&limits, &folders, &clock).map_err(convert_error)?;
     gr::install(&lua, &state).map_err(convert_error)?;
     legacy::install(&lua, &state).map_err(convert_error)?;
     globals::set(&lua, &options.globals)?;
-    lua.load(source)
+    let _watchdog = options.watchdog.then(|| sandbox::watchdog(&clock));
+    lua.load(&*sandbox::strip_script_header(source))
         .set_name(format!("@{name}"))
+        .set_mode(mlua::chunk::ChunkMode::Text)
         .exec()
-        .map_err(|e| match memory_error(&e) {
-            Some(message) => {
+        .and_then(|()| match clock.stop() {
+            // A stop the script caught still ends the run.
+            Some(e) => Err(mlua::Error::external(e)),
+            None => Ok(()),
+        })
+        .map_err(|e| match (clock.stop(), memory_error(&e)) {
+            (Some(stop), _) => stop,
+            (None, Some(message)) => {
                 let loc = lines.last().unwrap_or_else(|| Loc {
                     file: name.into(),
                     line: 0,
@@ -135,8 +171,9 @@ pub fn run_source_with(
                     format!("{message}: the script's Lua state reached its limit of {limit} bytes"),
                 )
             }
-            None => convert_error(e),
+            (None, None) => convert_error(e),
         })?;
+    clock.pause();
     drop(lua);
     let state = Rc::try_unwrap(state)
         .map_err(|_| Error::Lua("internal: scene state still borrowed".into()))?
@@ -144,10 +181,49 @@ pub fn run_source_with(
     Ok(state.desc)
 }
 
+/// Returns an error unless `output`, an image the script at `script` names in `gr.render`, is
+/// written inside the script's folder tree or the working directory's tree, once its folder's
+/// and its own symlinks are followed: a scene may not choose to overwrite files elsewhere (a
+/// user's `-o` may). A folder that does not exist is left to the write to report.
+pub fn check_scene_output(script: &Path, output: &Path) -> std::result::Result<(), String> {
+    let Ok((target, _)) = crate::files::check_output(output) else {
+        return Ok(());
+    };
+    let folder = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let Ok(folder) = std::fs::canonicalize(&folder) else {
+        return Ok(());
+    };
+    let script_dir = match script.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let trees: Vec<PathBuf> = [script_dir, PathBuf::from(".")]
+        .iter()
+        .filter_map(|d| std::fs::canonicalize(d).ok())
+        .collect();
+    if trees.iter().any(|t| folder.starts_with(t)) {
+        return Ok(());
+    }
+    let shown: Vec<String> = trees.iter().map(|t| t.display().to_string()).collect();
+    Err(format!(
+        "gr.render names the output '{}', which would be written in {}, outside the scene's \
+         folder and the working directory ({}); a scene writes images only inside those \
+         (docs/security.md): name the output with -o to write it elsewhere",
+        output.display(),
+        folder.display(),
+        shown.join(", ")
+    ))
+}
+
 /// What the `gr` functions of one script run share.
 struct State {
     desc: SceneDesc,
     script_dir: PathBuf,
+    /// The folders the scene may read.
+    folders: Rc<sandbox::Folders>,
     hook: RenderHook,
     /// Mesh files named so far, by canonical path.
     mesh_cache: HashMap<PathBuf, MeshId>,
@@ -160,14 +236,14 @@ struct State {
 }
 
 impl State {
-    /// Returns the readable file `given` names: as given (working directory), else in the script's folder.
-    fn resolve_input(&self, given: &str) -> Option<PathBuf> {
-        let p = Path::new(given);
-        if p.is_file() {
-            return Some(p.to_path_buf());
-        }
-        let q = self.script_dir.join(p);
-        (p.is_relative() && q.is_file()).then_some(q)
+    /// Returns the readable file `given` names: as given (working directory), else in the
+    /// script's folder, inside the folders the scene may read; else the message saying why not,
+    /// naming it as `what`.
+    fn resolve_input(&self, what: &str, given: &str) -> std::result::Result<PathBuf, String> {
+        self.folders.resolve(given).map_err(|e| match e {
+            sandbox::Unreadable::NotFound => self.not_found(what, given),
+            sandbox::Unreadable::Outside(real) => self.folders.outside_message(what, given, &real),
+        })
     }
 
     /// Returns where to write `given`: as given when its folder exists, else in the script's folder.

@@ -59,9 +59,9 @@ pub(in crate::lua) fn install(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Re
 fn read(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<MultiValue> {
     let given = a.string(1)?;
     s.saw(Sign::Readobj, &a.loc);
-    let Some(path) = s.resolve_input(&given) else {
-        return Err(a.fault(Fault::NotFound, s.not_found("mesh file", &given)));
-    };
+    let path = s
+        .resolve_input("mesh file", &given)
+        .map_err(|m| a.fault(crate::lua::gr::input_fault(&m), m))?;
     let mesh = crate::io::obj::load_obj(&path).map_err(|e| {
         a.fault(
             Fault::MeshLoad,

@@ -90,7 +90,8 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<MeshData, GltfError> {
     } else {
         (bytes, None)
     };
-    let root = gltf::json::Root::from_slice(json)
+    // The spec says JSON has no byte-order mark but lets readers ignore one; serde_json would not.
+    let root = gltf::json::Root::from_slice(crate::io::strip_bom(json))
         .map_err(|e| invalid(format!("invalid glTF JSON: {e}")))?;
     let enabled = gltf::json::extensions::ENABLED_EXTENSIONS;
     if let Some(ext) = root

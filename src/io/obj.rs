@@ -64,8 +64,10 @@ pub fn load_obj(path: &Path) -> Result<MeshData, ObjError> {
 }
 
 /// Parses OBJ text already in memory into one mesh; `path` names the file in messages and
-/// locates its material libraries.
+/// locates its material libraries. A leading byte-order mark is ignored.
 pub fn parse_obj(text: &str, path: &Path) -> Result<MeshData, ObjError> {
+    // tobj would read `\u{FEFF}v 0 0 0` as an unknown statement and lose the first vertex.
+    let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
     if has_unsafe_index(text) {
         return Err(locate(text, path, "face index out of range"));
     }

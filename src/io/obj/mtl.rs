@@ -51,7 +51,8 @@ impl<'a> MtlLoader<'a> {
         let Ok(bytes) = std::fs::read(&file) else {
             return Err(tobj::LoadError::OpenFileFailed);
         };
-        let text = String::from_utf8_lossy(&bytes);
+        // A byte-order mark would hide the first statement (usually `newmtl`) from tobj.
+        let text = String::from_utf8_lossy(crate::io::strip_bom(&bytes));
         let fail = |fault: ObjError| {
             self.fault.borrow_mut().get_or_insert(fault);
             Err(tobj::LoadError::MaterialParseError)

@@ -123,3 +123,101 @@ fn a_study_curve_saved_as_csv_utf8_with_a_byte_order_mark_reads() {
     let curve = caustic::study::Curve::read("other", &write(&dir, "curve.csv", &text)).unwrap();
     assert_eq!(curve.points, [(1.5, 0.25), (3.0, 0.125)]);
 }
+
+// ---- the inline form of gr.mesh ----
+
+/// Returns the error of `gr.mesh('m', VERTS, FACES)` at line 2 of `test.lua`.
+fn inline_error(verts: &str, faces: &str) -> String {
+    common::lua_error(&format!("x = 1\nm = gr.mesh('m', {verts}, {faces})"))
+}
+
+const TRI: &str = "{{0,0,0},{1,0,0},{0,1,0}}";
+
+#[test]
+fn inline_mesh_faults_name_the_line_the_argument_and_the_element() {
+    let bad3 = |detail: &str| format!("test.lua:2: bad argument #3 to 'mesh' ({detail})");
+    let bad2 = |detail: &str| format!("test.lua:2: bad argument #2 to 'mesh' ({detail})");
+    let cases = [
+        (
+            TRI,
+            "{{1,2,'x'}}",
+            bad3("face 1, index 3: integer expected, got string"),
+        ),
+        (
+            TRI,
+            "{{0,1,2},{0,1,2.5}}",
+            bad3("face 2, index 3: integer expected, got 2.5 (no integer representation)"),
+        ),
+        (
+            TRI,
+            "{{0,1,1e300}}",
+            bad3("face 1, index 3: integer expected, got 1e300 (beyond 64-bit integers)"),
+        ),
+        (
+            TRI,
+            "{{0,1,{}}}",
+            bad3("face 1, index 3: integer expected, got table"),
+        ),
+        (
+            TRI,
+            "{{0,1,nil,2}}",
+            bad3("face 1, index 3: integer expected, got nil"),
+        ),
+        (
+            TRI,
+            "{{0,1,5}}",
+            bad3("face 1: index 5 out of range (0..3)"),
+        ),
+        (
+            TRI,
+            "{{0,1,-1}}",
+            bad3("face 1: index -1 out of range (0..3)"),
+        ),
+        (TRI, "{1}", bad3("face 1 is not a table (got number)")),
+        (TRI, "{{0,1}}", bad3("face 1 has fewer than 3 vertices")),
+        (TRI, "'faces'", bad3("table of faces expected, got string")),
+        (TRI, "nil", bad3("table of faces expected, got nil")),
+        (
+            "{{0,0,0},{1,0,0},{0,1,'y'}}",
+            "{{0,1,2}}",
+            bad2("vertex 3, entry 3: number expected, got string"),
+        ),
+        (
+            "{{0,0,0},{1,0},{0,1,0}}",
+            "{{0,1,2}}",
+            bad2("vertex 2: 3-tuple expected, got 2 entries"),
+        ),
+        (
+            "{{0,0,0},{1,0,0,1},{0,1,0}}",
+            "{{0,1,2}}",
+            bad2("vertex 2: 3-tuple expected, got 4 entries"),
+        ),
+        (
+            "{{0,0,0},7,{0,1,0}}",
+            "{{0,1,2}}",
+            bad2("vertex 2: 3-tuple expected, got number"),
+        ),
+        (
+            "{{0,0,0},{1,0,0},{0,0/0,0}}",
+            "{{0,1,2}}",
+            bad2("vertex 3, entry 2: finite number expected, got NaN"),
+        ),
+        (
+            "{{0,0,0},{1,0,0},{0,1,1e300}}",
+            "{{0,1,2}}",
+            bad2(
+                "vertex 3, entry 3: number within single precision (|x| <= 3.4e38) expected, got 1e300",
+            ),
+        ),
+    ];
+    for (verts, faces, want) in cases {
+        assert_eq!(inline_error(verts, faces), want, "{verts} {faces}");
+    }
+}
+
+#[test]
+fn inline_mesh_accepts_integral_floats_and_numeric_strings_as_lua_does() {
+    let d = common::run_lua(&format!("m = gr.mesh('m', {TRI}, {{{{0.0, '1', 2}}}})")).unwrap();
+    let meshes = caustic::scene::meshes::load_meshes(&d).unwrap();
+    assert_eq!(meshes[0].triangles, [[0, 1, 2]]);
+}

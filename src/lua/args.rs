@@ -186,22 +186,54 @@ impl<'a> Args<'a> {
         }
         let mut out = [0.0f64; 3];
         for (k, slot) in out.iter_mut().enumerate() {
-            let v: Value = t.raw_get(k + 1)?;
-            let n = match &v {
-                Value::Integer(_) | Value::Number(_) | Value::String(_) => {
-                    self.lua.coerce_number(v.clone())?
-                }
-                _ => None,
-            };
-            *slot = match n {
-                Some(n) => single(n).map_err(|e| self.bad(i, format!("entry {}: {e}", k + 1)))?,
-                None => {
-                    let got = type_name(&v);
-                    return Err(self.bad(i, format!("entry {}: number expected, got {got}", k + 1)));
-                }
-            };
+            *slot = self.element_number(i, &format!("entry {}", k + 1), t.raw_get(k + 1)?)?;
         }
         Ok(DVec3::from_array(out))
+    }
+
+    /// Checks `v`, the element of table argument `i` that `element` names (`"vertex 2, entry
+    /// 3"`), as a finite single-precision number (numeric strings converted, as Lua does).
+    pub fn element_number(&self, i: usize, element: &str, v: Value) -> mlua::Result<f64> {
+        let n = match &v {
+            Value::Integer(_) | Value::Number(_) | Value::String(_) => {
+                self.lua.coerce_number(v.clone())?
+            }
+            _ => None,
+        };
+        match n {
+            Some(n) => single(n).map_err(|e| self.bad(i, format!("{element}: {e}"))),
+            None => {
+                let got = type_name(&v);
+                Err(self.bad(i, format!("{element}: number expected, got {got}")))
+            }
+        }
+    }
+
+    /// Checks `v`, the element of table argument `i` that `element` names, as an integer: a Lua
+    /// integer, a float with an integral value, or a string holding one (as
+    /// `luaL_checkinteger` takes them).
+    pub fn element_integer(&self, i: usize, element: &str, v: Value) -> mlua::Result<i64> {
+        let n = match &v {
+            Value::Integer(n) => return Ok(*n),
+            Value::Number(_) | Value::String(_) => self.lua.coerce_number(v.clone())?,
+            _ => None,
+        };
+        match n {
+            // 2^63 itself does not fit an i64.
+            Some(n) if n.fract() == 0.0 && n.abs() < 9.223_372_036_854_776e18 => Ok(n as i64),
+            Some(n) if n.fract() == 0.0 => Err(self.bad(
+                i,
+                format!("{element}: integer expected, got {n:e} (beyond 64-bit integers)"),
+            )),
+            Some(n) => Err(self.bad(
+                i,
+                format!("{element}: integer expected, got {n} (no integer representation)"),
+            )),
+            None => {
+                let got = type_name(&v);
+                Err(self.bad(i, format!("{element}: integer expected, got {got}")))
+            }
+        }
     }
 
     /// Checks a strictly positive number (a radius or a size).

@@ -26,7 +26,7 @@ use crate::desc::{
 };
 use crate::error::{Error, Fault};
 use crate::lua::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
-use glam::{DAffine3, DVec3};
+use glam::DAffine3;
 use mlua::{Lua, MetaMethod, MultiValue, Table, UserData, Value};
 use std::cell::RefCell;
 use std::path::PathBuf;
@@ -177,7 +177,7 @@ fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let id = match a.get(2) {
         Some(Value::Table(_)) => {
             s.saw(Sign::InlineMesh, &a.loc);
-            inline_mesh(s, a)?
+            super::inline::inline_mesh(s, a)?
         }
         _ => mesh_from_file(s, a, &a.string(2)?)?,
     };
@@ -220,58 +220,6 @@ pub(super) fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Resu
         loc: a.loc.clone(),
     });
     s.mesh_cache.insert(key, id);
-    Ok(id)
-}
-
-/// The legacy form `gr.mesh(name, {{x,y,z}, …}, {{i,j,k,…}, …})` with 0-based convex faces.
-fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
-    let Some(Value::Table(verts)) = a.get(2) else {
-        unreachable!("inline_mesh is only called with a table")
-    };
-    let Some(Value::Table(face_table)) = a.get(3) else {
-        return Err(a.bad(3, "table of faces expected"));
-    };
-    let mut positions = Vec::new();
-    for (k, v) in verts.clone().sequence_values::<Value>().enumerate() {
-        let p = match v? {
-            Value::Table(t) if t.raw_len() == 3 => {
-                let c: [f64; 3] = [t.raw_get(1)?, t.raw_get(2)?, t.raw_get(3)?];
-                DVec3::from_array(c)
-            }
-            _ => return Err(a.bad(2, format!("vertex {} is not a 3-tuple", k + 1))),
-        };
-        if !p.is_finite() {
-            return Err(a.bad(2, format!("vertex {} is not finite", k + 1)));
-        }
-        positions.push(p);
-    }
-    let nv = positions.len() as i64;
-    let mut faces = Vec::new();
-    for (k, f) in face_table.clone().sequence_values::<Value>().enumerate() {
-        let Value::Table(f) = f? else {
-            return Err(a.bad(3, format!("face {} is not a table", k + 1)));
-        };
-        let mut idx = Vec::new();
-        for i in f.sequence_values::<i64>() {
-            let i = i?;
-            if !(0..nv).contains(&i) {
-                return Err(a.bad(
-                    3,
-                    format!("face {}: index {i} out of range (0..{nv})", k + 1),
-                ));
-            }
-            idx.push(i as u32);
-        }
-        if idx.len() < 3 {
-            return Err(a.bad(3, format!("face {} has fewer than 3 vertices", k + 1)));
-        }
-        faces.push(idx);
-    }
-    let id = MeshId(s.desc.meshes.len() as u32);
-    s.desc.meshes.push(MeshDesc {
-        source: MeshSource::Inline { positions, faces },
-        loc: a.loc.clone(),
-    });
     Ok(id)
 }
 

@@ -221,3 +221,241 @@ fn inline_mesh_accepts_integral_floats_and_numeric_strings_as_lua_does() {
     let meshes = caustic::scene::meshes::load_meshes(&d).unwrap();
     assert_eq!(meshes[0].triangles, [[0, 1, 2]]);
 }
+
+// ---- numeric ranges: refused outside, safe at the edge ----
+
+/// A light list, a root and a camera around `body`, which places nodes under `root` with the
+/// materials `edge` (reflectances at their largest) and `dim`.
+fn ranged_scene(body: &str, lights: &str, eye: &str, ambient: &str) -> String {
+    format!(
+        "edge = gr.material({{10, 10, 10}}, {{10, 10, 10}}, 20)\n\
+         dim = gr.material({{0.5, 0.5, 0.5}}, {{0, 0, 0}}, 0)\n\
+         root = gr.node('root')\n{body}\n\
+         gr.render(root, 'edge.png', 12, 12, {eye}, {{0, 0, -1}}, {{0, 1, 0}}, 90, {ambient}, {{{lights}}})\n"
+    )
+}
+
+/// Renders every image of `script` with photon maps where its lights ask for them, and asserts
+/// every pixel is finite, no sample was dropped as NaN or infinite, and something was lit.
+fn assert_renders_finite(script: &str) {
+    let dir = out_dir("quirks-edge");
+    let frames = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+    let sink = std::rc::Rc::clone(&frames);
+    caustic::lua::run_source(
+        script.as_bytes(),
+        "edge.lua",
+        &dir,
+        Box::new(move |desc, r| {
+            let settings = common::centre_ray();
+            let progress = caustic::progress::NoProgress;
+            let frame = caustic::frame::render_desc(desc, r, 1.0, None, &settings, &progress)?;
+            sink.borrow_mut().push(frame);
+            Ok(())
+        }),
+    )
+    .unwrap();
+    for frame in frames.borrow().iter() {
+        let pixels = &frame.film.pixels;
+        assert!(pixels.iter().all(|p| p.is_finite()), "{script}");
+        assert_eq!(frame.stats.render.nonfinite_samples, 0, "{script}");
+        assert!(pixels.iter().any(|p| p.max_element() > 0.0), "{script}");
+        assert!(
+            frame.stats.photons.is_some(),
+            "the lights ask for photon maps"
+        );
+    }
+}
+
+#[test]
+fn a_scene_at_the_edge_of_the_coordinate_range_renders_finite_pixels() {
+    // A wall 2e8 wide at z = -1e8, a ball and a cube reaching the corners, lights at the far
+    // corners with the largest intensity and the strongest falloffs, the eye at z = 1e8.
+    let body = "wall = gr.mesh('wall', {{-1e8,-1e8,-1e8},{1e8,-1e8,-1e8},{1e8,1e8,-1e8},{-1e8,1e8,-1e8}}, {{0,1,2,3}})\n\
+                wall:set_material(edge); root:add_child(wall)\n\
+                ball = gr.nh_sphere('ball', {0, 0, -5e7}, 5e7); ball:set_material(dim); root:add_child(ball)\n\
+                box = gr.cube('box'); box:set_material(edge); box:scale(1e8, 1e8, 1e8)\n\
+                box:translate(0, -1e8, -1e8); root:add_child(box)";
+    let lights = "gr.light({1e8, 1e8, 1e8}, {1e8, 1e8, 1e8}, {1e-6, 0, 0}, 1e30, 2000),\n\
+                  gr.light({-1e8, 1e8, 0}, {1e8, 1e8, 1e8}, {0, 0, 1e-6}, 1e30, 2000),\n\
+                  gr.area_light({0, 1e8, -5e7}, {1e8, 1e8, 1e8}, {0, 1e-6, 0}, nil, 2000, {1e8, 0, 0}, {0, 0, 1e8}),\n\
+                  gr.sphere_light({-1e8, -1e8, 1e8}, {1e8, 1e8, 1e8}, {1e6, 1e6, 1e6}, nil, 2000, 1e8)";
+    assert_renders_finite(&ranged_scene(
+        body,
+        lights,
+        "{0, 0, 1e8}",
+        "{1e8, 1e8, 1e8}",
+    ));
+}
+
+#[test]
+fn a_scene_at_the_edge_of_the_light_ranges_renders_finite_pixels() {
+    // Unit-sized geometry under the brightest, nearest and smallest emitters: a sphere light of
+    // the smallest radius and an area light of the smallest area, both in view.
+    let body = "floor = gr.mesh('floor', {{-2,-1,-2},{2,-1,-2},{2,-1,2},{-2,-1,2}}, {{0,1,2,3}})\n\
+                floor:set_material(edge); root:add_child(floor)\n\
+                ball = gr.sphere('ball'); ball:set_material(edge); ball:scale(0.5, 0.5, 0.5); root:add_child(ball)";
+    let lights = "gr.light({0, 1, 0.6}, {1e8, 1e8, 1e8}, {1e-6, 0, 0}, 1e30, 2000),\n\
+                  gr.sphere_light({0.5, 0.5, 1}, {1e8, 1e8, 1e8}, {1e-6, 0, 1e-6}, 1, 2000, 1e-6),\n\
+                  gr.area_light({-0.5, 0.5, 1}, {1e8, 1e8, 1e8}, {1e-6, 1e-6, 0}, 1, 2000, {1e-6, 0, 0}, {0, 0, 1e-6})";
+    assert_renders_finite(&ranged_scene(body, lights, "{0, 0, 3}", "{1e8, 1e8, 1e8}"));
+}
+
+#[test]
+fn script_values_outside_the_ranges_are_refused_at_their_line() {
+    let light = |args: &str| format!("l = gr.light({args})");
+    let render = |eye: &str, ambient: &str| {
+        format!(
+            "r = gr.node('r')\ngr.render(r, 'x.png', 4, 4, {eye}, {{0,0,-1}}, {{0,1,0}}, 50, {ambient}, {{gr.light({{0,0,5}}, {{1,1,1}}, {{1,0,0}})}})"
+        )
+    };
+    let bad = |line: u32, n: u32, f: &str, detail: &str| {
+        format!("test.lua:{line}: bad argument #{n} to '{f}' ({detail})")
+    };
+    let cases = [
+        (
+            "m = gr.material({1e30, 1, 1}, {0, 0, 0}, 0)".to_owned(),
+            bad(1, 1, "material", "reflectance 1e30 is outside [0, 10]"),
+        ),
+        (
+            "m = gr.material({1, 1, 1}, {0, 11, 0}, 0)".to_owned(),
+            bad(1, 2, "material", "reflectance 11 is outside [0, 10]"),
+        ),
+        (
+            light("{0, 0, 0}, {1e9, 1, 1}, {1, 0, 0}"),
+            bad(1, 2, "light", "colour component 1e9 is outside [0, 1e8]"),
+        ),
+        (
+            light("{0, 0, 0}, {1, 1, 1}, {1e-30, 0, 0}"),
+            bad(1, 3, "light", "falloff coefficient 1e-30 must be 0 or in [1e-6, 1e6]"),
+        ),
+        (
+            light("{0, 0, 0}, {1, 1, 1}, {1, 0, 1e7}"),
+            bad(1, 3, "light", "falloff coefficient 1e7 must be 0 or in [1e-6, 1e6]"),
+        ),
+        (
+            light("{0, 0, 0}, {1, 1, 1}, {1, 0, 0}, 1e35"),
+            bad(1, 4, "light", "power must be in [0, 1e30], got 1e35"),
+        ),
+        (
+            light("{0, 0, 2e8}, {1, 1, 1}, {1, 0, 0}"),
+            bad(1, 1, "light", "coordinate 2e8 is outside the renderer's range [-1e8, 1e8]"),
+        ),
+        (
+            "l = gr.sphere_light({0, 0, 0}, {1, 1, 1}, {1, 0, 0}, nil, nil, 1e-30)".to_owned(),
+            bad(1, 6, "sphere_light", "radius 1e-30 is smaller than 1e-6"),
+        ),
+        (
+            "l = gr.area_light({0, 0, 0}, {1, 1, 1}, {1, 0, 0}, nil, nil, {1e-7, 0, 0}, {0, 0, 1e-7})"
+                .to_owned(),
+            bad(1, 7, "area_light", "the edges u and v must span a parallelogram of area at least 1e-12 (not zero or parallel)"),
+        ),
+        (
+            "l = gr.area_light({0, 0, 0}, {1, 1, 1}, {1, 0, 0}, nil, nil, {1e9, 0, 0}, {0, 0, 1})"
+                .to_owned(),
+            bad(1, 6, "area_light", "coordinate 1e9 is outside the renderer's range [-1e8, 1e8]"),
+        ),
+        (
+            "s = gr.nh_sphere('s', {0, 0, 0}, 1e30)".to_owned(),
+            bad(1, 3, "nh_sphere", "radius 1e30 is longer than 1e8"),
+        ),
+        (
+            "b = gr.nh_box('b', {-3e8, 0, 0}, 1)".to_owned(),
+            bad(1, 2, "nh_box", "coordinate -3e8 is outside the renderer's range [-1e8, 1e8]"),
+        ),
+        (
+            "m = gr.mesh('m', {{0,0,0},{1,0,0},{0,1e30,0}}, {{0,1,2}})".to_owned(),
+            bad(1, 2, "mesh", "vertex 3: coordinate 1e30 is outside the renderer's range [-1e8, 1e8]"),
+        ),
+        (
+            render("{0, 0, 1e30}", "{0, 0, 0}"),
+            bad(2, 5, "render", "coordinate 1e30 is outside the renderer's range [-1e8, 1e8]"),
+        ),
+        (
+            render("{0, 0, 5}", "{1e9, 0, 0}"),
+            bad(2, 9, "render", "colour component 1e9 is outside [0, 1e8]"),
+        ),
+    ];
+    for (script, want) in cases {
+        assert_eq!(common::lua_error(&script), want, "{script}");
+    }
+}
+
+#[test]
+fn transforms_that_place_geometry_out_of_range_are_refused_by_node() {
+    let dir = out_dir("quirks-placement");
+    let scene = |body: &str| {
+        format!(
+            "m = gr.material({{1,1,1}}, {{0,0,0}}, 0)\nr = gr.node('r')\n{body}\n\
+             gr.render(r, 'x.png', 4, 4, {{0,0,5}}, {{0,0,-1}}, {{0,1,0}}, 50, {{0,0,0}}, {{gr.light({{0,0,5}}, {{1,1,1}}, {{1,0,0}})}})"
+        )
+    };
+    let cases = [
+        // Before: a sphere of radius 1e30 rendered as a flat ambient colour around the eye.
+        (
+            "s = gr.sphere('big'); s:set_material(m); s:scale(1e30, 1e30, 1e30); r:add_child(s)",
+            "test.lua:3: node 'big' is placed out of range by its transforms: coordinate -1e30 is outside the renderer's range [-1e8, 1e8]",
+        ),
+        // A scale inherited from a parent, each number of it within single precision.
+        (
+            "t = gr.mesh('tri', {{-1,-1,0},{1,-1,0},{0,1,0}}, {{0,1,2}}); t:set_material(m)\n\
+             g = gr.node('g'); g:scale(1e20, 1e20, 1e20); g:add_child(t); r:add_child(g)",
+            "test.lua:3: node 'tri' is placed out of range by its transforms: coordinate -1e20 is outside the renderer's range [-1e8, 1e8]",
+        ),
+        (
+            "s = gr.sphere('far'); s:set_material(m); s:translate(0, 0, -1e38); r:add_child(s)",
+            "test.lua:3: node 'far' is placed out of range by its transforms: coordinate -1e38 is outside the renderer's range [-1e8, 1e8]",
+        ),
+    ];
+    for (body, want) in cases {
+        let result = common::render_films(scene(body).as_bytes(), "test.lua", &dir);
+        let error = result.map(|_| ()).expect_err(body);
+        assert_eq!(error.to_string(), want, "{body}");
+    }
+}
+
+#[test]
+fn mesh_file_values_outside_the_ranges_are_refused_at_their_line_or_accessor() {
+    let dir = out_dir("quirks-mesh-ranges");
+    let load = |name: &str| {
+        caustic::scene::meshes::load_meshes(
+            &common::run_lua_in(&format!("m = gr.mesh('m', '{name}')"), &dir).unwrap(),
+        )
+        .map(|_| ())
+        .unwrap_err()
+        .to_string()
+    };
+    write(&dir, "far.obj", "v 0 0 0\nv 1 0 0\nv 0 1e30 0\nf 1 2 3\n");
+    assert_eq!(
+        load("far.obj"),
+        "test.lua:1: cannot load mesh 'far.obj': far.obj:3: vertex coordinate 1e30 is outside the renderer's range [-1e8, 1e8]"
+            .replace("far.obj:3", &format!("{}:3", dir.join("far.obj").display()))
+    );
+    write(&dir, "hot.mtl", "newmtl hot\nKd 1e30 1 1\n");
+    write(
+        &dir,
+        "hot.obj",
+        "mtllib hot.mtl\nusemtl hot\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    let want = format!(
+        "test.lua:1: cannot load mesh 'hot.obj': {}:2: `Kd` value 1e30 is outside [0, 10]",
+        dir.join("hot.mtl").display()
+    );
+    assert_eq!(load("hot.obj"), want);
+    let (mut f, rest) = gltf_triangle();
+    f.floats("VEC3", &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -2e9, 0.0]);
+    let rest = rest.replace(r#""POSITION":0"#, r#""POSITION":1"#);
+    f.write_external(&dir, "far", &rest);
+    let want = format!(
+        "test.lua:1: cannot load mesh 'far.gltf': {}: mesh 0 primitive 0: position 2 of accessor 1: coordinate -2e9 is outside the renderer's range [-1e8, 1e8]",
+        dir.join("far.gltf").display()
+    );
+    assert_eq!(load("far.gltf"), want);
+    let (f, rest) = gltf_triangle();
+    let rest = rest.replace(r#"{"mesh":0}"#, r#"{"mesh":0,"scale":[1e30,1,1]}"#);
+    f.write_external(&dir, "scaled", &rest);
+    let want = format!(
+        "test.lua:1: cannot load mesh 'scaled.gltf': {}: mesh 0 primitive 0 under node 0: vertex 0 lands at coordinate 1e30 is outside the renderer's range [-1e8, 1e8]",
+        dir.join("scaled.gltf").display()
+    );
+    assert_eq!(load("scaled.gltf"), want);
+}

@@ -4,6 +4,8 @@
 //! ignored and messages read `bad argument #3 to 'nh_sphere' (number expected, got nil)`. We keep
 //! those messages, prefix them with `script:line:`, and additionally reject NaN, infinity and
 //! numbers beyond single precision (the renderer's `f32`: `|x| > 3.4e38` would become infinite).
+//! Points, lengths, light colours and reflectances are further held to the ranges the renderer
+//! can use ([`crate::range`]).
 //! This module also owns the Lua-side handles of description entries ([`NodeRef`],
 //! [`MaterialRef`], [`LightRef`]) and how a caustic error crosses the Lua boundary.
 //!
@@ -15,6 +17,7 @@
 
 use crate::desc::{LightId, MaterialId, NodeId};
 use crate::error::{Error, Fault, Loc};
+use crate::range;
 use glam::{DVec3, Vec3};
 use mlua::{Lua, MultiValue, Value};
 
@@ -284,6 +287,39 @@ impl<'a> Args<'a> {
             ));
         }
         Ok(c)
+    }
+
+    /// Checks a light colour or ambient light: a colour within [`range::MAX_INTENSITY`].
+    pub fn intensity(&self, i: usize) -> mlua::Result<Vec3> {
+        let c = self.colour(i)?;
+        let checked = range::within(&c.to_array(), "colour component", range::MAX_INTENSITY);
+        checked.map_err(|e| self.bad(i, e))?;
+        Ok(c)
+    }
+
+    /// Checks a reflectance (`kd`, `ks`): a colour within [`range::MAX_REFLECTANCE`].
+    pub fn reflectance(&self, i: usize) -> mlua::Result<Vec3> {
+        let c = self.colour(i)?;
+        let checked = range::within(&c.to_array(), "reflectance", range::MAX_REFLECTANCE);
+        checked.map_err(|e| self.bad(i, e))?;
+        Ok(c)
+    }
+
+    /// Checks a point or a length vector: a 3-tuple within [`range::MAX_COORDINATE`].
+    pub fn point(&self, i: usize) -> mlua::Result<DVec3> {
+        let p = self.dvec3(i)?;
+        range::coordinate(p.to_array()).map_err(|e| self.bad(i, e))?;
+        Ok(p)
+    }
+
+    /// Checks a positive length (a radius or a size) no longer than [`range::MAX_COORDINATE`].
+    pub fn length(&self, i: usize, what: &str) -> mlua::Result<f64> {
+        let v = self.positive(i, what)?;
+        if v > range::MAX_COORDINATE {
+            let max = range::show(range::MAX_COORDINATE);
+            return Err(self.bad(i, format!("{what} {v:e} is longer than {max}")));
+        }
+        Ok(v)
     }
 
     /// Checks a `gr.node` argument.

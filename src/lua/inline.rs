@@ -3,7 +3,8 @@
 //!
 //! Every fault is lauxlib's bad-argument error at the calling line, naming the element:
 //! `scene.lua:3: bad argument #3 to 'mesh' (face 1, index 3: integer expected, got string)`.
-//! Vertices are 3-tuples of finite single-precision numbers; faces are sequences of at least three 0-based
+//! Vertices are 3-tuples of numbers within the renderer's coordinate range
+//! ([`crate::range::MAX_COORDINATE`]); faces are sequences of at least three 0-based
 //! integer indices into the vertices, convex and fanned into triangles when the scene is built.
 //! Tables are read by their raw length, so a hole (`{0, 1, nil, 2}`) is an element that is
 //! `nil`, reported as such rather than cutting the face short.
@@ -57,6 +58,9 @@ fn vertices(a: &Args, verts: &Table) -> mlua::Result<Vec<DVec3>> {
         for (j, slot) in p.iter_mut().enumerate() {
             let element = format!("vertex {k}, entry {}", j + 1);
             *slot = a.element_number(2, &element, t.raw_get(j + 1)?)?;
+        }
+        if let Err(e) = crate::range::coordinate(p) {
+            return Err(a.bad(2, format!("vertex {k}: {e}")));
         }
         positions.push(DVec3::from_array(p));
     }

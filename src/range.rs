@@ -6,7 +6,7 @@
 //! | what | range | why |
 //! |---|---|---|
 //! | coordinates and lengths, object and world space | `|x| ≤ 1e8` ([`MAX_COORDINATE`]) | the watertight triangle test forms products of three coordinates (`1e24`), edge cross products are squared for normals (`3·(8·1e16)² ≈ 2e34`) and summed per vertex; `f32` holds `3.4e38`. At `1e8` single precision resolves only 8 units, so nothing useful is lost |
-//! | light colour (intensity) and ambient, per channel | `[0, 1e8]` ([`MAX_INTENSITY`]) | a physical `1/d²` light `1e4` units away needs `1e8` to light anything; with the attenuation bound below, direct light stays under `1e15` and a light's flux (`4π²·rgb`) under `4e9` |
+//! | light colour (intensity) and ambient, per channel | `[0, 1e8]` ([`MAX_INTENSITY`]) | a physical `1/d²` light `1e4` units away needs `1e8` to light anything; with the attenuation bound below, direct light from one light stays under `2e15` (times reflectance 10 at most `2e16`) and a light's flux (`4π²·rgb`) under `4e9`; the edge-of-range renders peak near `2e23` (a seen emitter of the smallest size, `rgb/R² = 1e20`, through mirrors) |
 //! | falloff coefficients `c0, c1, c2` | each `0` or in `[1e-6, 1e6]` ([`MIN_FALLOFF`], [`MAX_FALLOFF`]), not all `0` | `1/c0` is the attenuation at the light: `c0 = 1e-30` made `rgb·1e30`; at most `1e6` keeps a photon's falloff ratio `d²/(c0 + …)` finite over the whole coordinate range |
 //! | reflectances `kd`, `ks` (script and MTL) | `[0, 10]` ([`MAX_REFLECTANCE`]) | course scenes use up to `1.5`; see the note below on values above 1 |
 //! | light `power` | `[0, 1e30]` ([`MAX_POWER`]) | only a weight among lights: the sum over many lights must stay finite |

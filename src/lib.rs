@@ -57,6 +57,7 @@ pub mod mem;
 pub mod metrics;
 pub mod photon;
 pub mod progress;
+pub mod range;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -16,6 +16,8 @@
 //! mode are read, indexed (`u8`, `u16`, `u32`) or not; `POINTS` and `LINE*` primitives are
 //! skipped. Surplus indices of a `TRIANGLES` primitive (a count not divisible by 3) are ignored.
 //! As in the OBJ loader, normals and uvs (`TEXCOORD_0`) are all-or-nothing over the merged mesh.
+//! Positions, in the file and after the node transforms, must lie within the renderer's range
+//! ([`crate::range::MAX_COORDINATE`]); the error names the accessor or node and the vertex.
 //! Sparse accessors, accessors without a buffer view, node cycles and nodes with two parents are
 //! rejected, as are required extensions other than the two materials ones below.
 //!
@@ -90,7 +92,8 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<MeshData, GltfError> {
     } else {
         (bytes, None)
     };
-    let root = gltf::json::Root::from_slice(json)
+    // The spec says JSON has no byte-order mark but lets readers ignore one; serde_json would not.
+    let root = gltf::json::Root::from_slice(crate::io::strip_bom(json))
         .map_err(|e| invalid(format!("invalid glTF JSON: {e}")))?;
     let enabled = gltf::json::extensions::ENABLED_EXTENSIONS;
     if let Some(ext) = root
@@ -319,6 +322,7 @@ fn bake(part: &mut Part, world: &DAffine3) -> Result<(), String> {
         if !p.is_finite() {
             return Err(format!("vertex {i} lands at a non-finite position"));
         }
+        crate::range::coordinate(p.to_array()).map_err(|e| format!("vertex {i} lands at {e}"))?;
     }
     let normal_matrix: DMat3 = world.matrix3.inverse().transpose();
     for n in part.normals.iter_mut().flatten() {
@@ -403,7 +407,7 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
     if factors.iter().any(|f| !f.is_finite()) {
         return Err(format!("{name} has a non-finite factor"));
     }
-    let base = Vec3::new(r, g, b).max(Vec3::ZERO);
+    let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
     let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
     let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
     let smoothness = (1.0 - roughness) * (1.0 - roughness);

@@ -14,6 +14,9 @@
 //! only some `v` lines are rejected by tobj. Only vertices used by faces are kept;
 //! a position is duplicated when its corners carry different normals or uvs.
 //!
+//! Vertex coordinates must lie within the renderer's range ([`crate::range::MAX_COORDINATE`]);
+//! one outside it is an error at its line.
+//!
 //! Parsing is done by `tobj`. Because tobj reports no line numbers, a light
 //! line scanner re-reads the text only when something is wrong (and a cheap
 //! guard vets zero, relative or huge face indices before tobj sees them).
@@ -64,8 +67,10 @@ pub fn load_obj(path: &Path) -> Result<MeshData, ObjError> {
 }
 
 /// Parses OBJ text already in memory into one mesh; `path` names the file in messages and
-/// locates its material libraries.
+/// locates its material libraries. A leading byte-order mark is ignored.
 pub fn parse_obj(text: &str, path: &Path) -> Result<MeshData, ObjError> {
+    // tobj would read `\u{FEFF}v 0 0 0` as an unknown statement and lose the first vertex.
+    let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
     if has_unsafe_index(text) {
         return Err(locate(text, path, "face index out of range"));
     }
@@ -86,7 +91,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<MeshData, ObjError> {
     }
     let mut mesh = merge(&models, path)?;
     mtl::attach(&mut mesh, &models, &materials.unwrap_or_default());
-    if let Some(what) = first_non_finite(&mesh) {
+    if let Some(what) = first_unusable(&mesh) {
         return Err(locate(text, path, what));
     }
     Ok(mesh)
@@ -145,10 +150,16 @@ fn merge(models: &[tobj::Model], path: &Path) -> Result<MeshData, ObjError> {
     Ok(mesh)
 }
 
-/// Names the first kind of non-finite value stored in the mesh, if any.
-fn first_non_finite(mesh: &MeshData) -> Option<&'static str> {
+/// Names the first kind of non-finite or out-of-range value stored in the mesh, if any.
+fn first_unusable(mesh: &MeshData) -> Option<&'static str> {
     if !mesh.positions.iter().all(|p| p.is_finite()) {
         Some("vertex coordinate is not finite")
+    } else if mesh
+        .positions
+        .iter()
+        .any(|p| crate::range::coordinate(p.to_array()).is_err())
+    {
+        Some("vertex coordinate outside the renderer's range")
     } else if !mesh.normals.iter().all(|n| n.is_finite()) {
         Some("normal is not finite")
     } else if !mesh.uvs.iter().all(|t| t.is_finite()) {
@@ -273,7 +284,8 @@ fn check_vertex(mut words: SplitWhitespace) -> Result<(), String> {
         }
         n => return Err(format!("`v` has {} values (expected 3, 4 or 6)", n + 3)),
     }
-    finite(&p, "vertex coordinate")
+    finite(&p, "vertex coordinate")?;
+    crate::range::coordinate(p).map_err(|e| format!("vertex {e}"))
 }
 
 /// Parses the next `N` words as numbers of a `kind` statement.
@@ -389,7 +401,7 @@ mod tests {
         assert!(mesh.normals.is_empty() || mesh.normals.len() == n);
         assert!(mesh.uvs.is_empty() || mesh.uvs.len() == n);
         assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < n));
-        assert!(first_non_finite(mesh).is_none());
+        assert!(first_unusable(mesh).is_none());
     }
 
     /// Course meshes: `file vertices triangles min-corner max-corner`, counted from

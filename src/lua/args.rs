@@ -4,6 +4,8 @@
 //! ignored and messages read `bad argument #3 to 'nh_sphere' (number expected, got nil)`. We keep
 //! those messages, prefix them with `script:line:`, and additionally reject NaN, infinity and
 //! numbers beyond single precision (the renderer's `f32`: `|x| > 3.4e38` would become infinite).
+//! Points, lengths, light colours and reflectances are further held to the ranges the renderer
+//! can use ([`crate::range`]).
 //! This module also owns the Lua-side handles of description entries ([`NodeRef`],
 //! [`MaterialRef`], [`LightRef`]) and how a caustic error crosses the Lua boundary.
 //!
@@ -15,6 +17,7 @@
 
 use crate::desc::{LightId, MaterialId, NodeId};
 use crate::error::{Error, Fault, Loc};
+use crate::range;
 use glam::{DVec3, Vec3};
 use mlua::{Lua, MultiValue, Value};
 
@@ -188,22 +191,54 @@ impl<'a> Args<'a> {
         }
         let mut out = [0.0f64; 3];
         for (k, slot) in out.iter_mut().enumerate() {
-            let v: Value = t.raw_get(k + 1)?;
-            let n = match &v {
-                Value::Integer(_) | Value::Number(_) | Value::String(_) => {
-                    self.lua.coerce_number(v.clone())?
-                }
-                _ => None,
-            };
-            *slot = match n {
-                Some(n) => single(n).map_err(|e| self.bad(i, format!("entry {}: {e}", k + 1)))?,
-                None => {
-                    let got = type_name(&v);
-                    return Err(self.bad(i, format!("entry {}: number expected, got {got}", k + 1)));
-                }
-            };
+            *slot = self.element_number(i, &format!("entry {}", k + 1), t.raw_get(k + 1)?)?;
         }
         Ok(DVec3::from_array(out))
+    }
+
+    /// Checks `v`, the element of table argument `i` that `element` names (`"vertex 2, entry
+    /// 3"`), as a finite single-precision number (numeric strings converted, as Lua does).
+    pub fn element_number(&self, i: usize, element: &str, v: Value) -> mlua::Result<f64> {
+        let n = match &v {
+            Value::Integer(_) | Value::Number(_) | Value::String(_) => {
+                self.lua.coerce_number(v.clone())?
+            }
+            _ => None,
+        };
+        match n {
+            Some(n) => single(n).map_err(|e| self.bad(i, format!("{element}: {e}"))),
+            None => {
+                let got = type_name(&v);
+                Err(self.bad(i, format!("{element}: number expected, got {got}")))
+            }
+        }
+    }
+
+    /// Checks `v`, the element of table argument `i` that `element` names, as an integer: a Lua
+    /// integer, a float with an integral value, or a string holding one (as
+    /// `luaL_checkinteger` takes them).
+    pub fn element_integer(&self, i: usize, element: &str, v: Value) -> mlua::Result<i64> {
+        let n = match &v {
+            Value::Integer(n) => return Ok(*n),
+            Value::Number(_) | Value::String(_) => self.lua.coerce_number(v.clone())?,
+            _ => None,
+        };
+        match n {
+            // 2^63 itself does not fit an i64.
+            Some(n) if n.fract() == 0.0 && n.abs() < 9.223_372_036_854_776e18 => Ok(n as i64),
+            Some(n) if n.fract() == 0.0 => Err(self.bad(
+                i,
+                format!("{element}: integer expected, got {n:e} (beyond 64-bit integers)"),
+            )),
+            Some(n) => Err(self.bad(
+                i,
+                format!("{element}: integer expected, got {n} (no integer representation)"),
+            )),
+            None => {
+                let got = type_name(&v);
+                Err(self.bad(i, format!("{element}: integer expected, got {got}")))
+            }
+        }
     }
 
     /// Checks a strictly positive number (a radius or a size).
@@ -254,6 +289,39 @@ impl<'a> Args<'a> {
             ));
         }
         Ok(c)
+    }
+
+    /// Checks a light colour or ambient light: a colour within [`range::MAX_INTENSITY`].
+    pub fn intensity(&self, i: usize) -> mlua::Result<Vec3> {
+        let c = self.colour(i)?;
+        let checked = range::within(&c.to_array(), "colour component", range::MAX_INTENSITY);
+        checked.map_err(|e| self.bad(i, e))?;
+        Ok(c)
+    }
+
+    /// Checks a reflectance (`kd`, `ks`): a colour within [`range::MAX_REFLECTANCE`].
+    pub fn reflectance(&self, i: usize) -> mlua::Result<Vec3> {
+        let c = self.colour(i)?;
+        let checked = range::within(&c.to_array(), "reflectance", range::MAX_REFLECTANCE);
+        checked.map_err(|e| self.bad(i, e))?;
+        Ok(c)
+    }
+
+    /// Checks a point or a length vector: a 3-tuple within [`range::MAX_COORDINATE`].
+    pub fn point(&self, i: usize) -> mlua::Result<DVec3> {
+        let p = self.dvec3(i)?;
+        range::coordinate(p.to_array()).map_err(|e| self.bad(i, e))?;
+        Ok(p)
+    }
+
+    /// Checks a positive length (a radius or a size) no longer than [`range::MAX_COORDINATE`].
+    pub fn length(&self, i: usize, what: &str) -> mlua::Result<f64> {
+        let v = self.positive(i, what)?;
+        if v > range::MAX_COORDINATE {
+            let max = range::show(range::MAX_COORDINATE);
+            return Err(self.bad(i, format!("{what} {v:e} is longer than {max}")));
+        }
+        Ok(v)
     }
 
     /// Checks a `gr.node` argument.

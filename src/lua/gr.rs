@@ -26,7 +26,7 @@ use crate::desc::{
 };
 use crate::error::{Error, Fault};
 use crate::lua::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
-use glam::{DAffine3, DVec3};
+use glam::DAffine3;
 use mlua::{Lua, MetaMethod, MultiValue, Table, UserData, Value};
 use std::cell::RefCell;
 use std::path::PathBuf;
@@ -160,15 +160,15 @@ fn gr_simple(lua: &Lua, s: &mut State, a: &Args, kind: NodeKind) -> mlua::Result
 
 fn gr_nh_sphere(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let name = a.string(1)?;
-    let center = a.dvec3(2)?;
-    let radius = a.positive(3, "radius")?;
+    let center = a.point(2)?;
+    let radius = a.length(3, "radius")?;
     new_node(lua, s, a, name, NodeKind::NhSphere { center, radius })
 }
 
 fn gr_nh_box(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let name = a.string(1)?;
-    let corner = a.dvec3(2)?;
-    let size = a.positive(3, "size")?;
+    let corner = a.point(2)?;
+    let size = a.length(3, "size")?;
     new_node(lua, s, a, name, NodeKind::NhBox { corner, size })
 }
 
@@ -177,7 +177,7 @@ fn gr_mesh(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let id = match a.get(2) {
         Some(Value::Table(_)) => {
             s.saw(Sign::InlineMesh, &a.loc);
-            inline_mesh(s, a)?
+            super::inline::inline_mesh(s, a)?
         }
         _ => mesh_from_file(s, a, &a.string(2)?)?,
     };
@@ -232,58 +232,6 @@ pub(super) fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Resu
     Ok(id)
 }
 
-/// The legacy form `gr.mesh(name, {{x,y,z}, …}, {{i,j,k,…}, …})` with 0-based convex faces.
-fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
-    let Some(Value::Table(verts)) = a.get(2) else {
-        unreachable!("inline_mesh is only called with a table")
-    };
-    let Some(Value::Table(face_table)) = a.get(3) else {
-        return Err(a.bad(3, "table of faces expected"));
-    };
-    let mut positions = Vec::new();
-    for (k, v) in verts.clone().sequence_values::<Value>().enumerate() {
-        let p = match v? {
-            Value::Table(t) if t.raw_len() == 3 => {
-                let c: [f64; 3] = [t.raw_get(1)?, t.raw_get(2)?, t.raw_get(3)?];
-                DVec3::from_array(c)
-            }
-            _ => return Err(a.bad(2, format!("vertex {} is not a 3-tuple", k + 1))),
-        };
-        if !p.is_finite() {
-            return Err(a.bad(2, format!("vertex {} is not finite", k + 1)));
-        }
-        positions.push(p);
-    }
-    let nv = positions.len() as i64;
-    let mut faces = Vec::new();
-    for (k, f) in face_table.clone().sequence_values::<Value>().enumerate() {
-        let Value::Table(f) = f? else {
-            return Err(a.bad(3, format!("face {} is not a table", k + 1)));
-        };
-        let mut idx = Vec::new();
-        for i in f.sequence_values::<i64>() {
-            let i = i?;
-            if !(0..nv).contains(&i) {
-                return Err(a.bad(
-                    3,
-                    format!("face {}: index {i} out of range (0..{nv})", k + 1),
-                ));
-            }
-            idx.push(i as u32);
-        }
-        if idx.len() < 3 {
-            return Err(a.bad(3, format!("face {} has fewer than 3 vertices", k + 1)));
-        }
-        faces.push(idx);
-    }
-    let id = MeshId(s.desc.meshes.len() as u32);
-    s.desc.meshes.push(MeshDesc {
-        source: MeshSource::Inline { positions, faces },
-        loc: a.loc.clone(),
-    });
-    Ok(id)
-}
-
 fn gr_csg(lua: &Lua, s: &mut State, a: &Args, op: CsgOp) -> mlua::Result<Value> {
     let name = a.string(1)?;
     let mut operands = [a.node(2)?, a.node(3)?];
@@ -297,8 +245,8 @@ fn gr_csg(lua: &Lua, s: &mut State, a: &Args, op: CsgOp) -> mlua::Result<Value> 
 }
 
 fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
-    let kd = a.colour(1)?;
-    let ks = a.colour(2)?;
+    let kd = a.reflectance(1)?;
+    let ks = a.reflectance(2)?;
     let shininess = a.number(3)?;
     if shininess < 0.0 {
         return Err(a.bad(3, format!("Phong exponent must be >= 0, got {shininess}")));
@@ -359,27 +307,45 @@ fn gr_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
 
 /// `gr.area_light(pos, rgb, falloff, power, num_photons, u, v)`: power and num_photons may be nil.
 fn gr_area_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
-    let u = a.vec3(6)?;
-    let v = a.vec3(7)?;
-    if u.cross(v).length_squared() <= f32::MIN_POSITIVE {
+    let (u, v) = (a.point(6)?, a.point(7)?);
+    let min_area = crate::range::MIN_LIGHT_SIZE * crate::range::MIN_LIGHT_SIZE;
+    if u.cross(v).length() < min_area {
         return Err(a.bad(
             7,
-            "the edges u and v must span a parallelogram (not zero or parallel)",
+            format!("the edges u and v must span a parallelogram of area at least {min_area:e} (not zero or parallel)"),
         ));
     }
+    let (u, v) = (u.as_vec3(), v.as_vec3());
     new_light(lua, s, a, LightShape::Area { u, v })
 }
 
 /// `gr.sphere_light(pos, rgb, falloff, power, num_photons, radius)`.
 fn gr_sphere_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
-    let radius = a.positive(6, "radius")? as f32;
+    let radius = a.length(6, "radius")?;
+    if radius < crate::range::MIN_LIGHT_SIZE {
+        let min = crate::range::MIN_LIGHT_SIZE;
+        return Err(a.bad(6, format!("radius {radius:e} is smaller than {min:e}")));
+    }
+    let radius = radius as f32;
     new_light(lua, s, a, LightShape::Sphere { radius })
 }
 
 fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Result<Value> {
-    let position = a.vec3(1)?;
-    let colour = a.colour(2)?;
-    let falloff = a.vec3(3)?;
+    let position = a.point(1)?.as_vec3();
+    let colour = a.intensity(2)?;
+    let falloff64 = a.dvec3(3)?;
+    let falloff = falloff64.as_vec3();
+    let (min, max) = (crate::range::MIN_FALLOFF, crate::range::MAX_FALLOFF);
+    if let Some(c) = falloff64
+        .to_array()
+        .into_iter()
+        .find(|&c| c != 0.0 && !(min..=max).contains(&c))
+    {
+        return Err(a.bad(
+            3,
+            format!("falloff coefficient {c:e} must be 0 or in [{min:e}, {max:e}]"),
+        ));
+    }
     if falloff.min_element() < 0.0 || falloff.max_element() <= 0.0 {
         return Err(a.bad(
             3,
@@ -391,9 +357,16 @@ fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Res
     }
     let power = a.opt_number(4)?;
     if let Some(p) = power
-        && p < 0.0
+        && !(0.0..=crate::range::MAX_POWER).contains(&p)
     {
-        return Err(a.bad(4, format!("power must be >= 0, got {p}")));
+        let max = crate::range::MAX_POWER;
+        return Err(a.bad(
+            4,
+            format!(
+                "power must be in [0, {max:e}], got {}",
+                crate::range::show(p)
+            ),
+        ));
     }
     let photons = a.opt_number(5)?;
     if let Some(n) = photons
@@ -430,12 +403,12 @@ fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
             "image {width}x{height} is larger than {MAX_PIXELS} pixels"
         )));
     }
-    let eye = a.vec3(5)?;
+    let eye = a.point(5)?.as_vec3();
     // Directions are normalised in double precision: {0, 0, -1e30} squared overflows f32.
     let view = a.dvec3(6)?.normalize_or_zero().as_vec3();
     let up = a.dvec3(7)?.normalize_or_zero().as_vec3();
     let fov_deg = a.number(8)?;
-    let ambient = a.colour(9)?;
+    let ambient = a.intensity(9)?;
     let lights = a.lights(10)?;
     if view.length_squared() == 0.0 {
         return Err(a.bad(6, "view direction must not be zero"));

@@ -5,6 +5,8 @@
 //! there). The layer has three parts:
 //! - `sandbox.rs`: the Lua state and its standard library;
 //! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
+//! - `inline.rs`: the inline form of `gr.mesh`, its vertex and face tables checked element by
+//!   element;
 //! - `generated.rs`: meshes a script generates (`gr.water_mesh`), cached as files;
 //! - [`settings`]: a scene's own render settings (`gr.settings`);
 //! - [`args`]: argument checks with lauxlib's messages and the calling script line;
@@ -32,6 +34,7 @@ pub mod args;
 mod generated;
 pub mod globals;
 mod gr;
+mod inline;
 mod legacy;
 mod sandbox;
 pub mod settings;

@@ -5,7 +5,8 @@
 //! (instancing), but a mesh's file is read once per build ([`MeshCache`]) and its triangles and
 //! BVH are built once and shared by all its instances. Textures are loaded the same way
 //! ([`ImageCache`]). Bad input found here (cycles, singular or overflowing transforms, broken
-//! mesh files, non-finite vertices) is an error naming the script line.
+//! mesh files, non-finite vertices, geometry placed outside the coordinate range of
+//! [`crate::range`]) is an error naming the script line.
 //!
 //! ```lua
 //! root = gr.node('root')
@@ -319,6 +320,23 @@ fn check_fits_f32(node: &NodeDesc, m: &DAffine3) -> Result<()> {
     ))
 }
 
+/// Returns an error at `node`'s script line when its world-space box leaves the renderer's
+/// coordinate range ([`crate::range::MAX_COORDINATE`]): every number of the transforms fits, but
+/// their composition may place the geometry where intersection and shading overflow.
+fn check_in_range(node: &NodeDesc, bounds: &Bounds) -> Result<()> {
+    let corners = [bounds.min, bounds.max].map(|c| crate::range::coordinate(c.to_array()));
+    match corners.into_iter().find_map(Result::err) {
+        Some(e) => Err(Error::at(
+            &node.loc,
+            format!(
+                "node '{}' is placed out of range by its transforms: {e}",
+                node.name
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Returns true when the linear part of `m` and its inverse both fit single precision and `m`
 /// does not flatten space (a zero or vanishing scale).
 fn is_invertible(m: &DAffine3) -> bool {
@@ -408,6 +426,7 @@ impl Builder<'_> {
                 ),
             ));
         }
+        check_in_range(node, &bounds)?;
         *self.stats.by_kind.entry(shape.label()).or_default() += 1;
         let mesh_materials = match shape {
             Shape::Mesh(m) => {

@@ -292,10 +292,10 @@ impl Curve {
             path: path.to_path_buf(),
             message,
         };
-        let text = String::from_utf8(
-            crate::files::read_regular(path).map_err(|e| file_err(e.to_string()))?,
-        )
-        .map_err(|_| file_err("not UTF-8 text".into()))?;
+        let mut bytes = crate::files::read_regular(path).map_err(|e| file_err(e.to_string()))?;
+        // Spreadsheets save "CSV UTF-8" with a byte-order mark, which would rename the first column.
+        bytes.drain(..bytes.len() - crate::io::strip_bom(&bytes).len());
+        let text = String::from_utf8(bytes).map_err(|_| file_err("not UTF-8 text".into()))?;
         let mut lines = text.lines();
         let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
         let col = |name: &str| header.iter().position(|h| h.trim() == name);

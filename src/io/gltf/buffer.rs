@@ -270,13 +270,21 @@ pub fn read_vec3(
             )
         })
         .collect();
-    match v.iter().position(|p| !p.is_finite()) {
-        Some(bad) => Err(format!(
+    if let Some(bad) = v.iter().position(|p| !p.is_finite()) {
+        return Err(format!(
             "{what} {bad} of accessor {} is not finite",
             acc.index()
-        )),
-        None => Ok(v),
+        ));
     }
+    if what == "position"
+        && let Some((bad, e)) = v
+            .iter()
+            .enumerate()
+            .find_map(|(i, p)| crate::range::coordinate(p.to_array()).err().map(|e| (i, e)))
+    {
+        return Err(format!("position {bad} of accessor {}: {e}", acc.index()));
+    }
+    Ok(v)
 }
 
 /// Reads a `VEC2` texture-coordinate accessor: `FLOAT`, or normalised `UNSIGNED_BYTE`/`SHORT`.

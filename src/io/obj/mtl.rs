@@ -8,6 +8,9 @@
 //! and line: tobj would panic on a colour with fewer than three numbers, so each line is checked
 //! the way tobj reads it before tobj sees the text.
 //!
+//! `Kd` and `Ks` must lie in `[0, 10]` ([`crate::range::MAX_REFLECTANCE`]); others are an error
+//! at their line.
+//!
 //! Mapping: `Kd` → kd (0.6 grey when absent, the renderer's fallback), `Ks` → ks (0 when
 //! absent), `Ns` → shininess, `d` → transparency `1 − d` (else `Tr` → transparency), `Ni` → ior
 //! (1 when absent or not positive), `map_Kd` → texture, resolved against the `.mtl` file's folder
@@ -51,7 +54,8 @@ impl<'a> MtlLoader<'a> {
         let Ok(bytes) = std::fs::read(&file) else {
             return Err(tobj::LoadError::OpenFileFailed);
         };
-        let text = String::from_utf8_lossy(&bytes);
+        // A byte-order mark would hide the first statement (usually `newmtl`) from tobj.
+        let text = String::from_utf8_lossy(crate::io::strip_bom(&bytes));
         let fail = |fault: ObjError| {
             self.fault.borrow_mut().get_or_insert(fault);
             Err(tobj::LoadError::MaterialParseError)
@@ -101,6 +105,7 @@ fn check_line(line: &str) -> Result<(), String> {
     match keyword {
         "newmtl" if line[6..].trim().is_empty() => Err("`newmtl` needs a material name".to_owned()),
         "Ka" | "Kd" | "Ks" | "Ke" => {
+            let max = crate::range::MAX_REFLECTANCE;
             let mut values = [0.0; 3];
             for (found, slot) in values.iter_mut().enumerate() {
                 let word = words
@@ -108,7 +113,11 @@ fn check_line(line: &str) -> Result<(), String> {
                     .ok_or_else(|| format!("`{keyword}` needs 3 numbers, found {found}"))?;
                 *slot = number(word, keyword)?;
             }
-            finite(&values, "colour")
+            finite(&values, "colour")?;
+            match keyword {
+                "Kd" | "Ks" => crate::range::within(&values, &format!("`{keyword}` value"), max),
+                _ => Ok(()),
+            }
         }
         "Ns" | "Ni" | "d" | "Tr" => {
             let word = words

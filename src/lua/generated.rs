@@ -82,7 +82,9 @@ pub(super) fn water_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
             ));
         }
     }
-    super::gr::mesh_from_file(s, a, &path.to_string_lossy())
+    // A mesh caustic generated itself, in its cache: not a file the scene names, so outside
+    // the sandbox's read folders (CAUSTIC_CACHE may be anywhere).
+    super::gr::mesh_at(s, a, &path.to_string_lossy(), path.clone())
 }
 
 /// Reads argument 2, a table of [`KEYS`], over [`WaveParams::default`], and the depth of a

@@ -205,6 +205,12 @@ pub(super) fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Resu
     let path = s
         .resolve_input("mesh file", given)
         .map_err(|m| a.fault(input_fault(&m), m))?;
+    mesh_at(s, a, given, path)
+}
+
+/// Adds the mesh file at `path` (named `given` by the script, or made by caustic itself) to
+/// the description, once per file.
+pub(super) fn mesh_at(s: &mut State, a: &Args, given: &str, path: PathBuf) -> mlua::Result<MeshId> {
     let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
     if let Some(&id) = s.mesh_cache.get(&key) {
         return Ok(id);

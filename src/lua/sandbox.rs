@@ -8,7 +8,8 @@
 //!   corrupts memory) and `collectgarbage` limited to `collect`, `count`, `step` and `isrunning`;
 //! - `os.time`, `os.clock`, `os.date` and `os.difftime`;
 //! - `io.write` (to standard output), and `io.open`, `io.lines`, `dofile` and `loadfile` that
-//!   read, never write, files inside the scene's folders ([`Folders`]);
+//!   read, never write, files inside the scene's folders ([`Folders`]: the script's folder
+//!   tree, or the git checkout it lies in, plus `--allow-read` folders);
 //! - `require` of Lua modules (text) inside the scene's folders: the working directory first,
 //!   as Lua's `./?.lua` does, then the script's folder, so a course scene's
 //!   `require('buckyball')` finds the buckyball.lua beside it however it is run; `package` holds
@@ -190,8 +191,9 @@ impl ScriptClock {
     }
 }
 
-/// The folders a scene may read: the script's folder and every folder below it, and those the
-/// user names with `--allow-read`. Paths resolve against the working directory first, as the
+/// The folders a scene may read: the script's folder and every folder below it (or, inside a
+/// git checkout, the checkout's tree: [`project_root`]), and those the user names with
+/// `--allow-read`. Paths resolve against the working directory first, as the
 /// course does, then against the script's folder; what they name must lie in one of these
 /// folders once symlinks and `..` are resolved.
 #[derive(Clone, Debug)]
@@ -200,6 +202,25 @@ pub struct Folders {
     pub script_dir: PathBuf,
     /// The readable trees, canonical.
     roots: Vec<PathBuf>,
+}
+
+/// Returns the tree a script in the canonical folder `dir` may read: the nearest folder at or
+/// above `dir` that holds `.git` (a cloned scene repository keeps shared textures and meshes in
+/// sibling folders, `scenes/gallery/../textures/`), else `dir` itself. The search stops below
+/// the user's home folder and the file system's root, which are never a scene's tree.
+fn project_root(dir: &Path) -> PathBuf {
+    let home = std::env::var_os("HOME").and_then(|h| std::fs::canonicalize(h).ok());
+    let mut at = Some(dir);
+    while let Some(d) = at {
+        if d.parent().is_none() || home.as_deref() == Some(d) {
+            break;
+        }
+        if d.join(".git").exists() {
+            return d.to_path_buf();
+        }
+        at = d.parent();
+    }
+    dir.to_path_buf()
 }
 
 /// Why a path a scene names cannot be read.
@@ -219,9 +240,10 @@ impl Folders {
         } else {
             script_dir
         };
-        let roots = std::iter::once(dir)
-            .chain(allow_read.iter().map(PathBuf::as_path))
-            .filter_map(|d| std::fs::canonicalize(d).ok())
+        let own = std::fs::canonicalize(dir).ok().map(|d| project_root(&d));
+        let roots = own
+            .into_iter()
+            .chain(allow_read.iter().filter_map(|d| std::fs::canonicalize(d).ok()))
             .collect();
         Folders {
             script_dir: script_dir.to_path_buf(),

@@ -21,9 +21,14 @@ pub struct ExrTile {
     pub text: Vec<(String, String)>,
 }
 
-/// Writes `film` as an EXR file at `path`, its window as the data window in the full image's
-/// display window, with the text attributes `text` (ASCII keys and values).
-pub fn write(film: &Film, path: &Path, text: &[(&str, &str)]) -> std::result::Result<(), String> {
+/// Writes `film` as an EXR file to `file` (open for writing, at its start), its window as the
+/// data window in the full image's display window, with the text attributes `text` (ASCII keys
+/// and values).
+pub fn write(
+    film: &Film,
+    file: &mut std::fs::File,
+    text: &[(&str, &str)],
+) -> std::result::Result<(), String> {
     let (w, h) = (film.width as usize, film.height as usize);
     if film.pixels.len() != w * h {
         return Err("internal: film size does not match its pixels".into());
@@ -48,7 +53,7 @@ pub fn write(film: &Film, path: &Path, text: &[(&str, &str)]) -> std::result::Re
         IntegerBounds::from_dimensions((win.full_width as usize, win.full_height as usize));
     Image::new(ImageAttributes::new(display), layer)
         .write()
-        .to_file(path)
+        .to_unbuffered(file)
         .map_err(|e| e.to_string())
 }
 

@@ -147,8 +147,7 @@ impl<W: Write> Write for Crc<W> {
 
 /// Writes `maps` to `path`, replacing it atomically ([`crate::files::write_replacing_io`]).
 pub fn write(path: &Path, maps: &SavedMaps) -> std::io::Result<()> {
-    crate::files::write_replacing_io(path, |tmp| {
-        let file = std::fs::File::create(tmp)?;
+    crate::files::write_replacing_io(path, |file| {
         let mut w = Crc {
             inner: BufWriter::with_capacity(1 << 20, file),
             crc: crc32fast::Hasher::new(),

@@ -1,0 +1,429 @@
+//! Files that cannot be turned against the user who renders: temporary outputs a planted
+//! symlink cannot redirect, outputs that are never an input of the command, output folders
+//! checked before the work, photon-map files validated field by field although their checksum
+//! holds, stitch tiles whose headers cannot make us allocate, and `caustic diff` that never
+//! reports a NaN or an infinity as no error. The `fuzz_*` properties (proptest, `PROPTEST_CASES`)
+//! mutate photon-map files with the checksum recomputed and EXR tiles, and bound the largest
+//! allocation by the file's size.
+#![cfg(target_os = "linux")]
+
+mod common;
+
+use common::{caustic, out_dir};
+use glam::Vec3A;
+use proptest::prelude::*;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+/// The system allocator, recording the largest allocation of each thread while asked to.
+struct Largest;
+
+thread_local! {
+    /// Whether this thread records its allocations, and the largest so far.
+    static TRACKING: Cell<(bool, usize)> = const { Cell::new((false, 0)) };
+}
+
+/// Records an allocation of `size` bytes on this thread.
+fn note(size: usize) {
+    let _ = TRACKING.try_with(|t| {
+        let (on, most) = t.get();
+        if on {
+            t.set((on, most.max(size)));
+        }
+    });
+}
+
+// SAFETY: every call is passed to the system allocator unchanged.
+unsafe impl GlobalAlloc for Largest {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note(layout.size());
+        // SAFETY: the caller's layout, passed on.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note(layout.size());
+        // SAFETY: as above.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note(new_size);
+        // SAFETY: as above.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: as above.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Largest = Largest;
+
+/// Runs `f` and returns its result with the largest allocation it made on this thread.
+fn largest_allocation<T>(f: impl FnOnce() -> T) -> (T, usize) {
+    TRACKING.with(|t| t.set((true, 0)));
+    let out = f();
+    let most = TRACKING.with(|t| t.replace((false, 0)).1);
+    (out, most)
+}
+
+fn config() -> ProptestConfig {
+    let cases = std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(48);
+    ProptestConfig {
+        cases,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
+
+/// A 4×4 scene writing `out.png`.
+const SCENE: &str = "s = gr.sphere('s'); s:set_material(gr.material({1, 1, 1}, {0, 0, 0}, 0))\n\
+    gr.render(s, 'out.png', 4, 4, {0, 0, 5}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0},\n\
+              {gr.light({0, 0, 5}, {1, 1, 1}, {1, 0, 0})})\n";
+
+/// Writes `text` as `name` in `dir` and returns its path.
+fn put(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Runs `caustic ARGS` in `dir`.
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    caustic().current_dir(dir).args(args).output().unwrap()
+}
+
+/// Runs `caustic ARGS` in `dir`, asserting failure; returns stderr.
+fn fails_in(dir: &Path, args: &[&str]) -> String {
+    let o = run_in(dir, args);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!o.status.success(), "{args:?} succeeded: {err}");
+    err
+}
+
+// ---------------------------------------------------------------------------------------------
+// Temporary outputs.
+
+/// A symlink planted at the name the temporary file used to have (`.NAME.tmp<PID>`, the
+/// process id being easy to guess) made every writer write through it: onto `~/.bashrc`, for
+/// an attacker who planted the link in a shared output folder. Now the temporary name is
+/// random and created exclusively: the file the link names is untouched, and each output
+/// holds what was written (bytes, an OBJ, a PNG, a photon-map file).
+#[test]
+fn a_symlink_planted_at_the_temporary_name_is_never_written_through() {
+    let dir = out_dir("hostile_files_planted");
+    let victim = put(&dir, "bashrc", "precious");
+    let film = caustic::film::Film {
+        width: 2,
+        height: 2,
+        pixels: vec![Vec3A::ONE; 4],
+        samples: vec![1; 4],
+        window: caustic::film::Window::full(2, 2),
+    };
+    let mesh = caustic::geometry::mesh::MeshData {
+        positions: vec![glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
+        triangles: vec![[0, 1, 2]],
+        ..Default::default()
+    };
+    type Writer<'a> = Box<dyn Fn(&Path) -> Result<(), String> + 'a>;
+    let writers: [(&str, Writer); 4] = [
+        (
+            "out.txt",
+            Box::new(|p| caustic::files::write_bytes(p, b"new")),
+        ),
+        (
+            "out.obj",
+            Box::new(|p| caustic::io::obj::write_obj(&mesh, p).map_err(|e| e.to_string())),
+        ),
+        (
+            "out.png",
+            Box::new(|p| caustic::io::image::write_png(&film, p).map_err(|e| e.to_string())),
+        ),
+        (
+            "maps.bin",
+            Box::new(|p| {
+                caustic::photon::file::write(p, &small_maps(50)).map_err(|e| e.to_string())
+            }),
+        ),
+    ];
+    for (name, write) in writers {
+        let planted = dir.join(format!(".{name}.tmp{}", std::process::id()));
+        std::os::unix::fs::symlink(&victim, &planted).unwrap();
+        write(&dir.join(name)).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&victim).unwrap(),
+            "precious",
+            "{name}"
+        );
+        let meta = std::fs::symlink_metadata(dir.join(name)).unwrap();
+        assert!(meta.is_file() && meta.len() > 0, "{name}: {meta:?}");
+    }
+}
+
+/// Returns the path of the file open as `file`, as the kernel names it.
+fn path_of(file: &std::fs::File) -> PathBuf {
+    use std::os::fd::AsRawFd;
+    std::fs::read_link(format!("/proc/self/fd/{}", file.as_raw_fd())).unwrap()
+}
+
+/// The temporary file a writer is given is beside the target, named `.NAME.<16 hex
+/// digits>.tmp` with 64 random bits (no process id in it), different at every write, and
+/// created with no more permission than the file it replaces (0600 here: it was 0644 with
+/// the umask, readable by all while the private file was being written).
+#[test]
+fn temporary_names_are_random_and_no_more_open_than_the_target() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = out_dir("hostile_files_names");
+    let out = put(&dir, "secret.txt", "old");
+    std::fs::set_permissions(&out, std::fs::Permissions::from_mode(0o600)).unwrap();
+    let mut names = Vec::new();
+    for _ in 0..2 {
+        caustic::files::write_replacing(&out, |file| {
+            let tmp = path_of(file);
+            assert_eq!(tmp.parent().unwrap(), dir.canonicalize().unwrap());
+            let mode = file.metadata().unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode & 0o077, 0, "temporary file mode {mode:o}");
+            names.push(tmp.file_name().unwrap().to_string_lossy().into_owned());
+            use std::io::Write;
+            file.write_all(b"new").map_err(|e| e.to_string())
+        })
+        .unwrap();
+    }
+    for name in &names {
+        let hex = name
+            .strip_prefix(".secret.txt.")
+            .and_then(|r| r.strip_suffix(".tmp"))
+            .unwrap_or_else(|| panic!("{name}"));
+        assert!(
+            hex.len() == 16 && hex.chars().all(|c| c.is_ascii_hexdigit()),
+            "{name}"
+        );
+        assert!(!name.contains(&std::process::id().to_string()), "{name}");
+    }
+    assert_ne!(names[0], names[1]);
+    let meta = std::fs::metadata(&out).unwrap();
+    assert_eq!(meta.permissions().mode() & 0o777, 0o600);
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "new");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Outputs that are inputs.
+
+/// A scene reading a mesh and a texture, for the checks of outputs against inputs.
+const TEXTURED: &str = "m = gr.material({1, 1, 1}, {0, 0, 0}, 0, 0, 1, 0, 'tex.png')\n\
+    t = gr.mesh('t', 'tri.obj'); t:set_material(m)\n\
+    gr.render(t, 'out.png', 4, 4, {0.3, 0.3, 3}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0},\n\
+              {gr.light({0, 0, 3}, {1, 1, 1}, {1, 0, 0})})\n";
+
+/// Writes the textured scene (`scene.lua`, `tri.obj`, `tex.png`) into `dir`.
+fn textured_scene(dir: &Path) {
+    put(dir, "scene.lua", TEXTURED);
+    put(
+        dir,
+        "tri.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n",
+    );
+    let film = caustic::film::Film {
+        width: 2,
+        height: 2,
+        pixels: vec![Vec3A::new(0.5, 0.25, 1.0); 4],
+        samples: vec![1; 4],
+        window: caustic::film::Window::full(2, 2),
+    };
+    caustic::io::image::write_png(&film, &dir.join("tex.png")).unwrap();
+}
+
+/// `export-mitsuba scene.lua -o scene.lua` replaced the script with XML, and `-o ./scene.lua`,
+/// a symlink or a hard link to it did the same; now each is refused before anything is
+/// written, the error naming the output and the input, and the script is unchanged.
+#[test]
+fn an_output_that_is_the_script_is_refused_under_any_name() {
+    let dir = out_dir("hostile_files_script_out");
+    textured_scene(&dir);
+    std::os::unix::fs::symlink("scene.lua", dir.join("link.xml")).unwrap();
+    std::fs::hard_link(dir.join("scene.lua"), dir.join("hard.xml")).unwrap();
+    for out in ["scene.lua", "./scene.lua", "link.xml", "hard.xml"] {
+        let err = fails_in(&dir, &["export-mitsuba", "scene.lua", "-o", out]);
+        assert!(
+            err.contains(&format!("{out}: is the same file as the input scene.lua")),
+            "{out}: {err}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(dir.join("scene.lua")).unwrap(),
+            TEXTURED
+        );
+    }
+}
+
+/// The image a render writes may not be a file the scene reads: `-o tex.png` replaced the
+/// scene's texture, and `-o tri_mesh0.obj`'s Mitsuba export wrote its mesh over an input mesh
+/// named like the exported ones. `stitch a.png b.png -o a.png` and `diff a b -o a` wrote over
+/// their inputs too.
+#[test]
+fn outputs_never_replace_the_scenes_meshes_textures_tiles_or_images() {
+    let dir = out_dir("hostile_files_inputs");
+    textured_scene(&dir);
+    let tex = std::fs::read(dir.join("tex.png")).unwrap();
+    let err = fails_in(&dir, &["render", "-q", "scene.lua", "-o", "./tex.png"]);
+    assert!(
+        err.contains("./tex.png: is the same file as the input"),
+        "{err}"
+    );
+    assert!(err.contains("tex.png"), "{err}");
+    assert_eq!(std::fs::read(dir.join("tex.png")).unwrap(), tex);
+
+    // The export writes instance 0's mesh as `x_mesh0.obj`: the scene's own mesh here.
+    let obj = std::fs::read_to_string(dir.join("tri.obj")).unwrap();
+    put(&dir, "x_mesh0.obj", &obj);
+    put(
+        &dir,
+        "x.lua",
+        &TEXTURED
+            .replace("tri.obj", "x_mesh0.obj")
+            .replace(", 'tex.png'", ""),
+    );
+    let err = fails_in(&dir, &["export-mitsuba", "x.lua", "-o", "x.xml"]);
+    assert!(
+        err.contains("x_mesh0.obj: is the same file as the input"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("x_mesh0.obj")).unwrap(),
+        obj
+    );
+    assert!(!dir.join("x.xml").exists());
+
+    for args in [
+        &["stitch", "tex.png", "-o", "tex.png"][..],
+        &["diff", "tex.png", "tex.png", "-o", "tex.png"][..],
+    ] {
+        let err = fails_in(&dir, args);
+        assert!(
+            err.contains("tex.png: is the same file as the input tex.png"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(std::fs::read(dir.join("tex.png")).unwrap(), tex);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Output folders checked before the work.
+
+/// An output in a folder that does not exist was found only when the finished image was
+/// written: `--aa-map` in such a folder left the image written and the map lost, `diff -o`
+/// printed its metrics first, `export-mitsuba -o` ran the script and built the scene, and a
+/// `gr.render` naming such a folder rendered the frame in vain. Each is now refused first,
+/// the error naming the path and the folder.
+#[test]
+fn outputs_in_missing_folders_are_refused_before_the_work() {
+    let dir = out_dir("hostile_files_folders");
+    put(&dir, "scene.lua", SCENE);
+    let err = fails_in(
+        &dir,
+        &[
+            "render",
+            "-q",
+            "scene.lua",
+            "--adaptive",
+            "--aa-map",
+            "nowhere/map.png",
+        ],
+    );
+    assert!(
+        err.contains("nowhere/map.png: the folder nowhere does not exist"),
+        "{err}"
+    );
+    assert!(
+        !dir.join("out.png").exists(),
+        "the image was rendered first"
+    );
+
+    let o = run_in(
+        &dir,
+        &["diff", "scene.lua", "scene.lua", "-o", "nowhere/d.png"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("nowhere/d.png: the folder nowhere"),
+        "{err}"
+    );
+
+    for args in [
+        &["export-mitsuba", "scene.lua", "-o", "nowhere/s.xml"][..],
+        &["photons", "-q", "scene.lua", "--save", "nowhere/maps.bin"][..],
+        &["stitch", "a.png", "-o", "nowhere/full.png"][..],
+    ] {
+        let err = fails_in(&dir, args);
+        assert!(
+            err.contains("the folder nowhere does not exist"),
+            "{args:?}: {err}"
+        );
+    }
+
+    put(
+        &dir,
+        "far.lua",
+        &SCENE.replace("'out.png'", "'nowhere/out.png'"),
+    );
+    let err = fails_in(&dir, &["render", "-q", "far.lua"]);
+    assert!(
+        err.contains("nowhere/out.png: the folder ") && err.contains("nowhere does not exist"),
+        "{err}"
+    );
+    assert!(!err.contains("wrote"), "{err}");
+
+    // A file where the folder should be, and a folder that cannot be written (not as root,
+    // who may write anywhere).
+    put(&dir, "file", "x");
+    let err = fails_in(&dir, &["render", "-q", "scene.lua", "-o", "file/out.png"]);
+    assert!(err.contains("file is not a folder"), "{err}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Photon maps for the writers above.
+
+/// Returns maps of `n` photons (and a third as many caustic ones) and a small cache, with
+/// consistent counts, as a render would save them.
+fn small_maps(n: usize) -> caustic::photon::file::SavedMaps {
+    use caustic::integrator::irradiance_cache::{IrradianceCache, Record};
+    use caustic::photon::file::{CountedMap, Fingerprint, SavedMaps};
+    use caustic::photon::trace::LightCounts;
+    use caustic::photon::{Photon, PhotonMap};
+    let photon = |i: usize| Photon {
+        position: Vec3A::new((i % 7) as f32, (i % 5) as f32 * 0.5, i as f32 * 1e-2),
+        power: Vec3A::new(1.0, 0.5, 0.25) * (1.0 + (i % 3) as f32) * 1e-3,
+        dir: Vec3A::Y,
+        normal: Vec3A::Z,
+        direct: i.is_multiple_of(2),
+    };
+    let counted = |n: usize| CountedMap {
+        map: PhotonMap::build((0..n).map(photon).collect()),
+        per_light: vec![LightCounts {
+            emitted: n as u64,
+            stored: n as u64,
+            first_hit_specular: 1,
+            ..LightCounts::default()
+        }],
+    };
+    let record = |i: usize| Record {
+        p: Vec3A::splat(i as f32),
+        n: Vec3A::Y,
+        e: Vec3A::new(0.5, 0.25, 1.0),
+        t: [Vec3A::X, Vec3A::Y, Vec3A::Z],
+        r: 0.5,
+    };
+    SavedMaps {
+        fingerprint: Fingerprint {
+            scene: 7,
+            settings: "seed 0".into(),
+        },
+        global: counted(n),
+        caustic: Some(counted(n / 3)),
+        cache: Some(IrradianceCache::new((0..3).map(record).collect(), 0.3)),
+    }
+}

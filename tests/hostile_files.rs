@@ -385,7 +385,216 @@ fn outputs_in_missing_folders_are_refused_before_the_work() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Photon maps for the writers above.
+// Photon-map files.
+
+/// A glass ball on a floor under a point light: both maps and an irradiance cache.
+const BALL: &str = "
+    white = gr.material({0.7, 0.7, 0.7}, {0, 0, 0}, 0)
+    glass = gr.material({0, 0, 0}, {0.1, 0.1, 0.1}, 50, 1.0, 1.5)
+    root = gr.node('root')
+    floor = gr.cube('floor'); floor:set_material(white); floor:scale(6, 0.5, 6); floor:translate(-3, -0.5, -5)
+    root:add_child(floor)
+    ball = gr.nh_sphere('ball', {0, 1, -2.5}, 1); ball:set_material(glass); root:add_child(ball)
+    gr.render(root, 'ball.png', 64, 48, {0, 2, 3}, {0, -0.3, -1}, {0, 1, 0}, 50, {0.1, 0.1, 0.1},
+              {gr.light({0, 5, -2}, {1, 1, 1}, {1, 0, 0}, nil, 20000)})
+";
+
+/// The photon flags the save and every render share (the fingerprint holds them).
+const PHOTON_FLAGS: [&str; 10] = [
+    "--photons",
+    "3000",
+    "--caustic-photons",
+    "3000",
+    "--gather-rays",
+    "4",
+    "--cache-rays",
+    "16",
+    "--spp",
+    "1",
+];
+
+/// Where the fields of a photon-map file are (see `caustic::photon::file`'s layout).
+#[derive(Debug)]
+struct MapFile {
+    /// Per map: its per-light counts, photon count, power base, positions and powers.
+    maps: Vec<MapAt>,
+    /// The cache's accuracy and first record, when there is a cache.
+    cache: Option<(usize, usize, usize)>,
+}
+
+#[derive(Debug)]
+struct MapAt {
+    counts: usize,
+    n: usize,
+    base: usize,
+    pos: usize,
+    power: usize,
+}
+
+/// Returns where the fields of the photon-map file `b` are.
+fn map_file(b: &[u8]) -> MapFile {
+    let u32_at = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap()) as usize;
+    let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
+    let mut at = 8 + 4 + 8;
+    at += 4 + u32_at(at);
+    let count = b[at];
+    at += 1;
+    let mut maps = Vec::new();
+    for _ in 0..count {
+        let counts = at + 4;
+        at += 4 + 24 * u32_at(at);
+        let n = u64_at(at);
+        let base = at + 16;
+        let pos = base + 4;
+        let power = pos + 16 * n;
+        maps.push(MapAt {
+            counts,
+            n,
+            base,
+            pos,
+            power,
+        });
+        at = pos + 20 * n;
+    }
+    let cache = (b[at] == 1).then(|| (at + 1, at + 13, u64_at(at + 5)));
+    MapFile { maps, cache }
+}
+
+/// Recomputes the CRC-32 at the end of the photon-map file `b`.
+fn reseal(b: &mut [u8]) {
+    let end = b.len() - 4;
+    let crc = crc32fast::hash(&b[..end]);
+    b[end..].copy_from_slice(&crc.to_le_bytes());
+}
+
+/// Overwrites `b` at `at` with `values` (little-endian f32s).
+fn put_f32s(b: &mut [u8], at: usize, values: &[f32]) {
+    for (k, v) in values.iter().enumerate() {
+        b[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
+    }
+}
+
+/// One forged edit of a photon-map file, and what the error must say.
+type Forgery = (&'static str, fn(&mut [u8], &MapFile), &'static str);
+
+/// Forged photon-map files whose checksum holds, each with a field out of the renderer's
+/// range, and the error expected: every one was read and rendered (infinite pixels from a
+/// power base of 900, black ones from -900, caustics from photons moved out of the scene, a
+/// cache interpolating irradiance of 1e30 or -1, a normal of length 5, a radius a thousand
+/// times the scene). The file is damaged only in the field named.
+const FORGERIES: [Forgery; 11] = [
+    (
+        "base 900",
+        |b, f| b[f.maps[0].base..][..4].copy_from_slice(&900i32.to_le_bytes()),
+        "the global map: power base exponent 900",
+    ),
+    (
+        "base -900",
+        |b, f| b[f.maps[0].base..][..4].copy_from_slice(&(-900i32).to_le_bytes()),
+        "the global map: power base exponent -900",
+    ),
+    (
+        "code",
+        |b, f| b[f.maps[1].power..][..4].copy_from_slice(&((5u32 << 27) | 1).to_le_bytes()),
+        "the caustic map: photon 0's power code 0x28000001 is not normalised",
+    ),
+    (
+        "positions",
+        |b, f| {
+            let m = &f.maps[0];
+            for k in 0..3 * m.n {
+                let at = m.pos + 4 * k;
+                let v = f32::from_le_bytes(b[at..at + 4].try_into().unwrap());
+                put_f32s(b, at, &[v * 1048576.0]);
+            }
+        },
+        "lies outside the scene",
+    ),
+    (
+        "counts",
+        |b, f| b[f.maps[0].counts..][..8].copy_from_slice(&0u64.to_le_bytes()),
+        "the global map: light 0's counts (emitted 0",
+    ),
+    (
+        "accuracy",
+        |b, f| put_f32s(b, f.cache.unwrap().0, &[0.9]),
+        "the irradiance cache: accuracy 0.9, this frame's is 0.3",
+    ),
+    (
+        "irradiance",
+        |b, f| put_f32s(b, f.cache.unwrap().1 + 24, &[1e30]),
+        "the irradiance cache: record 0: its irradiance",
+    ),
+    (
+        "negative",
+        |b, f| put_f32s(b, f.cache.unwrap().1 + 28, &[-1.0]),
+        "the irradiance cache: record 0: its irradiance",
+    ),
+    (
+        "normal",
+        |b, f| put_f32s(b, f.cache.unwrap().1 + 12, &[0.0, 5.0, 0.0]),
+        "the irradiance cache: record 0: its normal",
+    ),
+    (
+        "radius",
+        |b, f| put_f32s(b, f.cache.unwrap().1 + 72, &[1e4]),
+        "the irradiance cache: record 0's radius 10000 is outside this frame's",
+    ),
+    (
+        "place",
+        |b, f| put_f32s(b, f.cache.unwrap().1, &[1e6]),
+        "the irradiance cache: record 0 at [1000000",
+    ),
+];
+
+/// A photon-map file whose checksum holds but whose fields are out of range is refused by
+/// `render --photon-maps` with an error naming the file, the map or cache, the field and the
+/// photon or record; the file as saved still renders.
+#[test]
+fn forged_photon_map_fields_are_refused_though_the_checksum_holds() {
+    let dir = out_dir("hostile_files_maps");
+    put(&dir, "ball.lua", BALL);
+    let saved = run_in(
+        &dir,
+        &[
+            &["photons", "-q", "ball.lua", "--save", "maps.bin"][..],
+            &PHOTON_FLAGS,
+        ]
+        .concat(),
+    );
+    assert!(
+        saved.status.success(),
+        "{}",
+        String::from_utf8_lossy(&saved.stderr)
+    );
+    let good = std::fs::read(dir.join("maps.bin")).unwrap();
+    let layout = map_file(&good);
+    assert!(layout.maps.len() == 2 && layout.maps[1].n > 0, "{layout:?}");
+    assert!(layout.cache.is_some_and(|c| c.2 > 0), "{layout:?}");
+    let render = |file: &str| {
+        let args = [
+            &["render", "-q", "ball.lua", "--photon-maps", file][..],
+            &PHOTON_FLAGS,
+        ]
+        .concat();
+        run_in(&dir, &args)
+    };
+    let o = render("maps.bin");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for (name, forge, expected) in FORGERIES {
+        let mut b = good.clone();
+        forge(&mut b, &layout);
+        reseal(&mut b);
+        std::fs::write(dir.join("forged.bin"), &b).unwrap();
+        let o = render("forged.bin");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name}: accepted");
+        assert!(
+            err.contains("forged.bin: ") && err.contains(expected),
+            "{name}: {err}"
+        );
+    }
+}
 
 /// Returns maps of `n` photons (and a third as many caustic ones) and a small cache, with
 /// consistent counts, as a render would save them.
@@ -427,3 +636,99 @@ fn small_maps(n: usize) -> caustic::photon::file::SavedMaps {
         cache: Some(IrradianceCache::new((0..3).map(record).collect(), 0.3)),
     }
 }
+
+/// One edit of a photon-map file: a byte, or a whole word set to a value a forger would try.
+#[derive(Clone, Debug)]
+enum MapEdit {
+    Byte(usize, u8),
+    Word(usize, u32),
+    Insert(usize, u8),
+    Delete(usize),
+}
+
+/// Words a forger tries: NaN, infinities, huge and tiny floats, negative numbers, large
+/// counts and exponents.
+const WORDS: [u32; 10] = [
+    0x7fc0_0000,
+    0x7f80_0000,
+    0xff80_0000,
+    0x7149_f2ca, // 1e30
+    0x0000_0001,
+    0xbf80_0000, // -1
+    0xffff_ffff,
+    0x8000_0000,
+    0x0000_0384, // 900
+    0x4000_0000,
+];
+
+fn map_edit() -> impl Strategy<Value = MapEdit> {
+    prop_oneof![
+        (any::<usize>(), any::<u8>()).prop_map(|(i, v)| MapEdit::Byte(i, v)),
+        (any::<usize>(), 0..WORDS.len()).prop_map(|(i, w)| MapEdit::Word(i, WORDS[w])),
+        (any::<usize>(), any::<u32>()).prop_map(|(i, w)| MapEdit::Word(i, w)),
+        (any::<usize>(), any::<u8>()).prop_map(|(i, v)| MapEdit::Insert(i, v)),
+        any::<usize>().prop_map(MapEdit::Delete),
+    ]
+}
+
+/// Returns `valid` with `edits` applied before its checksum, and the checksum recomputed.
+fn forge(valid: &[u8], edits: &[MapEdit]) -> Vec<u8> {
+    let mut body = valid[..valid.len() - 4].to_vec();
+    for e in edits {
+        let n = body.len();
+        match *e {
+            MapEdit::Byte(i, v) => body[i % n] = v,
+            MapEdit::Word(i, w) => {
+                let at = (i % (n / 4)) * 4;
+                body[at..at + 4].copy_from_slice(&w.to_le_bytes());
+            }
+            MapEdit::Insert(i, v) => body.insert(i % (n + 1), v),
+            MapEdit::Delete(i) => {
+                body.remove(i % n);
+            }
+        }
+    }
+    let crc = crc32fast::hash(&body);
+    body.extend_from_slice(&crc.to_le_bytes());
+    body
+}
+
+/// What a frame expects of `small_maps`: its photons and records inside a box of the scene.
+fn small_expected() -> caustic::photon::file::Expected {
+    caustic::photon::file::Expected {
+        bounds: Some((Vec3A::splat(-1.0), Vec3A::splat(10.0))),
+        lights: 1,
+        caustic: true,
+        cache: Some((0.3, (0.1, 1.0))),
+    }
+}
+
+proptest! {
+    #![proptest_config(config())]
+
+    /// A photon-map file with edits and its checksum recomputed is read as maps (that the
+    /// frame's check then accepts or refuses) or refused, never a panic; the largest
+    /// allocation reading it is a few times its size (a count read from the file cannot
+    /// allocate more than the file holds).
+    #[test]
+    fn fuzz_photon_map_files_with_a_valid_checksum(edits in prop::collection::vec(map_edit(), 1..6)) {
+        static VALID: std::sync::OnceLock<(PathBuf, Vec<u8>)> = std::sync::OnceLock::new();
+        let (dir, valid) = VALID.get_or_init(|| {
+            let dir = out_dir("hostile_files_fuzz_maps");
+            caustic::photon::file::write(&dir.join("maps.bin"), &small_maps(300)).unwrap();
+            let valid = std::fs::read(dir.join("maps.bin")).unwrap();
+            (dir, valid)
+        });
+        let path = dir.join("forged.bin");
+        let bytes = forge(valid, &edits);
+        std::fs::write(&path, &bytes).unwrap();
+        let (read, most) = largest_allocation(|| caustic::photon::file::read(&path));
+        if let Ok(maps) = read {
+            let _ = maps.check(&small_expected());
+        }
+        // Arrays of at most the photons the file holds, the reader's buffers (1 MiB) and the
+        // cache's grid (at most 2^20 cells, whatever its records).
+        prop_assert!(most <= 4 * bytes.len() + (16 << 20), "{most} bytes allocated for {}", bytes.len());
+    }
+}
+

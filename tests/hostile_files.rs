@@ -732,3 +732,229 @@ proptest! {
     }
 }
 
+// ---------------------------------------------------------------------------------------------
+// Stitch inputs.
+
+/// Files by name, with their bytes.
+type Files = Vec<(&'static str, Vec<u8>)>;
+
+/// Writes the three kinds of EXR file a tile may come as into `dir` and returns their bytes:
+/// caustic's own (single-part scan lines, run-length coded), a multi-part file and a tiled
+/// one (ZIP); `own.png` is caustic's PNG of the same tile.
+fn exr_files(dir: &Path) -> Files {
+    use exr::prelude::*;
+    let layer = |attributes: LayerAttributes, encoding: Encoding| {
+        Layer::new(
+            (4, 4),
+            attributes,
+            encoding,
+            SpecificChannels::rgb(|p: Vec2<usize>| (p.x() as f32, p.y() as f32, 0.5f32)),
+        )
+    };
+    let film = caustic::film::Film {
+        width: 4,
+        height: 4,
+        pixels: (0..16).map(|i| Vec3A::splat(i as f32 * 0.1)).collect(),
+        samples: vec![1; 16],
+        window: caustic::film::Window {
+            x0: 4,
+            y0: 0,
+            x1: 8,
+            y1: 4,
+            full_width: 8,
+            full_height: 4,
+        },
+    };
+    let own = dir.join("own.exr");
+    caustic::io::image::write_png(&film, &dir.join("own.png")).unwrap();
+    caustic::io::image::write_image(&film, &own, caustic::io::image::Tonemap::Clamp).unwrap();
+    let display = ImageAttributes::new(IntegerBounds::from_dimensions((4, 4)));
+    let parts = Image::from_layers(
+        display.clone(),
+        SmallVec::from_vec(vec![
+            layer(LayerAttributes::named("a"), Encoding::FAST_LOSSLESS),
+            layer(LayerAttributes::named("b"), Encoding::FAST_LOSSLESS),
+        ]),
+    );
+    parts.write().to_file(dir.join("parts.exr")).unwrap();
+    let tiled = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::Tiles(Vec2(2, 2)),
+        line_order: LineOrder::Increasing,
+    };
+    Image::from_layers(
+        display,
+        SmallVec::from_vec(vec![layer(LayerAttributes::default(), tiled)]),
+    )
+    .write()
+    .to_file(dir.join("tiled.exr"))
+    .unwrap();
+    ["own.exr", "parts.exr", "tiled.exr"]
+        .map(|n| (n, std::fs::read(dir.join(n)).unwrap()))
+        .into()
+}
+
+/// Returns `bytes` with the four `i32`s after the attribute `name` (a `box2i`) replaced.
+fn with_box(bytes: &[u8], name: &str, b: [i32; 4]) -> Vec<u8> {
+    let key = [name.as_bytes(), b"\0box2i\0"].concat();
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key)
+        .unwrap_or_else(|| panic!("no {name}"))
+        + key.len()
+        + 4;
+    let mut out = bytes.to_vec();
+    for (k, v) in b.iter().enumerate() {
+        out[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    out
+}
+
+/// A multi-part EXR was read by its first part whatever the others held, and a tiny tile whose
+/// header claims an 8192x8192 data window made stitch allocate a gigabyte before finding the
+/// file holds no such pixels; a tile claiming a huge image around its few pixels made the
+/// coverage map of the whole image (a gigabyte) before finding the pixels uncovered; a PNG
+/// tile's header claiming 8192x8192 pixels allocated its buffer before inflating anything.
+/// Now each is refused by its header, allocating a few times the file's size.
+#[test]
+fn stitch_refuses_multi_part_and_forged_headers_before_allocating() {
+    let dir = out_dir("hostile_files_stitch");
+    let files = exr_files(&dir);
+    let own = &files[0].1;
+    let stitch = |tiles: &[&str]| {
+        let paths: Vec<PathBuf> = tiles.iter().map(|t| dir.join(t)).collect();
+        largest_allocation(|| caustic::io::stitch::stitch(&paths, &dir.join("full.exr")))
+    };
+    let (r, _) = stitch(&["parts.exr"]);
+    let err = r.unwrap_err().to_string();
+    assert!(
+        err.contains("parts.exr: a multi-part EXR (2 parts)"),
+        "{err}"
+    );
+
+    let big = with_box(own, "dataWindow", [0, 0, 8191, 8191]);
+    let big = with_box(&big, "displayWindow", [0, 0, 8191, 8191]);
+    std::fs::write(dir.join("big.exr"), &big).unwrap();
+    let (r, most) = stitch(&["big.exr"]);
+    let err = r.unwrap_err().to_string();
+    assert!(
+        err.contains("big.exr: its 8192x8192 pixels") && err.contains("can hold"),
+        "{err}"
+    );
+    assert!(most < 64 * big.len() + (1 << 20), "{most} bytes allocated");
+
+    let wide = with_box(own, "displayWindow", [0, 0, 8191, 8191]);
+    std::fs::write(dir.join("wide.exr"), &wide).unwrap();
+    let (r, most) = stitch(&["wide.exr"]);
+    let err = r.unwrap_err().to_string();
+    assert!(
+        err.contains("the tiles leave pixel (0, 0) of the 8192x8192 image uncovered"),
+        "{err}"
+    );
+    assert!(most < 1 << 20, "{most} bytes allocated");
+
+    let png = png_claiming(8192, 8192);
+    std::fs::write(dir.join("big.png"), &png).unwrap();
+    let paths = [dir.join("big.png")];
+    let (r, most) =
+        largest_allocation(|| caustic::io::stitch::stitch(&paths, &dir.join("full.png")));
+    let err = r.unwrap_err().to_string();
+    assert!(
+        err.contains("big.png: its header claims 8192x8192 pixels, more than"),
+        "{err}"
+    );
+    assert!(most < 1 << 20, "{most} bytes allocated");
+}
+
+/// Returns a PNG of a few dozen bytes whose header claims `w × h` 8-bit RGB pixels, a whole
+/// image by its window record, and whose data is a few zero bytes.
+fn png_claiming(w: u32, h: u32) -> Vec<u8> {
+    let chunk = |kind: &[u8], data: &[u8]| {
+        let body = [kind, data].concat();
+        let crc = crc32fast::hash(&body);
+        [
+            &(data.len() as u32).to_be_bytes()[..],
+            &body,
+            &crc.to_be_bytes(),
+        ]
+        .concat()
+    };
+    let ihdr = [&w.to_be_bytes()[..], &h.to_be_bytes(), &[8, 2, 0, 0, 0]].concat();
+    let text = format!("caustic-window\00 0 {w} {h} {w} {h}");
+    let idat = [0x78, 0x9c, 0x63, 0x00, 0x00, 0x00, 0x01, 0x00, 0x01];
+    [
+        &b"\x89PNG\r\n\x1a\n"[..],
+        &chunk(b"IHDR", &ihdr),
+        &chunk(b"tEXt", text.as_bytes()),
+        &chunk(b"IDAT", &idat),
+        &chunk(b"IEND", &[]),
+    ]
+    .concat()
+}
+
+/// One edit of a byte string: overwrite a byte, set a 32-bit word, insert, delete or truncate.
+#[derive(Clone, Debug)]
+enum Edit {
+    Set(usize, u8),
+    Word(usize, u32),
+    Insert(usize, u8),
+    Delete(usize),
+    Truncate(usize),
+}
+
+fn edit() -> impl Strategy<Value = Edit> {
+    prop_oneof![
+        (any::<usize>(), any::<u8>()).prop_map(|(i, b)| Edit::Set(i, b)),
+        (any::<usize>(), any::<u32>()).prop_map(|(i, w)| Edit::Word(i, w)),
+        (any::<usize>(), 0..WORDS.len()).prop_map(|(i, w)| Edit::Word(i, WORDS[w])),
+        (any::<usize>(), any::<u8>()).prop_map(|(i, b)| Edit::Insert(i, b)),
+        any::<usize>().prop_map(Edit::Delete),
+        any::<usize>().prop_map(Edit::Truncate),
+    ]
+}
+
+/// Returns `valid` with `edits` applied.
+fn mutate(valid: &[u8], edits: &[Edit]) -> Vec<u8> {
+    let mut b = valid.to_vec();
+    for e in edits {
+        let n = b.len().max(1);
+        match *e {
+            Edit::Set(i, v) if !b.is_empty() => b[i % n] = v,
+            Edit::Word(i, w) if b.len() >= 4 => {
+                let at = i % (b.len() - 3);
+                b[at..at + 4].copy_from_slice(&w.to_le_bytes());
+            }
+            Edit::Insert(i, v) => b.insert(i % (b.len() + 1), v),
+            Edit::Delete(i) if !b.is_empty() => {
+                b.remove(i % n);
+            }
+            Edit::Truncate(i) => b.truncate(i % (b.len() + 1)),
+            _ => {}
+        }
+    }
+    b
+}
+
+proptest! {
+    #![proptest_config(config())]
+
+    /// An EXR file (caustic's own tile, a multi-part file, a tiled one), mutated and given to
+    /// stitch's reader, is read or refused, never a panic; its largest allocation is bounded
+    /// by the file's size times what its compression can expand (deflate's 1032, the most),
+    /// with 1 MiB for the reader's own tables.
+    #[test]
+    fn fuzz_exr_tiles_mutated(which in 0usize..3, edits in prop::collection::vec(edit(), 1..6)) {
+        static FILES: std::sync::OnceLock<(PathBuf, Files)> = std::sync::OnceLock::new();
+        let (dir, files) = FILES.get_or_init(|| {
+            let dir = out_dir("hostile_files_fuzz_exr");
+            let files = exr_files(&dir);
+            (dir, files)
+        });
+        let bytes = mutate(&files[which].1, &edits);
+        let path = dir.join("mutated.exr");
+        std::fs::write(&path, &bytes).unwrap();
+        let (_, most) = largest_allocation(|| caustic::io::exr::read(&path, caustic::film::MAX_PIXELS));
+        prop_assert!(most <= 1100 * bytes.len() + (1 << 20), "{most} bytes allocated for {}", bytes.len());
+    }
+}
+

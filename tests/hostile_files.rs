@@ -958,3 +958,46 @@ proptest! {
     }
 }
 
+// ---------------------------------------------------------------------------------------------
+// caustic diff.
+
+/// Writes a `w × h` PFM image of `pixels` (row 0 at the top) at `path`.
+fn pfm(path: &Path, w: u32, h: u32, pixels: &[Vec3A]) {
+    std::fs::write(path, caustic::io::pfm::encode(w, h, pixels)).unwrap();
+}
+
+/// `caustic diff` of an image with a NaN pixel against a reference printed an RMSE of 0 and
+/// succeeded (the NaN squared error was clamped to 0), and an infinite pixel gave an infinite
+/// RMSE with no word of where. Now a NaN or an infinity in the image or in either reference
+/// fails the command, naming the file, the count of such pixels and the first.
+#[test]
+fn diff_names_nan_and_infinite_pixels_instead_of_a_silent_zero() {
+    let dir = out_dir("hostile_files_diff");
+    let ones = vec![Vec3A::ONE; 12];
+    let mut bad = ones.clone();
+    bad[5] = Vec3A::new(1.0, f32::NAN, 1.0); // (1, 1) in a 4-wide image
+    bad[10] = Vec3A::new(f32::INFINITY, 1.0, 1.0); // (2, 2)
+    pfm(&dir.join("ref.pfm"), 4, 3, &ones);
+    pfm(&dir.join("bad.pfm"), 4, 3, &bad);
+    for args in [
+        &["diff", "bad.pfm", "ref.pfm"][..],
+        &["diff", "ref.pfm", "bad.pfm"][..],
+        &["diff", "ref.pfm", "ref.pfm", "--second", "bad.pfm"][..],
+    ] {
+        let o = run_in(&dir, args);
+        let (out, err) = (
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr),
+        );
+        assert!(!o.status.success(), "{args:?}: {out}");
+        assert!(
+            err.contains("bad.pfm: 2 pixels are not finite (NaN or infinite), the first at (1, 1)"),
+            "{args:?}: {err}"
+        );
+        assert!(!out.contains("RMSE"), "{args:?}: {out}");
+    }
+    // Outside the region compared, a NaN does not matter.
+    let o = run_in(&dir, &["diff", "bad.pfm", "ref.pfm", "--region", "0,0,1,3"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success() && out.contains("RMSE 0.000000"), "{out}");
+}

@@ -540,6 +540,25 @@ fn parse_region(region: Option<&[u32]>, width: u32, height: u32) -> Result<Regio
     }
 }
 
+/// Returns an error naming `path` when its image `img` has a NaN or infinite value in
+/// `region`: how many such pixels, and the first.
+pub(crate) fn check_finite(
+    img: &crate::metrics::Image,
+    path: &std::path::Path,
+    region: Region,
+) -> Result<()> {
+    match img.non_finite(region) {
+        None => Ok(()),
+        Some((count, (x, y))) => Err(Error::File {
+            path: path.to_path_buf(),
+            message: format!(
+                "{count} pixels are not finite (NaN or infinite), the first at ({x}, {y}): \
+                 no error metric can be computed"
+            ),
+        }),
+    }
+}
+
 /// Returns an error naming `out` when it cannot be written ([`crate::files::check_output`]: a
 /// special file, a folder that does not exist or cannot be written to) or is the same file as
 /// one of `inputs` ([`crate::files::check_not_input`]).
@@ -1003,6 +1022,9 @@ fn diff_command(args: DiffArgs) -> Result<()> {
         }
     }
     let region = parse_region(args.region.as_deref(), a.width, a.height)?;
+    for (img, path) in [(&a, &args.image), (&r1, &args.reference), (&r2, second)] {
+        check_finite(img, path, region)?;
+    }
     let m = Metrics::against_two(&a, &r1, &r2, region);
     println!("mean ratio {:.5}", m.mean_ratio);
     println!("mean error {:+.5}", m.mean_error);

@@ -109,6 +109,10 @@ pub fn study_command(args: StudyArgs) -> Result<()> {
         None => r1.clone(),
     };
     let region = super::parse_region(args.region.as_deref(), r1.width, r1.height)?;
+    let second = args.second.as_ref().unwrap_or(&args.reference);
+    for (img, path) in [(&r1, &args.reference), (&r2, second)] {
+        super::check_finite(img, path, region)?;
+    }
     let images = args.output.join("images");
     std::fs::create_dir_all(&images).map_err(|e| Error::File {
         path: images.clone(),

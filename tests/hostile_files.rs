@@ -818,6 +818,8 @@ fn with_box(bytes: &[u8], name: &str, b: [i32; 4]) -> Vec<u8> {
 /// Now each is refused by its header, allocating a few times the file's size.
 #[test]
 fn stitch_refuses_multi_part_and_forged_headers_before_allocating() {
+    let (v, seen) = largest_allocation(|| vec![1u8; 3 << 20]);
+    assert!(seen >= v.len(), "the allocation tracker saw {seen} bytes");
     let dir = out_dir("hostile_files_stitch");
     let files = exr_files(&dir);
     let own = &files[0].1;

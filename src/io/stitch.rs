@@ -8,6 +8,13 @@
 //! or HDR) with every value as rendered. Every pixel must be covered by exactly one tile, all
 //! tiles must belong to one image size, and a mix of PNG and EXR tiles is refused, as is the
 //! marked image of an interrupted render.
+//!
+//! A tile is a file from anyone (a farm's workers): nothing is allocated from its header
+//! before the header is bounded. Multi-part and deep EXRs are refused; windows and tile
+//! sizes hold at most [`MAX_PIXELS`]; the pixels a header claims may not decode to more
+//! than its file's bytes can expand to under its compression ([`super::exr::max_expansion`];
+//! PNG: deflate's 1032 times); and overlaps and uncovered pixels are found before the map of
+//! the whole image is made.
 
 use super::image::{
     Format, PARTIAL_KEY, WINDOW_KEY, output_format, parse_window_record, window_record,

@@ -22,6 +22,16 @@
 //! comment that moves a line, refuses the maps: the scene hash cannot tell which edits leave
 //! the photons alone.
 //!
+//! A checksum only says the file is as written, not that an honest program wrote it: every
+//! field is also checked against what the renderer can use, and an error names the map or
+//! the cache, the field and the photon or record. When the file is read: the kd-tree's
+//! invariants, the power codes (a base in `[-179, 33]`, normalised codes, the brightest
+//! photon at the top exponent: see `store::PowerCodec::validate`), per-light counts a trace
+//! can give, and cache records whose numbers are in range ([`MAX_RECORD_VALUE`], unit
+//! normals, non-negative irradiance). When a frame takes the maps ([`SavedMaps::check`]):
+//! its light count, caustic map and cache, photons and records inside the scene, the cache's
+//! accuracy and radius range.
+//!
 //! # Layout (little-endian)
 //! | bytes | contents |
 //! |---|---|

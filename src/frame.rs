@@ -25,7 +25,7 @@ use crate::integrator::photon_map::{Gi, GiSettings, GiStats, Preloaded, planned}
 use crate::integrator::plan::plan_for;
 use crate::integrator::{GiMode, Integrator, Settings, plan};
 use crate::lua::MAX_PIXELS;
-use crate::photon::file::{CountedMap, Fingerprint, Fnv, SavedMaps};
+use crate::photon::file::{CountedMap, Expected, Fingerprint, Fnv, SavedMaps};
 use crate::photon::trace::{MAX_PHOTONS, MapKind};
 use crate::progress::Progress;
 use crate::scene::{Scene, build_scene};
@@ -266,7 +266,31 @@ fn read_maps(
             saved.fingerprint.settings, want.settings
         )));
     }
+    saved
+        .check(&expected(scene, &gi_settings, size))
+        .map_err(bad)?;
     Ok(Preloaded::new(saved, start.elapsed()))
+}
+
+/// Returns what a frame of `scene` at `size` with `gi` expects of photon maps read from a file
+/// beyond their fingerprint ([`crate::photon::file::Expected`]).
+fn expected(scene: &Scene, gi: &GiSettings, size: (u32, u32)) -> Expected {
+    use crate::integrator::irradiance_cache::{MIN_IMAGE_SIZE, radius_range};
+    let b = scene
+        .instances
+        .iter()
+        .fold(crate::accel::Bounds::EMPTY, |a, i| a.union(i.bounds));
+    let gathers = matches!(
+        gi.indirect,
+        crate::integrator::photon_map::Indirect::Gather { .. }
+    );
+    let caches = gi.cache.enabled && gathers && size.0.max(size.1) >= MIN_IMAGE_SIZE;
+    Expected {
+        bounds: b.is_finite().then_some((b.min, b.max)),
+        lights: scene.lights.len(),
+        caustic: gi.caustics,
+        cache: caches.then(|| (gi.cache.accuracy, radius_range(scene, size))),
+    }
 }
 
 /// Returns an error at the light's script line when its photon count (its `num_photons` or its

@@ -28,6 +28,23 @@ impl Image {
     fn get(&self, x: u32, y: u32) -> Vec3A {
         self.pixels[(y * self.width + x) as usize]
     }
+
+    /// Returns how many pixels of `region` have a channel that is NaN or infinite, and the
+    /// first of them in row order, or `None` when every value there is finite: the metrics of
+    /// such an image mean nothing (a NaN even reads as an RMSE of 0).
+    pub fn non_finite(&self, region: Region) -> Option<(u64, (u32, u32))> {
+        let mut found = None;
+        let mut count = 0u64;
+        for y in region.y0..region.y1 {
+            for x in region.x0..region.x1 {
+                if !self.get(x, y).is_finite() {
+                    count += 1;
+                    found.get_or_insert((x, y));
+                }
+            }
+        }
+        found.map(|first| (count, first))
+    }
 }
 
 /// A window of pixels `[x0, x1) × [y0, y1)`.

@@ -154,15 +154,16 @@ fn special_files_are_refused_as_outputs_and_inputs() {
 }
 
 /// A process that receives SIGTERM while writing an output removes its temporary file and
-/// still dies by the signal (the `.tmp<PID>` file was left behind). Run in a child process
+/// still dies by the signal (the `.tmp` file was left behind). Run in a child process
 /// (this test binary again), which signals itself from inside the write.
 #[test]
 fn sigterm_while_writing_removes_the_temporary_file() {
     let dir =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-output/stability_output_sigterm");
     if std::env::var_os("STABILITY_SIGTERM_CHILD").is_some() {
-        let _ = caustic::files::write_replacing(&dir.join("out.png"), |tmp| {
-            std::fs::write(tmp, b"partial").map_err(|e| e.to_string())?;
+        let _ = caustic::files::write_replacing(&dir.join("out.png"), |file| {
+            use std::io::Write;
+            file.write_all(b"partial").map_err(|e| e.to_string())?;
             // SAFETY: raising a signal in this process is always allowed.
             unsafe { libc::raise(libc::SIGTERM) };
             Ok(())

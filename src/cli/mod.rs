@@ -520,6 +520,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render_command(args),
         Command::Info(args) => info_command(args),
         Command::Stitch(args) => {
+            let tiles: Vec<&std::path::Path> = args.tiles.iter().map(PathBuf::as_path).collect();
+            check_out(&args.output, &tiles)?;
             let s = crate::io::stitch::stitch(&args.tiles, &args.output)?;
             eprintln!(
                 "wrote {} ({}x{} from {} tiles)",
@@ -565,6 +567,62 @@ fn parse_region(region: Option<&[u32]>, width: u32, height: u32) -> Result<Regio
     }
 }
 
+/// Returns an error naming `path` when its image `img` has a NaN or infinite value in
+/// `region`: how many such pixels, and the first.
+pub(crate) fn check_finite(
+    img: &crate::metrics::Image,
+    path: &std::path::Path,
+    region: Region,
+) -> Result<()> {
+    match img.non_finite(region) {
+        None => Ok(()),
+        Some((count, (x, y))) => Err(Error::File {
+            path: path.to_path_buf(),
+            message: format!(
+                "{count} pixels are not finite (NaN or infinite), the first at ({x}, {y}): \
+                 no error metric can be computed"
+            ),
+        }),
+    }
+}
+
+/// Returns an error naming `out` when it cannot be written ([`crate::files::check_output`]: a
+/// special file, a folder that does not exist or cannot be written to) or is the same file as
+/// one of `inputs` ([`crate::files::check_not_input`]).
+fn check_out(out: &std::path::Path, inputs: &[&std::path::Path]) -> Result<()> {
+    crate::files::check_output(out)
+        .and_then(|_| crate::files::check_not_input(out, inputs))
+        .map_err(|message| Error::File {
+            path: out.to_path_buf(),
+            message,
+        })
+}
+
+/// Returns the files `desc` names that a render reads: mesh files, textures and normal maps.
+fn scene_inputs(desc: &SceneDesc) -> Vec<&std::path::Path> {
+    let meshes = desc.meshes.iter().filter_map(|m| match &m.source {
+        crate::desc::MeshSource::File { path, .. } => Some(path.as_path()),
+        crate::desc::MeshSource::Inline { .. } => None,
+    });
+    let images = desc
+        .materials
+        .iter()
+        .flat_map(|m| m.texture.iter().chain(&m.bump))
+        .map(PathBuf::as_path);
+    meshes.chain(images).collect()
+}
+
+/// Returns the command line's inputs of a command that runs `scene`: the script, and the
+/// photon-map file `maps` when one is read.
+fn script_inputs<'a>(
+    scene: &'a std::path::Path,
+    maps: Option<&'a PathBuf>,
+) -> Vec<&'a std::path::Path> {
+    std::iter::once(scene)
+        .chain(maps.map(PathBuf::as_path))
+        .collect()
+}
+
 fn render_command(args: RenderArgs) -> Result<()> {
     settings::check_scale(args.scale)?;
     if args.stats || args.heatmap.is_some() {
@@ -573,11 +631,16 @@ fn render_command(args: RenderArgs) -> Result<()> {
     if let Some(n) = args.threads {
         set_threads(n)?;
     }
+    let inputs = script_inputs(&args.scene, args.photon_maps.as_ref());
+    for out in args.output.iter().chain(&args.aa_map) {
+        check_out(out, &inputs)?;
+    }
     let rendered = Rc::new(Cell::new(0u32));
     let count = Rc::clone(&rendered);
     let output = args.output.clone();
     let job = RenderJob::from_args(&args)?;
     let (argv, scene) = (args.argv.clone(), args.scene.clone());
+    let maps = args.photon_maps.clone();
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
         count.set(count.get() + 1);
         let out = match &output {
@@ -594,9 +657,11 @@ fn render_command(args: RenderArgs) -> Result<()> {
                 ));
             }
         };
+        let mut inputs = script_inputs(&scene, maps.as_ref());
+        inputs.extend(scene_inputs(desc));
         match job_with_settings(&job, &argv, &scene, r)? {
-            Some(own) => render_one(desc, r, &own, &out),
-            None => render_one(desc, r, &job, &out),
+            Some(own) => render_one(desc, r, &own, &out, &inputs),
+            None => render_one(desc, r, &job, &out, &inputs),
         }
     });
     // Ctrl-C stops the render and writes what it has (crate::interrupt), unless --no-partial.
@@ -625,14 +690,14 @@ fn render_command(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// Renders and writes the image of one `gr.render` call.
-fn render_one(
-    desc: &SceneDesc,
-    r: &RenderDesc,
+/// Returns an error unless every file a render of `out` with `job` may write (the image, the
+/// ray-count map, the heatmap, the image of an interrupted render) has a format it can be
+/// written in, can be written, and is none of `inputs`: checked before the render is spent.
+fn check_render_outputs(
     job: &RenderJob,
     out: &std::path::Path,
+    inputs: &[&std::path::Path],
 ) -> Result<()> {
-    // Refuse an output the image cannot be written to before spending the render on it.
     let format = crate::io::image::output_format(out)?;
     if job.crop.is_some()
         && !matches!(
@@ -645,10 +710,6 @@ fn render_one(
             out.display()
         )));
     }
-    crate::files::check_output(out).map_err(|message| Error::File {
-        path: out.to_path_buf(),
-        message,
-    })?;
     if let Some(map) = &job.aa_map
         && crate::io::image::output_format(map)? != crate::io::image::Format::Png
     {
@@ -657,6 +718,29 @@ fn render_one(
             map.display()
         )));
     }
+    let heat = job.heatmap.map(|m| heatmap_path(out, m));
+    let partial = crate::io::image::partial_path(out);
+    for path in [
+        Some(out),
+        job.aa_map.as_deref(),
+        heat.as_deref(),
+        Some(&partial),
+    ] {
+        path.map_or(Ok(()), |p| check_out(p, inputs))?;
+    }
+    Ok(())
+}
+
+/// Renders and writes the image of one `gr.render` call; every file it may write is checked
+/// first, against the command's `inputs` too.
+fn render_one(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    job: &RenderJob,
+    out: &std::path::Path,
+    inputs: &[&std::path::Path],
+) -> Result<()> {
+    check_render_outputs(job, out, inputs)?;
     let start = Instant::now();
     let bar = Bar::new(job.progress, out);
     let progress = report::Snapshots {
@@ -724,6 +808,14 @@ fn render_one(
     Ok(())
 }
 
+/// Returns where the heatmap of `measure` for the image `out` goes: `NAME.heat-MEASURE.png`
+/// beside it.
+fn heatmap_path(out: &std::path::Path, measure: crate::io::heatmap::Measure) -> std::path::PathBuf {
+    let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned());
+    let name = format!("{}.heat-{}.png", stem.unwrap_or_default(), measure.name());
+    out.with_file_name(name)
+}
+
 /// Writes the heatmap of `measure` beside `out` as `NAME.heat-MEASURE.png` and says so.
 fn write_heatmap(
     out: &std::path::Path,
@@ -731,9 +823,7 @@ fn write_heatmap(
     heat: &[[f32; 3]],
     size: (u32, u32),
 ) -> Result<()> {
-    let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned());
-    let name = format!("{}.heat-{}.png", stem.unwrap_or_default(), measure.name());
-    let path = out.with_file_name(name);
+    let path = heatmap_path(out, measure);
     let (top, text) = crate::io::heatmap::write(&path, heat, size, measure)?;
     let unit = if measure == crate::io::heatmap::Measure::Time {
         format!("{:.1} µs", top / 1000.0)
@@ -787,6 +877,10 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
             "--photon-maps: caustic photons traces maps; it does not read them".into(),
         ));
     }
+    // With --save the maps are the output; without it, the picture -o names.
+    if let Some(out) = args.save.as_ref().or(a.output.as_ref()) {
+        check_out(out, &[&a.scene])?;
+    }
     let count = Rc::new(Cell::new(0u32));
     let counter = Rc::clone(&count);
     let job = RenderJob::from_args(a)?;
@@ -800,6 +894,8 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         counter.set(counter.get() + 1);
         let own = job_with_settings(&job, &argv, &scene, r)?;
         let job = own.as_ref().unwrap_or(&job);
+        let mut inputs = scene_inputs(desc);
+        inputs.push(&scene);
         if let Some(path) = &save {
             if counter.get() > 1 {
                 return Err(Error::at(
@@ -807,6 +903,7 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
                     "this script renders more than one image, so --save cannot hold its maps",
                 ));
             }
+            check_out(path, &inputs)?;
             return save_maps(desc, r, job, path);
         }
         let out = match &output {
@@ -826,6 +923,8 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
                 r.output.with_file_name(format!("{stem}_photons.png"))
             }
         };
+        crate::io::image::output_format(&out)?;
+        check_out(&out, &inputs)?;
         let win = frame::window(r, job.scale, None)?;
         let size = (win.full_width, win.full_height);
         let scene = build_scene(desc, r)?;
@@ -852,17 +951,13 @@ fn stored(counts: &[crate::photon::trace::LightCounts]) -> u64 {
 }
 
 /// Traces the photon maps that `caustic render` with `job` would trace for `r` and writes them
-/// to `path` (`caustic photons --save`).
+/// to `path` (`caustic photons --save`; the caller has checked `path`).
 fn save_maps(
     desc: &SceneDesc,
     r: &RenderDesc,
     job: &RenderJob,
     path: &std::path::Path,
 ) -> Result<()> {
-    crate::files::check_output(path).map_err(|message| Error::File {
-        path: path.to_path_buf(),
-        message,
-    })?;
     let start = Instant::now();
     let bar = Bar::new(job.progress, path);
     let traced = frame::trace_maps(desc, r, job.scale, &job.settings, &bar);
@@ -898,6 +993,7 @@ fn export_command(args: ExportArgs) -> Result<()> {
             args.spp
         )));
     }
+    check_out(&args.output, &[&args.scene])?;
     let desc = run_script_with(&args.scene, Box::new(|_, _| Ok(())), args.script.options())?;
     let Some(r) = desc.renders.first() else {
         return Err(Error::Usage(format!(
@@ -906,6 +1002,11 @@ fn export_command(args: ExportArgs) -> Result<()> {
         )));
     };
     let scene = build_scene(&desc, r)?;
+    let mut inputs = scene_inputs(&desc);
+    inputs.push(&args.scene);
+    for out in crate::io::mitsuba::outputs(&scene, &args.output) {
+        check_out(&out, &inputs)?;
+    }
     let win = frame::window(r, args.scale, None)?;
     let size = (win.full_width, win.full_height);
     crate::io::mitsuba::export(&desc, r, &scene, size, args.spp, &args.output)?;
@@ -921,6 +1022,16 @@ fn export_command(args: ExportArgs) -> Result<()> {
 
 fn diff_command(args: DiffArgs) -> Result<()> {
     use crate::metrics::{Metrics, difference_image};
+    if let Some(out) = &args.output {
+        let inputs = [
+            Some(&args.image),
+            Some(&args.reference),
+            args.second.as_ref(),
+        ];
+        let inputs: Vec<&std::path::Path> =
+            inputs.into_iter().flatten().map(PathBuf::as_path).collect();
+        check_out(out, &inputs)?;
+    }
     let a = crate::io::image::read_rgb(&args.image)?;
     let r1 = crate::io::image::read_rgb(&args.reference)?;
     let r2 = match &args.second {
@@ -942,6 +1053,9 @@ fn diff_command(args: DiffArgs) -> Result<()> {
         }
     }
     let region = parse_region(args.region.as_deref(), a.width, a.height)?;
+    for (img, path) in [(&a, &args.image), (&r1, &args.reference), (&r2, second)] {
+        check_finite(img, path, region)?;
+    }
     let m = Metrics::against_two(&a, &r1, &r2, region);
     println!("mean ratio {:.5}", m.mean_ratio);
     println!("mean error {:+.5}", m.mean_error);

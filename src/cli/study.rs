@@ -109,11 +109,26 @@ pub fn study_command(args: StudyArgs) -> Result<()> {
         None => r1.clone(),
     };
     let region = super::parse_region(args.region.as_deref(), r1.width, r1.height)?;
+    let second = args.second.as_ref().unwrap_or(&args.reference);
+    for (img, path) in [(&r1, &args.reference), (&r2, second)] {
+        super::check_finite(img, path, region)?;
+    }
     let images = args.output.join("images");
     std::fs::create_dir_all(&images).map_err(|e| Error::File {
         path: images.clone(),
         message: format!("cannot create the study's folder: {e}"),
     })?;
+    // The tables and the plot: writable, and none of the study's inputs.
+    let compared: Vec<&Path> = args
+        .compare
+        .iter()
+        .filter_map(|c| c.split_once('=').map(|(_, f)| Path::new(f)))
+        .collect();
+    let mut inputs = vec![args.scene.as_path(), args.reference.as_path()];
+    inputs.extend(args.second.as_deref().into_iter().chain(compared));
+    for name in ["study.csv", "study.md", "study.png"] {
+        super::check_out(&args.output.join(name), &inputs)?;
+    }
     let out = args.output.clone();
     let (scene, seeds) = (args.scene.clone(), args.seeds);
     let title = args
@@ -312,10 +327,7 @@ fn same_size(a: &Image, a_path: &Path, b: &Image, b_path: &Path) -> Result<()> {
 
 /// Writes `text` to `path`, replacing it safely.
 fn write(path: &Path, text: &str) -> Result<()> {
-    crate::files::write_replacing(path, |tmp| {
-        std::fs::write(tmp, text).map_err(|e| e.to_string())
-    })
-    .map_err(|message| Error::File {
+    crate::files::write_bytes(path, text.as_bytes()).map_err(|message| Error::File {
         path: path.to_path_buf(),
         message,
     })

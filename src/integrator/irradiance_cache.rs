@@ -80,6 +80,16 @@ pub const MIN_IMAGE_SIZE: u32 = 48;
 /// Most grid cells.
 const MAX_CELLS: usize = 1 << 20;
 
+/// Returns the range `(R_min, R_max)` the records' radii of a `width × height` frame of `scene`
+/// are clamped to (see the module doc).
+pub fn radius_range(scene: &Scene, (width, height): (u32, u32)) -> (f32, f32) {
+    let extent = scene.extent().max(f32::MIN_POSITIVE);
+    // A tiny image's pixels are wide: its smallest R may not exceed the largest.
+    let r_max = R_MAX_FRACTION * extent;
+    let r_min = (R_MIN_PIXELS * extent / width.max(height).max(1) as f32).min(r_max);
+    (r_min, r_max)
+}
+
 /// How final gathering uses the cache.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CacheSettings {
@@ -408,11 +418,7 @@ impl IrradianceCache {
         use rayon::prelude::*;
         let start = Instant::now();
         let (width, height) = camera.size();
-        let extent = scene.extent().max(f32::MIN_POSITIVE);
-        // A tiny image's pixels are wide: its smallest R may not exceed the largest.
-        let r_max = R_MAX_FRACTION * extent;
-        let r_min = (R_MIN_PIXELS * extent / width.max(height).max(1) as f32).min(r_max);
-        let r_range = (r_min, r_max);
+        let r_range = radius_range(scene, (width, height));
         let levels: Vec<Vec<(u32, u32)>> = STRIDES
             .iter()
             .enumerate()

@@ -9,6 +9,8 @@
 //! Text attributes (the note an interrupted render's image carries) go in the header.
 
 use crate::film::{Film, Window};
+use exr::meta::BlockDescription;
+use exr::meta::header::Header;
 use exr::prelude::*;
 use glam::Vec3A;
 use std::path::Path;
@@ -21,9 +23,14 @@ pub struct ExrTile {
     pub text: Vec<(String, String)>,
 }
 
-/// Writes `film` as an EXR file at `path`, its window as the data window in the full image's
-/// display window, with the text attributes `text` (ASCII keys and values).
-pub fn write(film: &Film, path: &Path, text: &[(&str, &str)]) -> std::result::Result<(), String> {
+/// Writes `film` as an EXR file to `file` (open for writing, at its start), its window as the
+/// data window in the full image's display window, with the text attributes `text` (ASCII keys
+/// and values).
+pub fn write(
+    film: &Film,
+    file: &mut std::fs::File,
+    text: &[(&str, &str)],
+) -> std::result::Result<(), String> {
     let (w, h) = (film.width as usize, film.height as usize);
     if film.pixels.len() != w * h {
         return Err("internal: film size does not match its pixels".into());
@@ -48,7 +55,7 @@ pub fn write(film: &Film, path: &Path, text: &[(&str, &str)]) -> std::result::Re
         IntegerBounds::from_dimensions((win.full_width as usize, win.full_height as usize));
     Image::new(ImageAttributes::new(display), layer)
         .write()
-        .to_file(path)
+        .to_unbuffered(file)
         .map_err(|e| e.to_string())
 }
 
@@ -57,27 +64,91 @@ fn to_i32(v: u32) -> std::result::Result<i32, String> {
     i32::try_from(v).map_err(|_| format!("coordinate {v} is too large for OpenEXR"))
 }
 
-/// Reads the EXR file at `path` as a tile: its window (the data window's place in the display
-/// window), RGB pixels and text attributes; a message says what is wrong otherwise. Files whose
-/// windows hold more than `max_pixels` are refused before their pixels are read.
-pub fn read(path: &Path, max_pixels: u64) -> std::result::Result<ExrTile, String> {
-    let meta =
-        MetaData::read_from_file(path, false).map_err(|e| format!("not a readable EXR: {e}"))?;
-    let header = meta
-        .headers
-        .first()
-        .ok_or_else(|| "an EXR with no layer".to_string())?;
-    let display = header.shared_attributes.display_window;
-    let data = (header.own_attributes.layer_position, header.layer_size);
-    for (what, size) in [("display", display.size), ("data", data.1)] {
-        if size.area() as u64 > max_pixels {
+/// Bytes of decoded pixels a file may stand for beyond what [`max_expansion`] allows: a tiny
+/// tile's headers and offset table weigh more than its pixels.
+const DECODE_SLACK: u64 = 64 << 10;
+
+/// Returns the most bytes of decoded pixels one byte of a file compressed with `compression`
+/// can stand for: 1 uncompressed, 64 for run-length coding (a 2-byte run stands for at most
+/// 128 bytes), and deflate's 1032 for the others (a bound for the Huffman and block codes too).
+pub fn max_expansion(compression: Compression) -> u64 {
+    match compression {
+        Compression::Uncompressed => 1,
+        Compression::RLE => 64,
+        _ => 1032,
+    }
+}
+
+/// Returns an error unless the one header of an EXR file of `file_len` bytes is one that
+/// [`read`] may allocate for: a single flat part (not multi-part, not deep) whose windows
+/// and tiles hold at most `max_pixels`, and whose decoded pixels (as stored, and as the RGB
+/// floats read) are no more than the file's compression can expand its bytes to.
+fn check_header(
+    meta: &MetaData,
+    file_len: u64,
+    max_pixels: u64,
+) -> std::result::Result<&Header, String> {
+    let header = match &meta.headers[..] {
+        [] => return Err("an EXR with no layer".into()),
+        [one] => one,
+        parts => {
             return Err(format!(
-                "its {what} window is {}x{}, larger than {max_pixels} pixels",
+                "a multi-part EXR ({} parts): a tile is a single-part image",
+                parts.len()
+            ));
+        }
+    };
+    if header.deep {
+        return Err("a deep EXR (samples per pixel): a tile is a flat image".into());
+    }
+    let display = header.shared_attributes.display_window;
+    let mut sizes = vec![
+        ("display window", display.size),
+        ("data window", header.layer_size),
+    ];
+    if let BlockDescription::Tiles(t) = &header.blocks {
+        sizes.push(("tile size", t.tile_size));
+    }
+    for (what, size) in sizes {
+        let area = size.width() as u64 * size.height() as u64;
+        if area > max_pixels {
+            return Err(format!(
+                "its {what} is {}x{}, larger than {max_pixels} pixels",
                 size.width(),
                 size.height()
             ));
         }
     }
+    let area = header.layer_size.width() as u64 * header.layer_size.height() as u64;
+    let per_pixel = (header.channels.bytes_per_pixel as u64).max(16);
+    let most = max_expansion(header.compression).saturating_mul(file_len) + DECODE_SLACK;
+    if area.saturating_mul(per_pixel) > most {
+        return Err(format!(
+            "its {}x{} pixels ({} bytes a pixel decoded) are more than its {file_len} bytes \
+             can hold with {} compression: a damaged or forged header",
+            header.layer_size.width(),
+            header.layer_size.height(),
+            header.channels.bytes_per_pixel,
+            header.compression
+        ));
+    }
+    Ok(header)
+}
+
+/// Reads the EXR file at `path` as a tile: its window (the data window's place in the display
+/// window), RGB pixels and text attributes; a message says what is wrong otherwise. Files whose
+/// windows hold more than `max_pixels`, multi-part and deep files, and files whose header
+/// claims more pixels than their bytes can hold ([`max_expansion`]) are refused before their
+/// pixels are read.
+pub fn read(path: &Path, max_pixels: u64) -> std::result::Result<ExrTile, String> {
+    let file_len = std::fs::metadata(path)
+        .map_err(|e| format!("cannot read it: {e}"))?
+        .len();
+    let meta =
+        MetaData::read_from_file(path, false).map_err(|e| format!("not a readable EXR: {e}"))?;
+    let header = check_header(&meta, file_len, max_pixels)?;
+    let display = header.shared_attributes.display_window;
+    let data = (header.own_attributes.layer_position, header.layer_size);
     let window = place(display, data).ok_or_else(|| {
         format!(
             "its data window ({}, {}) {}x{} is not inside its display window ({}, {}) {}x{}",

@@ -105,11 +105,12 @@ pub(super) fn parse_window_record(text: &str) -> Option<Window> {
     }
 }
 
-/// Writes `write` to a temporary file beside `path`'s target, then renames it over the target
-/// ([`crate::files::write_replacing`]: symlinks followed, permissions kept, special files refused).
+/// Writes through `write` to a temporary file beside `path`'s target, created exclusively and
+/// given to `write` open, then renames it over the target ([`crate::files::write_replacing`]:
+/// symlinks followed, permissions kept, special files refused).
 pub(super) fn write_atomically(
     path: &Path,
-    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+    write: impl FnOnce(&mut std::fs::File) -> std::result::Result<(), String>,
 ) -> Result<()> {
     crate::files::write_replacing(path, write).map_err(|e| Error::File {
         path: path.to_path_buf(),
@@ -204,12 +205,12 @@ pub fn write_image_noted(
         Format::Png => {}
         Format::Exr => {
             let text: Vec<(&str, &str)> = text.iter().map(|(k, v)| (*k, v.as_str())).collect();
-            return write_atomically(path, |tmp| super::exr::write(film, tmp, &text));
+            return write_atomically(path, |file| super::exr::write(film, file, &text));
         }
         Format::Pfm => {
             let bytes = super::pfm::encode(film.width, film.height, &film.pixels);
-            return write_atomically(path, |tmp| {
-                std::fs::write(tmp, &bytes).map_err(|e| e.to_string())
+            return write_atomically(path, |file| {
+                file.write_all(&bytes).map_err(|e| e.to_string())
             });
         }
         Format::Hdr => {
@@ -220,8 +221,7 @@ pub fn write_image_noted(
                 .map(|c| image::Rgb(c.max(Vec3A::ZERO).to_array()))
                 .collect();
             let (w, h) = (film.width as usize, film.height as usize);
-            return write_atomically(path, |tmp| {
-                let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+            return write_atomically(path, |file| {
                 let mut out = BufWriter::new(file);
                 image::codecs::hdr::HdrEncoder::new(&mut out)
                     .encode(&rgb, w, h)
@@ -234,8 +234,7 @@ pub fn write_image_noted(
         text.push((WINDOW_KEY, window_record(&film.window)));
     }
     let data = to_rgb8(film, tonemap);
-    write_atomically(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+    write_atomically(path, |file| {
         let mut out = BufWriter::new(file);
         encode_png(&mut out, film.width, film.height, 3, &data, &text)?;
         out.flush().map_err(|e| e.to_string())
@@ -255,8 +254,7 @@ pub fn write_sample_map(film: &Film, path: &Path) -> Result<()> {
         .iter()
         .map(|&n| (255.0 * n as f32 / max + 0.5) as u8)
         .collect();
-    write_atomically(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+    write_atomically(path, |file| {
         let mut out = BufWriter::new(file);
         encode_png(&mut out, film.width, film.height, 1, &data, &[])?;
         out.flush().map_err(|e| e.to_string())
@@ -266,8 +264,7 @@ pub fn write_sample_map(film: &Film, path: &Path) -> Result<()> {
 /// Writes 8-bit RGB `data` (`width × height`, row-major) as a PNG at `path`, atomically
 /// (difference pictures, plots).
 pub fn write_rgb8_png(path: &Path, width: u32, height: u32, data: &[u8]) -> Result<()> {
-    write_atomically(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+    write_atomically(path, |file| {
         let mut out = BufWriter::new(file);
         encode_png(&mut out, width, height, 3, data, &[])?;
         out.flush().map_err(|e| e.to_string())

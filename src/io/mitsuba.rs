@@ -33,6 +33,28 @@ use glam::{Affine3A, Vec3A};
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// Returns the name of the OBJ file the mesh of instance `i` is written to, beside the XML
+/// file whose name without extension is `stem`.
+fn mesh_name(stem: &str, i: usize) -> String {
+    format!("{stem}_mesh{i}.obj")
+}
+
+/// Returns every file [`export`] of `scene` to `xml` writes: `xml` and the OBJ file of each
+/// mesh instance beside it, so that a caller can check them all before the export starts.
+pub fn outputs(scene: &Scene, xml: &Path) -> Vec<std::path::PathBuf> {
+    let stem = xml
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let meshes = scene
+        .instances
+        .iter()
+        .enumerate()
+        .filter(|(_, inst)| matches!(inst.shape, Shape::Mesh(_)))
+        .map(|(i, _)| xml.with_file_name(mesh_name(&stem, i)));
+    std::iter::once(xml.to_path_buf()).chain(meshes).collect()
+}
+
 /// Writes the Mitsuba 3 scene of `scene` (built from `desc`'s `gr.render` call `r`) to `xml`, at
 /// `width × height` pixels and `spp` samples per pixel; meshes go to OBJ files beside it.
 pub fn export(
@@ -98,7 +120,7 @@ pub fn export(
                 );
             }
             Shape::Mesh(k) => {
-                let name = format!("{stem}_mesh{i}.obj");
+                let name = mesh_name(&stem, i);
                 write_obj(scene, k, &m, inst.normal_to_world, &dir.join(&name))?;
                 let _ = writeln!(
                     s,

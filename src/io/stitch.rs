@@ -8,6 +8,13 @@
 //! or HDR) with every value as rendered. Every pixel must be covered by exactly one tile, all
 //! tiles must belong to one image size, and a mix of PNG and EXR tiles is refused, as is the
 //! marked image of an interrupted render.
+//!
+//! A tile is a file from anyone (a farm's workers): nothing is allocated from its header
+//! before the header is bounded. Multi-part and deep EXRs are refused; windows and tile
+//! sizes hold at most [`MAX_PIXELS`]; the pixels a header claims may not decode to more
+//! than its file's bytes can expand to under its compression ([`super::exr::max_expansion`];
+//! PNG: deflate's 1032 times); and overlaps and uncovered pixels are found before the map of
+//! the whole image is made.
 
 use super::image::{
     Format, PARTIAL_KEY, WINDOW_KEY, output_format, parse_window_record, window_record,
@@ -141,6 +148,16 @@ fn read_png_tile(path: &Path) -> Result<Tile> {
     let window = parse_window_record(&text)
         .ok_or_else(|| fail(format!("malformed '{WINDOW_KEY}' record '{text}'")))?;
     check_window(path, window, (width, height))?;
+    // A PNG's pixels are deflated: refuse a header claiming more than its bytes can inflate to
+    // before allocating for it (a 100-byte file may claim 8192x8192 pixels).
+    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    let most = 1032 * len + (64 << 10);
+    if width as u64 * height as u64 * 3 > most {
+        return Err(fail(format!(
+            "its header claims {width}x{height} pixels, more than its {len} bytes can hold: a \
+             damaged or forged PNG"
+        )));
+    }
     let mut rgb = vec![
         0;
         reader
@@ -224,19 +241,45 @@ pub fn stitch(tiles: &[PathBuf], out: &Path) -> Result<Stitched> {
 /// error naming a tile of another image size, two overlapping tiles or an uncovered pixel.
 fn owners(tiles: &[Tile], (fw, fh): (u32, u32)) -> Result<Vec<usize>> {
     let first = &tiles[0];
-    let mut owner: Vec<Option<usize>> = vec![None; fw as usize * fh as usize];
+    if let Some(t) = tiles
+        .iter()
+        .find(|t| (t.window.full_width, t.window.full_height) != (fw, fh))
+    {
+        return Err(tile_error(
+            &t.path,
+            format!(
+                "belongs to a {}x{} image, but {} to a {fw}x{fh} one",
+                t.window.full_width,
+                t.window.full_height,
+                first.path.display()
+            ),
+        ));
+    }
+    // Overlaps, then pixels left uncovered, are found without the map of the whole image,
+    // which a small tile claiming a large image would make us allocate: tiles that do not
+    // overlap and hold fewer pixels than the image leave one uncovered.
     for (k, t) in tiles.iter().enumerate() {
-        if (t.window.full_width, t.window.full_height) != (fw, fh) {
+        if let Some((y, x, j)) = tiles[..k]
+            .iter()
+            .enumerate()
+            .filter_map(|(j, o)| overlap(t.window, o.window).map(|(x, y)| (y, x, j)))
+            .min()
+        {
             return Err(tile_error(
                 &t.path,
-                format!(
-                    "belongs to a {}x{} image, but {} to a {fw}x{fh} one",
-                    t.window.full_width,
-                    t.window.full_height,
-                    first.path.display()
-                ),
+                format!("overlaps {} at pixel ({x}, {y})", tiles[j].path.display()),
             ));
         }
+    }
+    let covered: u64 = tiles
+        .iter()
+        .map(|t| t.window.size().0 as u64 * t.window.size().1 as u64)
+        .sum();
+    if covered < fw as u64 * fh as u64 {
+        return Err(uncovered(tiles, (fw, fh)));
+    }
+    let mut owner: Vec<Option<usize>> = vec![None; fw as usize * fh as usize];
+    for (k, t) in tiles.iter().enumerate() {
         for y in t.window.y0..t.window.y1 {
             for x in t.window.x0..t.window.x1 {
                 let i = (y * fw + x) as usize;
@@ -266,6 +309,27 @@ fn owners(tiles: &[Tile], (fw, fh): (u32, u32)) -> Result<Vec<usize>> {
             })
         })
         .collect()
+}
+
+/// Returns the first pixel (in row order) that windows `a` and `b` share, if any.
+fn overlap(a: Window, b: Window) -> Option<(u32, u32)> {
+    let (x0, y0) = (a.x0.max(b.x0), a.y0.max(b.y0));
+    (x0 < a.x1.min(b.x1) && y0 < a.y1.min(b.y1)).then_some((x0, y0))
+}
+
+/// Returns the error naming the first pixel (in row order) of the `fw × fh` image that no tile
+/// covers, for tiles that cover fewer pixels than it has (so such a pixel exists).
+fn uncovered(tiles: &[Tile], (fw, fh): (u32, u32)) -> Error {
+    let inside = |t: &Tile, x: u32, y: u32| {
+        (t.window.x0..t.window.x1).contains(&x) && (t.window.y0..t.window.y1).contains(&y)
+    };
+    let (x, y) = (0..fh)
+        .flat_map(|y| (0..fw).map(move |x| (x, y)))
+        .find(|&(x, y)| !tiles.iter().any(|t| inside(t, x, y)))
+        .unwrap_or((0, 0));
+    Error::Usage(format!(
+        "the tiles leave pixel ({x}, {y}) of the {fw}x{fh} image uncovered"
+    ))
 }
 
 /// Returns the full image's pixels, each taken from the tile `owners` names, through `pixels`

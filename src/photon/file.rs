@@ -22,6 +22,16 @@
 //! comment that moves a line, refuses the maps: the scene hash cannot tell which edits leave
 //! the photons alone.
 //!
+//! A checksum only says the file is as written, not that an honest program wrote it: every
+//! field is also checked against what the renderer can use, and an error names the map or
+//! the cache, the field and the photon or record. When the file is read: the kd-tree's
+//! invariants, the power codes (a base in `[-179, 33]`, normalised codes, the brightest
+//! photon at the top exponent: see `store::PowerCodec::validate`), per-light counts a trace
+//! can give, and cache records whose numbers are in range ([`MAX_RECORD_VALUE`], unit
+//! normals, non-negative irradiance). When a frame takes the maps ([`SavedMaps::check`]):
+//! its light count, caustic map and cache, photons and records inside the scene, the cache's
+//! accuracy and radius range.
+//!
 //! # Layout (little-endian)
 //! | bytes | contents |
 //! |---|---|
@@ -35,7 +45,7 @@
 //! | 4 | CRC-32 (IEEE) of everything before it |
 
 use super::store::PowerCodec;
-use super::trace::LightCounts;
+use super::trace::{LightCounts, MAX_BOUNCES};
 use super::{PhotonMap, kdtree};
 use crate::integrator::irradiance_cache::{IrradianceCache, Record};
 use glam::Vec3A;
@@ -78,6 +88,95 @@ pub struct SavedMaps {
     /// The frame's irradiance cache, when it has one: made over the whole image, it is the
     /// same for every tile, so tiles read it rather than each making it again.
     pub cache: Option<IrradianceCache>,
+}
+
+/// What the frame reading a file expects of its maps beyond the fingerprint, which an honest
+/// file matches whenever its fingerprint does; [`SavedMaps::check`] compares.
+#[derive(Clone, Debug)]
+pub struct Expected {
+    /// The box holding the scene (`min`, `max`), when it is finite: every photon and cache
+    /// record lies on a surface, so inside it (with a margin of 1% of its diagonal).
+    pub bounds: Option<(Vec3A, Vec3A)>,
+    /// The scene's lights: each map counts photons for each.
+    pub lights: usize,
+    /// Whether the frame has a caustic map.
+    pub caustic: bool,
+    /// When the frame makes an irradiance cache: its accuracy and the range its records'
+    /// radii are clamped to (see [`crate::integrator::irradiance_cache`]).
+    pub cache: Option<(f32, (f32, f32))>,
+}
+
+impl SavedMaps {
+    /// Returns an error naming the map and the photon, record or count that the frame
+    /// `expected` describes could not have made: a light count, a caustic map or a cache the
+    /// frame does not have, a photon or record outside the scene, another cache accuracy or a
+    /// record radius outside the frame's range.
+    pub fn check(&self, expected: &Expected) -> Result<(), String> {
+        let outside = |p: Vec3A| {
+            expected.bounds.is_some_and(|(lo, hi)| {
+                let margin =
+                    0.01 * (hi - lo).length() + 1e-6 * lo.abs().max(hi.abs()).max_element();
+                p.cmplt(lo - margin).any() || p.cmpgt(hi + margin).any()
+            })
+        };
+        for (m, what) in std::iter::once((&self.global, "the global map"))
+            .chain(self.caustic.as_ref().map(|c| (c, "the caustic map")))
+        {
+            if m.per_light.len() != expected.lights {
+                return Err(format!(
+                    "{what}: counts for {} lights, but the scene has {}",
+                    m.per_light.len(),
+                    expected.lights
+                ));
+            }
+            if let Some(i) = m
+                .map
+                .pos
+                .iter()
+                .position(|p| outside(Vec3A::from_array(*p)))
+            {
+                return Err(format!(
+                    "{what}: photon {i} at {:?} lies outside the scene",
+                    m.map.pos[i]
+                ));
+            }
+        }
+        if self.caustic.is_some() != expected.caustic {
+            return Err(match expected.caustic {
+                true => "it has no caustic map, and this frame has caustics".into(),
+                false => "it has a caustic map, and this frame has no caustics".into(),
+            });
+        }
+        let Some(cache) = &self.cache else {
+            return Ok(());
+        };
+        let what = "the irradiance cache";
+        let Some((accuracy, (r_min, r_max))) = expected.cache else {
+            return Err(format!("{what}: this frame makes none"));
+        };
+        if cache.accuracy() != accuracy {
+            return Err(format!(
+                "{what}: accuracy {}, this frame's is {accuracy}",
+                cache.accuracy()
+            ));
+        }
+        let (lo, hi) = (r_min * (1.0 - 1e-5), r_max * (1.0 + 1e-5));
+        for (i, r) in cache.records().iter().enumerate() {
+            if outside(r.p) {
+                return Err(format!(
+                    "{what}: record {i} at {} lies outside the scene",
+                    r.p
+                ));
+            }
+            if !(lo..=hi).contains(&r.r) {
+                return Err(format!(
+                    "{what}: record {i}'s radius {} is outside this frame's [{r_min}, {r_max}]",
+                    r.r
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// 64-bit FNV-1a, for the scene fingerprint: a fixed, documented hash whose value does not
@@ -147,8 +246,7 @@ impl<W: Write> Write for Crc<W> {
 
 /// Writes `maps` to `path`, replacing it atomically ([`crate::files::write_replacing_io`]).
 pub fn write(path: &Path, maps: &SavedMaps) -> std::io::Result<()> {
-    crate::files::write_replacing_io(path, |tmp| {
-        let file = std::fs::File::create(tmp)?;
+    crate::files::write_replacing_io(path, |file| {
         let mut w = Crc {
             inner: BufWriter::with_capacity(1 << 20, file),
             crc: crc32fast::Hasher::new(),
@@ -228,16 +326,51 @@ fn read_cache<R: Read>(r: &mut Input<R>, size: u64) -> Result<Option<IrradianceC
             t: [v(3), v(4), v(5)],
             r: f(18),
         };
-        let finite = rec.p.is_finite() && rec.n.is_finite() && rec.e.is_finite();
-        if !(finite && rec.t.iter().all(|t| t.is_finite()) && rec.r > 0.0 && rec.r.is_finite()) {
-            return Err(format!(
-                "{what}: record {} is not a valid record",
-                records.len()
-            ));
-        }
+        check_record(&rec).map_err(|e| format!("{what}: record {}: {e}", records.len()))?;
         records.push(rec);
     }
     Ok(Some(IrradianceCache::new(records, accuracy)))
+}
+
+/// Largest irradiance (W/m²) and rotational-gradient component a cache record read from a file
+/// may hold: an interpolation sums up to 2^32 records of at most 2^64 each, and the shading
+/// after it multiplies by albedos and cosines, all far inside `f32` (2^128).
+pub const MAX_RECORD_VALUE: f32 = 18_446_744_073_709_551_616.0; // 2^64
+
+/// Returns what is wrong with cache record `r` for the renderer, if anything (checked before
+/// the cache's grid is built over the records): a position or a radius beyond
+/// [`MAX_RECORD_VALUE`], a normal that is not a unit vector, an irradiance that is negative, not
+/// finite or above [`MAX_RECORD_VALUE`], a gradient component beyond it, or a radius that is
+/// not positive.
+fn check_record(r: &Record) -> Result<(), String> {
+    let within = |v: Vec3A| v.is_finite() && v.abs().max_element() <= MAX_RECORD_VALUE;
+    if !within(r.p) {
+        return Err(format!(
+            "its position {} is not finite or beyond {MAX_RECORD_VALUE:e}",
+            r.p
+        ));
+    }
+    if !(r.n.is_finite() && (r.n.length() - 1.0).abs() <= 1e-3) {
+        return Err(format!("its normal {} is not a unit vector", r.n));
+    }
+    if !(within(r.e) && r.e.min_element() >= 0.0) {
+        return Err(format!(
+            "its irradiance {} is not in [0, {MAX_RECORD_VALUE:e}]",
+            r.e
+        ));
+    }
+    if let Some(t) = r.t.iter().find(|t| !within(**t)) {
+        return Err(format!(
+            "its gradient {t} is not finite or beyond {MAX_RECORD_VALUE:e}"
+        ));
+    }
+    if !(r.r > 0.0 && r.r <= MAX_RECORD_VALUE) {
+        return Err(format!(
+            "its radius {} is not in (0, {MAX_RECORD_VALUE:e}]",
+            r.r
+        ));
+    }
+    Ok(())
 }
 
 fn write_map<W: Write>(w: &mut W, m: &CountedMap) -> std::io::Result<()> {
@@ -339,6 +472,14 @@ pub fn read(path: &Path) -> Result<SavedMaps, String> {
         2 => Some(read_map(&mut r, "the caustic map", size)?),
         _ => None,
     };
+    for (m, what, most) in [
+        (Some(&global), "the global map", u64::from(MAX_BOUNCES)),
+        (caustic.as_ref(), "the caustic map", 1),
+    ] {
+        if let Some(m) = m {
+            check_counts(m, most).map_err(|e| format!("{what}: {e}"))?;
+        }
+    }
     let cache = read_cache(&mut r, size)?;
     let want = r.crc.clone().finalize();
     let mut b = [0; 4];
@@ -359,6 +500,10 @@ pub fn read(path: &Path) -> Result<SavedMaps, String> {
     ] {
         if let Some(m) = m {
             m.map.validate().map_err(|e| format!("{what}: {e}"))?;
+            m.map
+                .codec
+                .validate(&m.map.power)
+                .map_err(|e| format!("{what}: {e}"))?;
         }
     }
     Ok(SavedMaps {
@@ -367,6 +512,30 @@ pub fn read(path: &Path) -> Result<SavedMaps, String> {
         caustic,
         cache,
     })
+}
+
+/// Returns what is wrong with the per-light counts of `m`, if anything: a light that stored
+/// more than `most` photons per photon it emitted (a global photon is stored at each diffuse
+/// bounce, at most [`MAX_BOUNCES`]; a caustic photon once) or met a specular surface first
+/// more often than it emitted, or counts that stored fewer photons than the map holds.
+fn check_counts(m: &CountedMap, most: u64) -> Result<(), String> {
+    let mut stored = 0u64;
+    for (l, c) in m.per_light.iter().enumerate() {
+        if c.stored > c.emitted.saturating_mul(most) || c.first_hit_specular > c.emitted {
+            return Err(format!(
+                "light {l}'s counts (emitted {}, stored {}, first hit specular {}) cannot be",
+                c.emitted, c.stored, c.first_hit_specular
+            ));
+        }
+        stored = stored.saturating_add(c.stored);
+    }
+    if stored < m.map.len() as u64 {
+        return Err(format!(
+            "its lights stored {stored} photons, but it holds {}",
+            m.map.len()
+        ));
+    }
+    Ok(())
 }
 
 fn read_map<R: Read>(r: &mut Input<R>, what: &str, size: u64) -> Result<CountedMap, String> {
@@ -450,7 +619,7 @@ mod tests {
         };
         let counts = |stored: usize| {
             vec![LightCounts {
-                emitted: 1000,
+                emitted: stored as u64 + 1000,
                 stored: stored as u64,
                 first_hit_specular: 7,
                 ..LightCounts::default()
@@ -534,14 +703,56 @@ mod tests {
             m.cache = Some(IrradianceCache::new(records.clone(), 0.3));
             write(&path, &m).unwrap();
             let e = read(&path).unwrap_err();
-            assert_eq!(e, "the irradiance cache: record 3 is not a valid record");
+            assert!(
+                e.starts_with("the irradiance cache: record 3: its gradient"),
+                "{e}"
+            );
             records[3].t[1].y = 0.0;
             records[4].r = bad;
             m.cache = Some(IrradianceCache::new(records, 0.3));
             write(&path, &m).unwrap();
             let e = read(&path).unwrap_err();
-            assert_eq!(e, "the irradiance cache: record 4 is not a valid record");
+            assert!(
+                e.starts_with("the irradiance cache: record 4: its radius"),
+                "{e}"
+            );
         }
+    }
+
+    /// Every map a render builds passes the power check: powers over the whole `f32` range a
+    /// map can hold (its brightest photon up to 2^64 W), subnormal and zero powers among them,
+    /// and a map whose powers are all zero.
+    #[test]
+    fn every_map_built_passes_the_power_check() {
+        let mut r = crate::sampling::Rng::new(9, crate::sampling::Pass::Photon, 0);
+        for top in [-140i32, -60, -3, 0, 20, 63] {
+            let photons: Vec<Photon> = (0..2000)
+                .map(|i| {
+                    let scale = |u: f32| (2.0f32).powi(top - (u * 40.0) as i32);
+                    let p = Vec3A::new(scale(r.next_f32()), scale(r.next_f32()), 0.0);
+                    Photon {
+                        position: Vec3A::new(r.next_f32(), r.next_f32(), r.next_f32()),
+                        power: if i % 17 == 0 { Vec3A::ZERO } else { p },
+                        dir: Vec3A::Y,
+                        normal: Vec3A::Z,
+                        direct: false,
+                    }
+                })
+                .collect();
+            let map = PhotonMap::build(photons);
+            assert_eq!(map.codec.validate(&map.power), Ok(()), "top exponent {top}");
+        }
+        let dark = PhotonMap::build(vec![
+            Photon {
+                position: Vec3A::ZERO,
+                power: Vec3A::ZERO,
+                dir: Vec3A::Y,
+                normal: Vec3A::Z,
+                direct: true,
+            };
+            10
+        ]);
+        assert_eq!(dark.codec.validate(&dark.power), Ok(()));
     }
 
     #[test]

@@ -152,6 +152,15 @@ pub(super) fn code_is_valid(code: u32) -> bool {
     code & DIRS_MASK < OCT_CELLS * OCT_CELLS
 }
 
+/// The smallest power base exponent of a map with power: the base of one whose brightest
+/// photon is the smallest `f32`, 2^-149 W (its exponent -148, less 31).
+pub(super) const MIN_BASE: i32 = -179;
+/// The largest power base exponent a map read from a file may have: its brightest photon is
+/// then below 2^(33 + 31) = 2^64 W (1.8e19 W), so that a density estimate's sum of many such
+/// photons over a small disc, times a BSDF, stays far inside `f32` (2^128). A photon that bright
+/// would take a light of more than 10^19 W per photon traced.
+pub(super) const MAX_BASE: i32 = 33;
+
 /// The shared-exponent power format of one photon map: 32 exponents counted up from a base.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct PowerCodec {
@@ -264,6 +273,41 @@ impl PowerCodec {
         let inv_q = pow2(9 - e);
         let m = c.map(|x| ((x * inv_q + 0.5) as u32).min(511));
         m[0] | (m[1] << 9) | (m[2] << 18) | (((e - self.base) as u32) << 27)
+    }
+
+    /// Returns an error naming the first photon whose power code `words[i]` this map could not
+    /// have written, or whose power the renderer cannot use: see [`MIN_BASE`] and
+    /// [`MAX_BASE`] for the base, and the encoder's invariants for the codes: a code with a
+    /// stored exponent above 0 has a largest mantissa of at least 256 (it is normalised:
+    /// only photons dimmer than the base underflow to exponent 0), the map's brightest photon
+    /// has stored exponent 31, and a map whose codes are all 0 has base 0.
+    pub(super) fn validate(&self, words: &[u32]) -> Result<(), String> {
+        let mantissa = |w: u32| (w & 511).max((w >> 9) & 511).max((w >> 18) & 511);
+        if words.iter().all(|&w| w == 0) {
+            return match self.base {
+                0 => Ok(()),
+                b => Err(format!(
+                    "power base exponent {b}, but every photon's power is 0"
+                )),
+            };
+        }
+        if !(MIN_BASE..=MAX_BASE).contains(&self.base) {
+            return Err(format!(
+                "power base exponent {} (a map's is in [{MIN_BASE}, {MAX_BASE}]: its brightest \
+                 photon between 2^-149 W and 2^64 W)",
+                self.base
+            ));
+        }
+        if let Some(i) = words.iter().position(|&w| w >> 27 > 0 && mantissa(w) < 256) {
+            return Err(format!(
+                "photon {i}'s power code {:#010x} is not normalised",
+                words[i]
+            ));
+        }
+        if !words.iter().any(|&w| w >> 27 == 31) {
+            return Err("no photon has the map's top power exponent (31)".into());
+        }
+        Ok(())
     }
 
     /// Returns the power a 32-bit code stands for.

@@ -17,15 +17,15 @@ pub fn write_gltf(mesh: &MeshData, path: &Path) -> io::Result<()> {
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
     let layout = Layout::new(mesh);
     if is_glb {
-        crate::files::write_replacing_io(path, |tmp| write_glb(mesh, &layout, tmp))
+        crate::files::write_replacing_io(path, |file| write_glb(mesh, &layout, file))
     } else {
         let bin_path = path.with_extension("bin");
         let bin_name = bin_path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        crate::files::write_replacing_io(&bin_path, |tmp| {
-            let mut bin = BufWriter::new(std::fs::File::create(tmp)?);
+        crate::files::write_replacing_io(&bin_path, |file| {
+            let mut bin = BufWriter::new(file);
             write_buffer(mesh, &mut bin)?;
             bin.flush()
         })?;
@@ -34,12 +34,12 @@ pub fn write_gltf(mesh: &MeshData, path: &Path) -> io::Result<()> {
     }
 }
 
-/// Writes `mesh` laid out by `layout` as one GLB file at `path`.
-fn write_glb(mesh: &MeshData, layout: &Layout, path: &Path) -> io::Result<()> {
+/// Writes `mesh` laid out by `layout` as one GLB file to `file`.
+fn write_glb(mesh: &MeshData, layout: &Layout, file: &mut std::fs::File) -> io::Result<()> {
     let json = pad(layout.json(None).into_bytes(), b' ');
     let bin_len = layout.total.next_multiple_of(4);
     let total = 12 + 8 + json.len() + 8 + bin_len;
-    let mut out = BufWriter::new(std::fs::File::create(path)?);
+    let mut out = BufWriter::new(file);
     out.write_all(b"glTF")?;
     out.write_all(&2u32.to_le_bytes())?;
     out.write_all(&to_u32(total)?.to_le_bytes())?;

@@ -12,11 +12,11 @@ use std::path::Path;
 /// ([`crate::files::write_replacing`]: symlinks followed, permissions kept, special files
 /// refused, no temporary file left behind).
 pub fn write_obj(mesh: &MeshData, path: &Path) -> io::Result<()> {
-    crate::files::write_replacing_io(path, |tmp| write_to(mesh, tmp))
+    crate::files::write_replacing_io(path, |file| write_to(mesh, file))
 }
 
-fn write_to(mesh: &MeshData, path: &Path) -> io::Result<()> {
-    let mut out = BufWriter::with_capacity(1 << 20, std::fs::File::create(path)?);
+fn write_to(mesh: &MeshData, file: &mut std::fs::File) -> io::Result<()> {
+    let mut out = BufWriter::with_capacity(1 << 20, file);
     writeln!(out, "# written by caustic")?;
     for p in &mesh.positions {
         writeln!(out, "v {} {} {}", p.x, p.y, p.z)?;

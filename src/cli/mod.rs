@@ -284,6 +284,19 @@ pub struct ScriptArgs {
     /// float when VALUE reads as one, true or false, else a string.
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = Global::parse)]
     pub define: Vec<Global>,
+    /// Most memory, in GiB, the scene may take (its description, instances, CSG trees,
+    /// triangles, textures and photon maps); over it, the script line or file at fault is an
+    /// error [default: half of the machine's physical memory].
+    #[arg(long, value_name = "GIB", value_parser = parse_gib)]
+    pub memory_budget: Option<u64>,
+}
+
+/// Parses `--memory-budget`: a positive number of GiB, returned in bytes.
+fn parse_gib(s: &str) -> std::result::Result<u64, String> {
+    match s.parse::<f64>() {
+        Ok(g) if g > 0.0 && g.is_finite() => Ok((g * (1u64 << 30) as f64) as u64),
+        _ => Err(format!("expected a positive number of GiB, got '{s}'")),
+    }
 }
 
 impl ScriptArgs {
@@ -295,6 +308,7 @@ impl ScriptArgs {
                 DialectArg::Legacy => Dialect::Legacy,
             }),
             globals: self.define.clone(),
+            memory_budget: self.memory_budget,
             ..ScriptOptions::default()
         }
     }

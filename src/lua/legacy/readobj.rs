@@ -62,7 +62,8 @@ fn read(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<MultiValue> {
     let Some(path) = s.resolve_input(&given) else {
         return Err(a.fault(Fault::NotFound, s.not_found("mesh file", &given)));
     };
-    let mesh = crate::io::obj::load_obj(&path).map_err(|e| {
+    let account = s.desc.budget.account();
+    let mesh = crate::io::obj::load_obj_with(&path, &account).map_err(|e| {
         a.fault(
             Fault::MeshLoad,
             format!("readobj: cannot load mesh '{given}': {e}"),

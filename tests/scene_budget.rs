@@ -223,6 +223,60 @@ fn a_long_name_copied_into_many_nodes_is_refused() {
     );
 }
 
+/// Returns a description of `n` spheres placed at the origin, the `k`-th scaled by
+/// `1 + k·grow` (0: all coincident; above: concentric), under one root, with its render.
+fn stacked_spheres(n: usize, grow: f64) -> (SceneDesc, RenderDesc) {
+    let mut desc = SceneDesc::default();
+    let loc = Loc::internal();
+    let root = desc.add_node("root", NodeKind::Group, loc.clone());
+    for k in 0..n {
+        let s = desc.add_node("s", NodeKind::Sphere, loc.clone());
+        desc.nodes[s.0 as usize].transform =
+            DAffine3::from_scale(DVec3::splat(1.0 + k as f64 * grow));
+        desc.nodes[root.0 as usize].children.push((s, loc.clone()));
+    }
+    let render = RenderDesc {
+        root,
+        output: "x.png".into(),
+        width: 8,
+        height: 8,
+        camera: CameraDesc {
+            eye: Vec3::new(0.0, 0.0, 5.0),
+            view: Vec3::NEG_Z,
+            up: Vec3::Y,
+            fov_deg: 50.0,
+        },
+        ambient: Vec3::ZERO,
+        lights: Vec::new(),
+        loc,
+        settings: Vec::new(),
+    };
+    (desc, render)
+}
+
+/// 65,536 coincident spheres, and 65,536 concentric ones: obvhs's PLOC built their top-level
+/// BVH in time growing with the square of the stack (32,000 coincident took 43 s, 8,000
+/// concentric 3.8 s: minutes here); the stacked scenes are now built by the binned SAH builder.
+/// The tree is right: a ray down the axis meets the smallest sphere at t = 4, or the largest
+/// (radius 1 + 65535·10⁻⁵) at t = 5 − r.
+#[test]
+fn stacked_instances_build_a_correct_top_level_bvh() {
+    for (grow, radius) in [(0.0, 1.0), (1e-5, 1.0 + 65535.0 * 1e-5)] {
+        let (desc, render) = stacked_spheres(65_536, grow);
+        let scene = build_scene(&desc, &render).unwrap();
+        assert_eq!(scene.instances.len(), 65_536);
+        let ray =
+            caustic::geometry::ray::Ray::new(glam::Vec3A::new(0.0, 0.0, 5.0), -glam::Vec3A::Z);
+        let hit = scene.intersect(&ray).expect("the stack is hit");
+        assert!(
+            (hit.t - (5.0 - radius as f32)).abs() < 1e-4,
+            "t = {}",
+            hit.t
+        );
+        assert!(scene.account.held() > 65_536 * 400, "{:?}", scene.account);
+    }
+}
+
 /// Writes a `size × size` black PNG to `path`.
 fn write_png(path: &Path, size: u32) {
     let img = image::RgbImage::new(size, size);

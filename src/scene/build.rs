@@ -16,7 +16,7 @@
 //! ```
 
 use crate::accel::mesh::MeshGeom;
-use crate::accel::{Bounds, Bvh};
+use crate::accel::{self, Bounds, Bvh};
 use crate::budget::{Account, At, bytes_of};
 use crate::desc::{MeshId, NodeDesc, NodeId, NodeKind, RenderDesc, SceneDesc};
 use crate::error::{Error, Fault, Loc, Result};
@@ -95,7 +95,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
     for p in &placements {
         b.place(p)?;
     }
-    let tlas = Bvh::build(&b.bounds);
+    let tlas = Bvh::build_with(&b.bounds, tlas_builder(&b.bounds));
     let mut instances: Vec<Instance> = tlas
         .order()
         .iter()
@@ -144,6 +144,49 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
             .all(|(_, t)| (b.max.cmplt(t.min) | b.min.cmpgt(t.max)).any())
     });
     Ok(scene)
+}
+
+/// Most instances whose centres share one cell of a 1024³ grid over the scene that the top-level
+/// BVH is built for with obvhs's PLOC. Its build time grows with the square of the instances
+/// stacked on one spot and beyond (measured on coincident spheres: 2,000 in 0.2 s, 8,000 in
+/// 1.9 s, 32,000 in 43 s; 8,000 concentric ones in 3.8 s), where the binned SAH builder halves
+/// such a range by position and stays near-linear. Every other scene keeps the PLOC tree, so its
+/// pictures do not change.
+const MAX_STACKED_FOR_PLOC: usize = 256;
+
+/// Returns the builder of the top-level BVH over `boxes`: PLOC, unless more than
+/// [`MAX_STACKED_FOR_PLOC`] instances are centred on one spot.
+fn tlas_builder(boxes: &[Bounds]) -> accel::Builder {
+    if boxes.len() <= MAX_STACKED_FOR_PLOC {
+        return accel::Builder::Ploc;
+    }
+    let centre = |b: &Bounds| (b.min + b.max) * 0.5;
+    let (lo, hi) = boxes
+        .iter()
+        .fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(lo, hi), b| {
+            (lo.min(centre(b)), hi.max(centre(b)))
+        });
+    let scale = Vec3A::splat(1023.0) / (hi - lo).max(Vec3A::splat(f32::MIN_POSITIVE));
+    let mut cells: Vec<u32> = boxes
+        .iter()
+        .map(|b| {
+            let c = ((centre(b) - lo) * scale)
+                .min(Vec3A::splat(1023.0))
+                .as_uvec3();
+            c.x | c.y << 10 | c.z << 20
+        })
+        .collect();
+    cells.sort_unstable();
+    let most = cells
+        .chunk_by(|a, b| a == b)
+        .map(<[u32]>::len)
+        .max()
+        .unwrap_or(0);
+    if most > MAX_STACKED_FOR_PLOC {
+        accel::Builder::BinnedSah
+    } else {
+        accel::Builder::Ploc
+    }
 }
 
 /// Returns a box holding every point of `light` (an area light's with room to spare).

@@ -62,9 +62,10 @@ fn left(message: &str) -> String {
 }
 
 /// A DAG of nodes, each added as a child twice, 40 levels deep, stands for 2^40 placements: it
-/// is refused before a placement is made, at the root's line. At 22 levels (4 Mi coincident
-/// spheres, which the old code flattened and built into 2.6 GB over minutes) a 256 MiB budget
-/// refuses it the same way.
+/// is refused before a placement is made, at the root's line (the old code gave up after 20
+/// million node visits and 1 GB). At 22 levels, 4 Mi coincident spheres whose top-level BVH the
+/// old `caustic info` was still building after 10 minutes, a 256 MiB budget refuses it the
+/// same way.
 #[test]
 fn a_node_dag_is_refused_before_it_is_flattened() {
     for (levels, count, amount) in [(40, 1u64 << 40, "104.0 TiB"), (22, 1 << 22, "416.0 MiB")] {
@@ -316,7 +317,7 @@ fn textures_are_charged_from_their_header_and_decoded_once_per_file() {
 
 /// A light's photons are charged before they are traced, at its line: 10⁹ photons (the most a
 /// light may ask for) take 44.7 GiB at 48 bytes a stored photon. The old code set out to trace
-/// them (minutes of tracing, growing towards tens of GB).
+/// them (minutes of tracing, growing towards tens of GB), in a render and in `caustic photons`.
 #[test]
 fn photon_maps_are_charged_per_light_before_they_are_traced() {
     let src = "m = gr.material({1, 1, 1}, {0, 0, 0}, 0)
@@ -341,6 +342,17 @@ fn photon_maps_are_charged_per_light_before_they_are_traced() {
         ),
         "{e}"
     );
+    // `caustic photons` draws the maps of the scene it builds itself: charged the same way.
+    let dir = out_dir("budget-photons");
+    std::fs::write(dir.join("test.lua"), src).unwrap();
+    let out = caustic()
+        .current_dir(&dir)
+        .args(["photons", "test.lua", "--memory-budget", "1"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains(&format!("error: {e}")), "{stderr}");
 }
 
 /// An OBJ is charged from its faces before tobj parses it: one face of 2^20 corners fans into

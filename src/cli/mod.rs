@@ -812,6 +812,8 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         let win = frame::window(r, job.scale, None)?;
         let size = (win.full_width, win.full_height);
         let scene = build_scene(desc, r)?;
+        let caustics = crate::integrator::plan(&scene, crate::integrator::GiMode::On).caustics;
+        frame::charge_photons(desc, r, &scene, &job.settings.photons, caustics)?;
         let camera = Camera::new(&r.camera, size.0, size.1);
         let bar = Bar::new(job.progress, &out);
         let (film, stats) = frame::photon_view(&scene, &camera, size, &job.settings.photons, &bar);

@@ -5,7 +5,10 @@
 //! (instancing), but a mesh's file is read once per build ([`MeshCache`]) and its triangles and
 //! BVH are built once and shared by all its instances. Textures are loaded the same way
 //! ([`ImageCache`]). Bad input found here (cycles, singular or overflowing transforms, broken
-//! mesh files, non-finite vertices) is an error naming the script line.
+//! mesh files, non-finite vertices) is an error naming the script line, and so is a scene over
+//! the memory budget ([`crate::budget`]): placements are counted over the DAG, and CSG trees
+//! over their operands, before either is expanded; instances, meshes and textures are charged
+//! before they are made.
 //!
 //! ```lua
 //! root = gr.node('root')

@@ -15,6 +15,7 @@
 //! `--dialect legacy` compose `M ← M·T` instead (`lua::Dialect`); either way a node holds one
 //! `parent_from_node` matrix, and nothing below the Lua layer knows which order made it.
 
+use crate::budget::Budget;
 use crate::error::Loc;
 use glam::{DAffine3, DVec3, Vec3};
 use std::path::{Path, PathBuf};
@@ -248,6 +249,9 @@ pub struct SceneDesc {
     /// What `gr.settings` has set so far: a setting's name and its flag tokens, in the order
     /// first set.
     pub settings: Vec<(String, Vec<String>)>,
+    /// The command's memory budget: the script's entries are charged to it as they are made,
+    /// and every scene built from this description draws on it ([`crate::budget`]).
+    pub budget: Budget,
 }
 
 impl SceneDesc {

@@ -110,8 +110,11 @@ fn prepare(
     }
     check_photon_budget(desc, r, &scene, &settings)?;
     // Every pass of the frame, and the photon-map file's, sees the scene as the plan shades it.
-    let features = plan_for(&scene, &settings).features;
-    scene.apply(features);
+    let plan = plan_for(&scene, &settings);
+    if plan.integrator != Integrator::Whitted {
+        charge_photons(desc, r, &scene, &settings.photons, plan.caustics)?;
+    }
+    scene.apply(plan.features);
     Ok((window, scene, settings, follow.then_some(factor)))
 }
 
@@ -315,6 +318,37 @@ fn check_photon_budget(
                     settings.photons.photon_scale
                 ),
             ));
+        }
+    }
+    Ok(())
+}
+
+/// Bytes a stored photon takes: its 28-byte record in the traced stream, then 20 bytes in the
+/// map built from it.
+const PHOTON_BYTES: u64 = 48;
+
+/// Charges the global map, and the caustic map when `caustics`, that `photons` traces for the
+/// frame of `r` to the scene's account, at one stored photon per photon emitted (a diffuse
+/// bounce stores one more; a photon that leaves the scene none), each light's share at its
+/// script line. One pass's maps: a progressive render frees its maps before the next pass's.
+pub fn charge_photons(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scene: &Scene,
+    photons: &GiSettings,
+    caustics: bool,
+) -> Result<()> {
+    let mut kinds = vec![MapKind::Global];
+    if caustics {
+        kinds.push(MapKind::Caustic);
+    }
+    for kind in kinds {
+        for (l, &n) in photons.budget(&scene.lights, kind).iter().enumerate() {
+            let what = format!("this light's {n} photons for the {kind:?} map").to_lowercase();
+            let at = crate::budget::At::Script(&desc.lights[r.lights[l].0 as usize].loc);
+            scene
+                .account
+                .charge(n.saturating_mul(PHOTON_BYTES), what, at)?;
         }
     }
     Ok(())

@@ -39,6 +39,7 @@
 //! - *BSDF*: what a surface does at one hit ([`material::bsdf::Bsdf`]).
 
 pub mod accel;
+pub mod budget;
 pub mod camera;
 pub mod cli;
 pub mod desc;

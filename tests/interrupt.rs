@@ -164,7 +164,8 @@ mod signals {
         let mut command = caustic();
         command
             .current_dir(dir)
-            .args(["render", "scene.lua", "-q"])
+            // The script marks its start by writing a file, which only a trusted script may.
+            .args(["render", "scene.lua", "-q", "--trusted-script"])
             .args(args)
             .stderr(Stdio::piped());
         // SAFETY: between fork and exec only the async-signal-safe `signal` runs.

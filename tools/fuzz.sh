@@ -1,25 +1,66 @@
 #!/usr/bin/env bash
-# A long fuzz campaign of the loaders' property tests (tests/stability_fuzz.rs): rounds of
-# PROPTEST_CASES cases per property, each round with fresh random seeds, until SECONDS (default
-# 300) have passed, under a virtual-memory limit (GiB, default 8) so a loader that trusted a size
-# it read fails instead of taking the machine. Prints the rounds, the cases and the failures.
-#   bash tools/fuzz.sh [SECONDS] [CASES_PER_ROUND] [GIB]
+# A long fuzz campaign of the property tests that read hostile input: scene scripts generated from
+# the gr grammar and glTF structures (tests/fuzz_scenes.rs), photon-map files with valid
+# checksums and single-part, multi-part and tiled EXR tiles (tests/hostile_files.rs, its fuzz_*
+# properties), and the loaders' byte mutations (tests/stability_fuzz.rs). Rounds of
+# CASES cases per property, each round with fresh random seeds, JOBS rounds at a time, until
+# SECONDS (default 300) of wall time have passed. Each round runs under a virtual-memory limit
+# (GiB, default 8), so a loader that trusted a size it read fails instead of taking the
+# machine, and under a time limit of 20 minutes per round, so a hang fails too. Prints the
+# rounds, the cases, the CPU seconds used and the failures (logs under target/).
+#   bash tools/fuzz.sh [SECONDS] [CASES_PER_ROUND] [GIB] [JOBS]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 budget=${1:-300}
-cases=${2:-2000}
+cases=${2:-500}
 gib=${3:-8}
-cargo test --release --test stability_fuzz --no-run >/dev/null 2>&1
+jobs=${4:-2}
+targets=(fuzz_scenes hostile_files stability_fuzz)
+for t in "${targets[@]}"; do
+  cargo test --release --test "$t" --no-run >/dev/null 2>&1
+done
+# The test binaries, run directly: one round is one binary's fuzz properties with fresh seeds.
+bins=()
+for t in "${targets[@]}"; do
+  bins+=("$(cargo test --release --test "$t" --no-run --message-format=json 2>/dev/null |
+    sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | tail -1)")
+done
 start=$SECONDS
+log=target/fuzz-campaign
+mkdir -p "$log"
 rounds=0
 failures=0
+# One round of target $1 (index into bins) as round $2; its status in $log/$2.status.
+round() {
+  local bin=${bins[$1]} name=${targets[$1]} n=$2 filter=""
+  [ "$name" = hostile_files ] && filter=fuzz_
+  (
+    ulimit -v $((gib * 1024 * 1024))
+    PROPTEST_CASES=$cases timeout 1200 "$bin" $filter --test-threads 1 -q
+  ) >"$log/$n.log" 2>&1
+  echo $? >"$log/$n.status"
+}
+cpu_before=$(awk '{print $14 + $15 + $16 + $17}' /proc/$$/stat)
+pids=()
 while (( SECONDS - start < budget )); do
-  if ! (ulimit -v $((gib * 1024 * 1024)); PROPTEST_CASES=$cases \
-        cargo test --release --test stability_fuzz -q >/tmp/caustic-fuzz.log 2>&1); then
-    failures=$((failures + 1))
-    cp /tmp/caustic-fuzz.log "target/fuzz-failure-$rounds.log"
-    echo "fuzz: round $rounds failed, see target/fuzz-failure-$rounds.log" >&2
-  fi
-  rounds=$((rounds + 1))
+  while (( ${#pids[@]} < jobs )) && (( SECONDS - start < budget )); do
+    round $((rounds % ${#targets[@]})) "$rounds" &
+    pids+=($!)
+    rounds=$((rounds + 1))
+  done
+  wait -n || true
+  alive=()
+  for p in "${pids[@]}"; do kill -0 "$p" 2>/dev/null && alive+=("$p"); done
+  pids=("${alive[@]}")
 done
-echo "fuzz: $rounds rounds x 6 properties x $cases cases = $((rounds * 6 * cases)) cases in $((SECONDS - start)) s, $failures failed rounds"
+wait
+for ((n = 0; n < rounds; n++)); do
+  if [ "$(cat "$log/$n.status")" != 0 ]; then
+    failures=$((failures + 1))
+    echo "fuzz: round $n (${targets[$((n % ${#targets[@]}))]}) failed, see $log/$n.log" >&2
+  fi
+done
+cpu=$(awk -v t="$(getconf CLK_TCK)" '{printf "%.0f", ($14 + $15 + $16 + $17) / t}' /proc/$$/stat)
+before=$(awk -v t="$(getconf CLK_TCK)" -v b="$cpu_before" 'BEGIN {printf "%.0f", b / t}')
+echo "fuzz: $rounds rounds of ${targets[*]} x $cases cases per property in $((SECONDS - start)) s" \
+  "of wall time and $((cpu - before)) s of CPU, under ${gib} GiB; $failures failed rounds"

@@ -296,6 +296,11 @@ pub struct ScriptArgs {
     /// only for a script you wrote or trust (docs/security.md).
     #[arg(long)]
     pub trusted_script: bool,
+    /// Most memory, in GiB, the scene may take (its description, instances, CSG trees,
+    /// triangles, textures and photon maps); over it, the script line or file at fault is an
+    /// error [default: half of the machine's physical memory].
+    #[arg(long, value_name = "GIB", value_parser = parse_gib)]
+    pub memory_budget: Option<u64>,
 }
 
 /// Parses `--script-time`: seconds, positive, at most a week.
@@ -307,6 +312,14 @@ fn parse_script_time(s: &str) -> Result<std::time::Duration, String> {
         return Err(format!("must be in (0, 604800] seconds, got {s}"));
     }
     Ok(std::time::Duration::from_secs_f64(secs))
+}
+
+/// Parses `--memory-budget`: a positive number of GiB, returned in bytes.
+fn parse_gib(s: &str) -> std::result::Result<u64, String> {
+    match s.parse::<f64>() {
+        Ok(g) if g > 0.0 && g.is_finite() => Ok((g * (1u64 << 30) as f64) as u64),
+        _ => Err(format!("expected a positive number of GiB, got '{s}'")),
+    }
 }
 
 impl ScriptArgs {
@@ -322,6 +335,7 @@ impl ScriptArgs {
             allow_read: self.allow_read.clone(),
             trusted: self.trusted_script,
             watchdog: true,
+            memory_budget: self.memory_budget,
             ..ScriptOptions::default()
         }
     }
@@ -928,6 +942,8 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         let win = frame::window(r, job.scale, None)?;
         let size = (win.full_width, win.full_height);
         let scene = build_scene(desc, r)?;
+        let caustics = crate::integrator::plan(&scene, crate::integrator::GiMode::On).caustics;
+        frame::charge_photons(desc, r, &scene, &job.settings.photons, caustics)?;
         let camera = Camera::new(&r.camera, size.0, size.1);
         let bar = Bar::new(job.progress, &out);
         let (film, stats) = frame::photon_view(&scene, &camera, size, &job.settings.photons, &bar);

@@ -45,6 +45,7 @@ mod write;
 
 pub use write::write_gltf;
 
+use crate::budget::Account;
 use crate::geometry::mesh::{MeshData, MeshMaterial};
 use buffer::{load_buffers, read_indices, read_uvs, read_vec3, split_glb, uri_path};
 use glam::{DAffine3, DMat3, DQuat, DVec3, Vec2, Vec3};
@@ -73,16 +74,35 @@ pub enum GltfError {
 
 /// Reads a `.gltf` or `.glb` file into one mesh (see the module doc for what is read).
 pub fn load_gltf(path: &Path) -> Result<MeshData, GltfError> {
+    load_gltf_with(path, &crate::budget::Budget::machine_default().account())
+}
+
+/// [`load_gltf`], charging each primitive's triangles to `account` before they are read.
+pub fn load_gltf_with(path: &Path, account: &Account) -> Result<MeshData, GltfError> {
     let bytes = crate::files::read_regular(path).map_err(|error| GltfError::Read {
         path: path.to_owned(),
         error,
     })?;
-    parse_gltf(&bytes, path)
+    parse_gltf_with(&bytes, path, account)
 }
 
 /// Parses glTF JSON or GLB bytes already in memory; `path` names the file in messages and
 /// locates its external buffers and images.
 pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<MeshData, GltfError> {
+    parse_gltf_with(
+        bytes,
+        path,
+        &crate::budget::Budget::machine_default().account(),
+    )
+}
+
+/// [`parse_gltf`], charging each primitive's triangles to `account` before they are read: a
+/// small file whose nodes and primitives share one large accessor would otherwise make billions.
+pub fn parse_gltf_with(
+    bytes: &[u8],
+    path: &Path,
+    account: &Account,
+) -> Result<MeshData, GltfError> {
     let invalid = |message: String| GltfError::Invalid {
         path: path.to_owned(),
         message,
@@ -134,6 +154,14 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<MeshData, GltfError> {
         }
         for prim in mesh.primitives() {
             let at = format!("mesh {} primitive {}", mesh.index(), prim.index());
+            let what = format!(
+                "{at} under node {}: {}",
+                node.index(),
+                primitive_size(&prim)
+            );
+            account
+                .try_charge(primitive_bytes(&prim), what)
+                .map_err(|e| invalid(e.to_string()))?;
             let Some(mut part) =
                 read_primitive(&prim, &buffers).map_err(|e| GltfError::Invalid {
                     path: path.to_owned(),
@@ -239,6 +267,39 @@ fn local_transform(node: &gltf::Node) -> Result<DAffine3, String> {
         return Err(format!("node {} has a non-finite transform", node.index()));
     }
     Ok(m)
+}
+
+/// Returns the vertex and index counts of a primitive, as its accessors declare them.
+fn primitive_counts(prim: &gltf::Primitive) -> (u64, u64) {
+    let vertices = prim
+        .get(&Semantic::Positions)
+        .map_or(0, |a| a.count() as u64);
+    let indices = prim.indices().map_or(vertices, |a| a.count() as u64);
+    (vertices, indices)
+}
+
+/// Returns a primitive's size for messages: "N vertices, M indices".
+fn primitive_size(prim: &gltf::Primitive) -> String {
+    let (vertices, indices) = primitive_counts(prim);
+    format!("{vertices} vertices and {indices} indices, which")
+}
+
+/// Returns the bytes reading and merging a primitive takes, from its accessors' counts:
+/// positions, normals and uvs, its indices, and the triangles they make (at most one per index),
+/// each once in the primitive's part and once in the merged mesh; 0 for points and lines.
+fn primitive_bytes(prim: &gltf::Primitive) -> u64 {
+    let (vertices, indices) = primitive_counts(prim);
+    let triangles = match prim.mode() {
+        Mode::Triangles => indices / 3,
+        Mode::TriangleStrip | Mode::TriangleFan => indices,
+        _ => return 0,
+    };
+    let vertex = (2 * size_of::<Vec3>() + size_of::<Vec2>()) as u64;
+    let triangle = 2 * size_of::<[u32; 3]>() as u64;
+    vertices
+        .saturating_mul(2 * vertex)
+        .saturating_add(indices.saturating_mul(size_of::<u32>() as u64))
+        .saturating_add(triangles.saturating_mul(triangle))
 }
 
 /// One triangle primitive's data before merging, in the primitive's own index space.

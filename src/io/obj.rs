@@ -30,6 +30,7 @@ mod write;
 
 pub use write::write_obj;
 
+use crate::budget::Account;
 use crate::geometry::mesh::MeshData;
 use glam::{Vec2, Vec3};
 use std::io;
@@ -59,18 +60,40 @@ pub enum ObjError {
 /// Bytes that are not valid UTF-8 are replaced (they can only matter in names
 /// and comments).
 pub fn load_obj(path: &Path) -> Result<MeshData, ObjError> {
+    load_obj_with(path, &crate::budget::Budget::machine_default().account())
+}
+
+/// [`load_obj`], charging what the mesh takes to `account` before it is parsed.
+pub fn load_obj_with(path: &Path, account: &Account) -> Result<MeshData, ObjError> {
     let bytes = crate::files::read_regular(path).map_err(|error| ObjError::Read {
         path: path.to_owned(),
         error,
     })?;
-    parse_obj(&String::from_utf8_lossy(&bytes), path)
+    parse_obj_with(&String::from_utf8_lossy(&bytes), path, account)
 }
 
 /// Parses OBJ text already in memory into one mesh; `path` names the file in messages and
 /// locates its material libraries. A leading byte-order mark is ignored.
 pub fn parse_obj(text: &str, path: &Path) -> Result<MeshData, ObjError> {
+    parse_obj_with(
+        text,
+        path,
+        &crate::budget::Budget::machine_default().account(),
+    )
+}
+
+/// [`parse_obj`], charging what the mesh takes to `account` before it is parsed.
+pub fn parse_obj_with(text: &str, path: &Path, account: &Account) -> Result<MeshData, ObjError> {
     // tobj would read `\u{FEFF}v 0 0 0` as an unknown statement and lose the first vertex.
     let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
+    let (triangles, bytes) = estimate_bytes(text);
+    let what = format!("its {triangles} triangles");
+    account
+        .try_charge(bytes, what)
+        .map_err(|e| ObjError::Mesh {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
     if has_unsafe_index(text) {
         return Err(locate(text, path, "face index out of range"));
     }
@@ -193,6 +216,31 @@ struct Counts {
     v: usize,
     vt: usize,
     vn: usize,
+}
+
+/// Returns the triangles the faces of `text` make and the bytes reading it takes: the text
+/// (and its copy), tobj's index per corner, a vertex per distinct corner (at most one per
+/// `v`, `vt` or `vn` statement) in tobj's arrays and in ours, and a triangle in each.
+fn estimate_bytes(text: &str) -> (u64, u64) {
+    let (mut corners, mut triangles, mut statements) = (0u64, 0u64, 0u64);
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v" | "vt" | "vn") => statements += 1,
+            Some("f" | "l") => {
+                let n = words.count() as u64;
+                corners += n;
+                triangles += n.saturating_sub(2);
+            }
+            _ => {}
+        }
+    }
+    let vertex = 2 * (size_of::<Vec3>() * 2 + size_of::<Vec2>()) as u64;
+    let bytes = 2 * text.len() as u64
+        + corners * size_of::<u32>() as u64
+        + corners.min(statements) * vertex
+        + triangles * 2 * size_of::<[u32; 3]>() as u64;
+    (triangles, bytes)
 }
 
 /// Reports whether a face uses a zero, relative or huge index that is invalid.

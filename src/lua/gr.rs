@@ -20,9 +20,10 @@
 
 use super::legacy::{self, Sign};
 use super::{MAX_PIXELS, State};
+use crate::budget::At;
 use crate::desc::{
     CameraDesc, CsgOp, LightDesc, LightId, LightShape, MaterialDesc, MaterialId, MeshDesc,
-    MeshFormat, MeshId, MeshSource, NodeKind, RenderDesc,
+    MeshFormat, MeshId, MeshSource, NodeDesc, NodeId, NodeKind, RenderDesc,
 };
 use crate::error::{Error, Fault};
 use crate::lua::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
@@ -131,6 +132,15 @@ pub(super) fn install(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()>
     Ok(())
 }
 
+/// Charges `bytes` for a description entry made at `a`'s line to the command's budget.
+pub(super) fn charge(s: &State, a: &Args, bytes: usize, what: &str) -> mlua::Result<()> {
+    let at = At::Script(&a.loc);
+    s.desc
+        .budget
+        .charge(bytes as u64, what, at)
+        .map_err(lua_err)
+}
+
 fn new_node(
     lua: &Lua,
     s: &mut State,
@@ -138,6 +148,13 @@ fn new_node(
     name: String,
     kind: NodeKind,
 ) -> mlua::Result<Value> {
+    let bytes = size_of::<NodeDesc>() + name.len();
+    charge(
+        s,
+        a,
+        bytes,
+        &format!("a node named by {} bytes", name.len()),
+    )?;
     let id = s.desc.add_node(name, kind, a.loc.clone());
     Ok(Value::UserData(lua.create_userdata(NodeRef(id))?))
 }
@@ -225,6 +242,8 @@ pub(super) fn mesh_at(s: &mut State, a: &Args, given: &str, path: PathBuf) -> ml
             "cannot load mesh '{given}': unsupported format '.{ext}' (caustic reads .obj, .gltf and .glb)"
         )));
     };
+    let bytes = size_of::<MeshDesc>() + given.len() + path.as_os_str().len();
+    charge(s, a, bytes, "a mesh entry")?;
     let id = MeshId(s.desc.meshes.len() as u32);
     s.desc.meshes.push(MeshDesc {
         source: MeshSource::File {
@@ -292,6 +311,13 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     };
     let texture = image(7, "texture")?;
     let bump = image(8, "bump map")?;
+    let paths = [&texture, &bump].map(|p| p.as_ref().map_or(0, |p| p.as_os_str().len()));
+    charge(
+        s,
+        a,
+        size_of::<MaterialDesc>() + paths[0] + paths[1],
+        "a material",
+    )?;
     let id = MaterialId(s.desc.materials.len() as u32);
     s.desc.materials.push(MaterialDesc {
         kd,
@@ -386,6 +412,7 @@ fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Res
             ),
         ));
     }
+    charge(s, a, size_of::<LightDesc>(), "a light")?;
     let id = LightId(s.desc.lights.len() as u32);
     s.desc.lights.push(LightDesc {
         shape,
@@ -449,6 +476,14 @@ fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
             .flat_map(|(_, tokens)| tokens.iter().cloned())
             .collect(),
     };
+    let tokens: usize = render
+        .settings
+        .iter()
+        .map(|t| size_of::<String>() + t.len())
+        .sum();
+    let lights = render.lights.len() * size_of::<LightId>();
+    let bytes = size_of::<RenderDesc>() + tokens + lights + render.output.as_os_str().len();
+    charge(s, a, bytes, "a render entry and its settings")?;
     s.desc.renders.push(render.clone());
     legacy::before_render(s, &render);
     let State { desc, hook, .. } = s;
@@ -465,6 +500,12 @@ fn gr_add_child(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     if parent == child {
         return Err(a.bad(2, "a node cannot be its own child"));
     }
+    charge(
+        s,
+        a,
+        size_of::<(NodeId, crate::error::Loc)>(),
+        "a child entry",
+    )?;
     s.desc.nodes[parent.0 as usize]
         .children
         .push((child, a.loc.clone()));

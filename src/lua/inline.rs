@@ -30,6 +30,12 @@ pub(super) fn inline_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
     };
     let positions = vertices(a, verts)?;
     let faces = faces(a, face_table, positions.len())?;
+    let corners: usize = faces.iter().map(Vec::len).sum();
+    let bytes = size_of::<MeshDesc>()
+        + positions.len() * size_of::<DVec3>()
+        + faces.len() * size_of::<Vec<u32>>()
+        + corners * size_of::<u32>();
+    super::gr::charge(s, a, bytes, "an inline mesh's vertices and faces")?;
     let id = MeshId(s.desc.meshes.len() as u32);
     s.desc.meshes.push(MeshDesc {
         source: MeshSource::Inline { positions, faces },

@@ -62,6 +62,9 @@ pub struct ScriptOptions {
     pub missing_textures_warn: bool,
     /// Most bytes the script's Lua state may hold; `None` for [`sandbox::MAX_LUA_MEMORY`].
     pub memory_limit: Option<usize>,
+    /// Most bytes the description and the scenes built from it may take (`--memory-budget`);
+    /// `None` for [`crate::budget::default_limit`].
+    pub memory_budget: Option<u64>,
     /// `--dialect`: how transforms compose. `None` (no `--dialect`) reads the script the
     /// modern way and warns when it looks legacy (`legacy/`).
     pub dialect: Option<Dialect>,
@@ -81,6 +84,16 @@ pub struct ScriptOptions {
     /// one library call that the Lua hook cannot stop ([`sandbox::watchdog`]); the command
     /// line sets it, a library caller would rather not be ended.
     pub watchdog: bool,
+}
+
+impl ScriptOptions {
+    /// Returns a fresh budget of [`ScriptOptions::memory_budget`] bytes.
+    pub fn budget(&self) -> crate::budget::Budget {
+        let limit = self
+            .memory_budget
+            .unwrap_or_else(crate::budget::default_limit);
+        crate::budget::Budget::new(limit)
+    }
 }
 
 /// Runs the script at `path`, calling `hook` for every `gr.render`; returns the final description.
@@ -132,6 +145,7 @@ pub fn run_source_with(
     let state = Rc::new(RefCell::new(State {
         desc: SceneDesc {
             missing_textures_warn: options.missing_textures_warn,
+            budget: options.budget(),
             ..SceneDesc::default()
         },
         warned_images: HashSet::new(),

@@ -14,6 +14,7 @@
 //! quad = gr.mesh('quad', {{0,0,0}, {1,0,0}, {1,1,0}, {0,1,0}}, {{0, 1, 2, 3}})
 //! ```
 
+use crate::budget::{Account, At};
 use crate::desc::{MeshDesc, MeshFormat, MeshId, MeshSource, SceneDesc};
 use crate::error::{Error, Fault, Result};
 use crate::geometry::mesh::MeshData;
@@ -27,12 +28,22 @@ use std::sync::Arc;
 pub struct MeshCache {
     by_id: HashMap<MeshId, Arc<MeshData>>,
     by_path: HashMap<PathBuf, Arc<MeshData>>,
+    /// Where the loaders charge what they read; `None` draws on each description's budget.
+    account: Option<Account>,
 }
 
 impl MeshCache {
-    /// Returns an empty cache.
+    /// Returns an empty cache charging each description's own budget.
     pub fn new() -> MeshCache {
         MeshCache::default()
+    }
+
+    /// Returns an empty cache whose loaders charge `account`.
+    pub fn with_account(account: Account) -> MeshCache {
+        MeshCache {
+            account: Some(account),
+            ..MeshCache::default()
+        }
     }
 
     /// Returns the data of mesh `id` of `desc`, reading its file on first use.
@@ -41,6 +52,11 @@ impl MeshCache {
             return Ok(Arc::clone(data));
         }
         let mesh = &desc.meshes[id.0 as usize];
+        let account = self
+            .account
+            .get_or_insert_with(|| desc.budget.account())
+            .clone();
+        let load_mesh = |mesh| load_mesh(mesh, &account);
         let data = match &mesh.source {
             MeshSource::File { path, .. } => match self.by_path.get(path) {
                 Some(data) => Arc::clone(data),
@@ -58,8 +74,8 @@ impl MeshCache {
 }
 
 /// Returns the triangles of `mesh`: its file read by the loader of its format, or its inline
-/// faces fanned into triangles.
-pub fn load_mesh(mesh: &MeshDesc) -> Result<MeshData> {
+/// faces fanned into triangles; what is read is charged to `account` before it is allocated.
+pub fn load_mesh(mesh: &MeshDesc, account: &Account) -> Result<MeshData> {
     match &mesh.source {
         MeshSource::File {
             given,
@@ -74,11 +90,16 @@ pub fn load_mesh(mesh: &MeshDesc) -> Result<MeshData> {
                 )
             };
             match format {
-                MeshFormat::Obj => obj::load_obj(path).map_err(|e| cannot(&e)),
-                MeshFormat::Gltf => gltf::load_gltf(path).map_err(|e| cannot(&e)),
+                MeshFormat::Obj => obj::load_obj_with(path, account).map_err(|e| cannot(&e)),
+                MeshFormat::Gltf => gltf::load_gltf_with(path, account).map_err(|e| cannot(&e)),
             }
         }
         MeshSource::Inline { positions, faces } => {
+            let triangles: usize = faces.iter().map(|f| f.len().saturating_sub(2)).sum();
+            let bytes = (positions.len() * size_of::<glam::Vec3>()
+                + triangles * size_of::<[u32; 3]>()) as u64;
+            let what = format!("the inline mesh's {triangles} triangles");
+            account.charge(bytes, what, At::Script(&mesh.loc))?;
             let mut data = MeshData {
                 source: PathBuf::from(format!("{} (inline mesh)", mesh.loc)),
                 positions: positions.iter().map(|p| p.as_vec3()).collect(),

@@ -97,6 +97,9 @@ pub struct Scene {
     /// What of its materials and lights the passes simulate: the effect plan's choice, applied
     /// by [`Scene::apply`] before any pass runs; [`Features::GENERAL`] until then.
     pub features: Features,
+    /// What the scene holds, charged to the command's memory budget and given back when the
+    /// scene is dropped ([`crate::budget`]).
+    pub account: crate::budget::Account,
 }
 
 /// The parts of shading the effect plan can leave out ([`crate::integrator::plan`]). Each hit is

@@ -62,7 +62,8 @@ fn read(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<MultiValue> {
     let path = s
         .resolve_input("mesh file", &given)
         .map_err(|m| a.fault(crate::lua::gr::input_fault(&m), m))?;
-    let mesh = crate::io::obj::load_obj(&path).map_err(|e| {
+    let account = s.desc.budget.account();
+    let mesh = crate::io::obj::load_obj_with(&path, &account).map_err(|e| {
         a.fault(
             Fault::MeshLoad,
             format!("readobj: cannot load mesh '{given}': {e}"),

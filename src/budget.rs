@@ -17,6 +17,10 @@
 //! A scene build charges an [`Account`], which gives its bytes back when the scene is dropped,
 //! so a script that renders many frames is charged for one scene at a time.
 //!
+//! A budget also carries the scene's read scope ([`Budget::read_scope`]): the folders its mesh
+//! files may name material libraries, buffers and images in, so the loaders that charge an
+//! account check those names against the same allowance.
+//!
 //! The Lua state's own memory is bounded apart (the sandbox's limit); limits that bound time or
 //! depth rather than memory (node visits, CSG depth, photon counts per light) stay where they are.
 //!
@@ -74,15 +78,30 @@ pub struct Budget(Arc<Counter>);
 struct Counter {
     limit: u64,
     used: AtomicU64,
+    /// The folders the scene's files may name other files in ([`crate::files::ReadScope`]):
+    /// the other half of what a scene is allowed, travelling with its bytes.
+    scope: crate::files::ReadScope,
 }
 
 impl Budget {
     /// Returns a budget of `limit` bytes, nothing charged yet.
     pub fn new(limit: u64) -> Budget {
+        Budget::scoped(limit, crate::files::ReadScope::any())
+    }
+
+    /// Returns a budget of `limit` bytes for a scene whose files may name only files in
+    /// `scope` (its material libraries, glTF buffers and images).
+    pub fn scoped(limit: u64, scope: crate::files::ReadScope) -> Budget {
         Budget(Arc::new(Counter {
             limit,
             used: AtomicU64::new(0),
+            scope,
         }))
+    }
+
+    /// Returns the folders the scene's files may name other files in.
+    pub fn read_scope(&self) -> &crate::files::ReadScope {
+        &self.0.scope
     }
 
     /// Returns a budget of [`default_limit`] bytes.
@@ -169,6 +188,11 @@ impl Drop for Held {
 }
 
 impl Account {
+    /// Returns the folders the scene's files may name other files in ([`Budget::read_scope`]).
+    pub fn read_scope(&self) -> &crate::files::ReadScope {
+        self.0.budget.read_scope()
+    }
+
     /// Charges `bytes` to the account, or returns what was over (nothing is charged then).
     pub fn try_charge(&self, bytes: u64, what: impl fmt::Display) -> Result<(), OverBudget> {
         self.0.budget.try_charge(bytes, what)?;

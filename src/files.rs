@@ -440,3 +440,50 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// The folders an untrusted scene's files may name other files in (a mesh's material
+/// libraries, glTF buffers and images; `docs/security.md`): canonical trees, or any file.
+#[derive(Clone, Debug, Default)]
+pub struct ReadScope {
+    /// The readable trees; `None` for any file (scenes built in Rust, trusted tools).
+    roots: Option<std::sync::Arc<[PathBuf]>>,
+}
+
+impl ReadScope {
+    /// Returns the scope that lets any file be read.
+    pub fn any() -> ReadScope {
+        ReadScope { roots: None }
+    }
+
+    /// Returns the scope of the canonical folder trees `roots`.
+    pub fn within(roots: Vec<PathBuf>) -> ReadScope {
+        ReadScope {
+            roots: Some(roots.into()),
+        }
+    }
+
+    /// Returns an error unless the existing file `path`, its symlinks and `..` resolved, lies in
+    /// the scope; a file that does not exist is left to the reader to report.
+    pub fn check(&self, path: &Path) -> io::Result<()> {
+        let Some(roots) = &self.roots else {
+            return Ok(());
+        };
+        let Ok(real) = std::fs::canonicalize(path) else {
+            return Ok(());
+        };
+        if roots.iter().any(|r| real.starts_with(r)) {
+            return Ok(());
+        }
+        let shown: Vec<String> = roots.iter().map(|r| r.display().to_string()).collect();
+        Err(io::Error::new(
+            io::ErrorKind::PermissionDenied,
+            format!(
+                "{} is outside the folders a scene may read ({}); a scene reads only files in its \
+                 own folder and below it (docs/security.md): copy the file there, or name its \
+                 folder with --allow-read DIR",
+                real.display(),
+                shown.join(", ")
+            ),
+        ))
+    }
+}

@@ -152,9 +152,11 @@ fn run_and_build(src: &str, dir: &std::path::Path) {
         script_time: Some(Duration::from_secs(5)),
         ..ScriptOptions::default()
     };
-    let hook = Box::new(|desc: &caustic::desc::SceneDesc, r: &caustic::desc::RenderDesc| {
-        build_scene(desc, r).map(|_| ())
-    });
+    let hook = Box::new(
+        |desc: &caustic::desc::SceneDesc, r: &caustic::desc::RenderDesc| {
+            build_scene(desc, r).map(|_| ())
+        },
+    );
     let _ = run_source_with(src.as_bytes(), "fuzz.lua", dir, hook, options);
 }
 
@@ -200,7 +202,9 @@ fn gltf_shape() -> impl Strategy<Value = GltfShape> {
             (
                 prop::option::of(0usize..4),
                 prop::collection::vec(0usize..8, 0..4),
-                prop::array::uniform3(prop_oneof![4 => Just(1.0f32), 1 => Just(1e20f32), 1 => Just(0.0f32)]),
+                prop::array::uniform3(
+                    prop_oneof![4 => Just(1.0f32), 1 => Just(1e20f32), 1 => Just(0.0f32)],
+                ),
             ),
             1..8,
         ),
@@ -270,9 +274,10 @@ impl GltfShape {
             accessors.join(",")
         );
         if self.glb {
-            let mut json =
-                format!(r#"{{"asset":{{"version":"2.0"}},{rest},"buffers":[{{"byteLength":{len}}}]}}"#)
-                    .into_bytes();
+            let mut json = format!(
+                r#"{{"asset":{{"version":"2.0"}},{rest},"buffers":[{{"byteLength":{len}}}]}}"#
+            )
+            .into_bytes();
             json.resize(json.len().next_multiple_of(4), b' ');
             let mut body = bin;
             body.resize(body.len().next_multiple_of(4), 0);

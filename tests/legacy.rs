@@ -256,13 +256,16 @@ fn legacy_copies_of_the_a4_scenes_render_the_originals_images() {
             legacy_copy(&std::fs::read_to_string(&original).unwrap()),
         )
         .unwrap();
-        // From the scenes' folder, where the copy finds the meshes (the working directory first).
+        // From the scenes' folder, where the copy finds the meshes (the working directory first);
+        // a script outside that folder reads it only when the user says so (--allow-read).
         let render = |script: &Path, flags: &[&str], exr: &str| {
             let run = run_ok(
                 caustic()
                     .current_dir(a4_assets())
                     .arg("render")
                     .arg(script)
+                    .arg("--allow-read")
+                    .arg(a4_assets())
                     .args(["--scale", "0.25", "--seed", "3", "-q", "-o"])
                     .arg(out.join(exr))
                     .args(flags),

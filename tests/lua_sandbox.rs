@@ -7,9 +7,20 @@ mod common;
 
 use caustic::error::{Error, Fault};
 use caustic::lua::{ScriptOptions, run_source_with};
-use common::{caustic, out_dir};
+use common::caustic;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
+
+/// Returns a fresh, empty folder for one test outside any git checkout (a scene inside one may
+/// read the whole checkout, so `target/test-output` would not test the folder boundary).
+fn out_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir()
+        .join(format!("caustic-sandbox-{}", std::process::id()))
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
 
 /// Runs `src` as `test.lua` in `dir` with `options`, without rendering.
 fn run_in(src: &[u8], dir: &Path, options: ScriptOptions) -> Result<(), Error> {
@@ -373,4 +384,72 @@ fn an_image_a_scene_names_outside_its_folders_is_refused_unless_the_user_names_i
         .output()
         .unwrap();
     assert!(out.status.success() && dir.join("inside.png").exists());
+}
+
+/// Runs `src` in `dir`, building the scene of every `gr.render` (where mesh files are read).
+fn build_in(src: &str, dir: &Path) -> Result<(), Error> {
+    let hook = Box::new(
+        |d: &caustic::desc::SceneDesc, r: &caustic::desc::RenderDesc| {
+            caustic::scene::build::build_scene(d, r).map(|_| ())
+        },
+    );
+    run_source_with(src.as_bytes(), "test.lua", dir, hook, quick()).map(|_| ())
+}
+
+#[test]
+fn files_a_mesh_names_outside_the_scene_folder_are_refused() {
+    let outside = out_dir("sandbox-nested-secret");
+    std::fs::write(outside.join("lib.mtl"), "newmtl m\nKd 1 0 0\n").unwrap();
+    std::fs::write(outside.join("data.bin"), [0u8; 36]).unwrap();
+    let png = outside.join("t.png");
+    image::RgbImage::from_pixel(2, 2, image::Rgb([200, 10, 10]))
+        .save(&png)
+        .unwrap();
+    let dir = out_dir("sandbox-nested");
+    let up = format!("../{}", outside.file_name().unwrap().to_string_lossy());
+    std::fs::write(
+        dir.join("a.obj"),
+        format!("mtllib {up}/lib.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("b.mtl"),
+        format!("newmtl m\nKd 1 1 1\nmap_Kd {}\n", png.display()),
+    )
+    .unwrap();
+    std::fs::write(dir.join("b.obj"), "mtllib b.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n").unwrap();
+    std::fs::write(
+        dir.join("c.gltf"),
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3",
+            "min":[0,0,0],"max":[0,0,0]}}],"bufferViews":[{{"buffer":0,"byteLength":36}}],
+            "buffers":[{{"uri":"{up}/data.bin","byteLength":36}}]}}"#
+        ),
+    )
+    .unwrap();
+    for mesh in ["a.obj", "b.obj", "c.gltf"] {
+        let src = format!(
+            "m = gr.mesh('m', '{mesh}') r = gr.node('r') r:add_child(m)
+             gr.render(r, 'o.png', 4, 4, {{0, 0, 5}}, {{0, 0, -1}}, {{0, 1, 0}}, 50,
+                       {{0, 0, 0}}, {{gr.light({{0, 5, 5}}, {{1, 1, 1}}, {{1, 0, 0}})}})"
+        );
+        let e = build_in(&src, &dir).unwrap_err().to_string();
+        assert!(
+            e.contains("outside the folders a scene may read"),
+            "{mesh}: {e}"
+        );
+        // Named by the user, the same folder is readable.
+        let options = ScriptOptions {
+            allow_read: vec![outside.clone()],
+            ..quick()
+        };
+        let hook = Box::new(
+            |d: &caustic::desc::SceneDesc, r: &caustic::desc::RenderDesc| {
+                caustic::scene::build::build_scene(d, r).map(|_| ())
+            },
+        );
+        run_source_with(src.as_bytes(), "test.lua", &dir, hook, options).unwrap();
+    }
 }

@@ -645,6 +645,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
     if let Some(n) = args.threads {
         set_threads(n)?;
     }
+    // The flags' own errors first, then the outputs, then the work.
+    let job = RenderJob::from_args(&args)?;
     let inputs = script_inputs(&args.scene, args.photon_maps.as_ref());
     for out in args.output.iter().chain(&args.aa_map) {
         check_out(out, &inputs)?;
@@ -652,7 +654,6 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let rendered = Rc::new(Cell::new(0u32));
     let count = Rc::clone(&rendered);
     let output = args.output.clone();
-    let job = RenderJob::from_args(&args)?;
     let (argv, scene) = (args.argv.clone(), args.scene.clone());
     let maps = args.photon_maps.clone();
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {

@@ -143,7 +143,7 @@ pub fn parse_gltf_with(
     }
     let doc = Document::from_json(root).map_err(|e| invalid(validation_message(e)))?;
     let dir = path.parent().unwrap_or(Path::new(""));
-    let buffers = load_buffers(&doc, bin, dir).map_err(invalid)?;
+    let buffers = load_buffers(&doc, bin, dir, account.read_scope()).map_err(invalid)?;
     let mut parts = Vec::new();
     let mut default_material = None;
     for (node, world) in placements(&doc).map_err(invalid)? {

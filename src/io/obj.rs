@@ -105,7 +105,8 @@ pub fn parse_obj_with(text: &str, path: &Path, account: &Account) -> Result<Mesh
         ignore_lines: true,
         ..Default::default()
     };
-    let libraries = mtl::MtlLoader::new(path.parent().unwrap_or(Path::new("")));
+    let libraries =
+        mtl::MtlLoader::new(path.parent().unwrap_or(Path::new("")), account.read_scope());
     let (models, materials) =
         tobj::load_obj_buf(&mut text.as_bytes(), &options, |name| libraries.load(name))
             .map_err(|e| locate(text, path, &e.to_string()))?;

@@ -89,10 +89,16 @@ pub struct ScriptOptions {
 impl ScriptOptions {
     /// Returns a fresh budget of [`ScriptOptions::memory_budget`] bytes.
     pub fn budget(&self) -> crate::budget::Budget {
+        self.budget_within(crate::files::ReadScope::any())
+    }
+
+    /// Returns a fresh budget of [`ScriptOptions::memory_budget`] bytes for a scene whose files
+    /// may name files only in `scope`.
+    pub fn budget_within(&self, scope: crate::files::ReadScope) -> crate::budget::Budget {
         let limit = self
             .memory_budget
             .unwrap_or_else(crate::budget::default_limit);
-        crate::budget::Budget::new(limit)
+        crate::budget::Budget::scoped(limit, scope)
     }
 }
 
@@ -145,7 +151,7 @@ pub fn run_source_with(
     let state = Rc::new(RefCell::new(State {
         desc: SceneDesc {
             missing_textures_warn: options.missing_textures_warn,
-            budget: options.budget(),
+            budget: options.budget_within(folders.read_scope()),
             ..SceneDesc::default()
         },
         warned_images: HashSet::new(),
@@ -156,7 +162,11 @@ pub fn run_source_with(
         dialect: options.dialect.unwrap_or_default(),
         watch: options.dialect.is_none().then(legacy::Watch::default),
     }));
-    let limit = options.memory_limit.unwrap_or(sandbox::MAX_LUA_MEMORY);
+    // The Lua state takes part of the same memory: never more than the command's budget.
+    let limit = options.memory_limit.unwrap_or_else(|| {
+        let budget = state.borrow().desc.budget.limit();
+        sandbox::MAX_LUA_MEMORY.min(usize::try_from(budget).unwrap_or(usize::MAX))
+    });
     let limits = sandbox::Limits {
         memory: limit,
         interruptible: options.interruptible,

@@ -243,12 +243,21 @@ impl Folders {
         let own = std::fs::canonicalize(dir).ok().map(|d| project_root(&d));
         let roots = own
             .into_iter()
-            .chain(allow_read.iter().filter_map(|d| std::fs::canonicalize(d).ok()))
+            .chain(
+                allow_read
+                    .iter()
+                    .filter_map(|d| std::fs::canonicalize(d).ok()),
+            )
             .collect();
         Folders {
             script_dir: script_dir.to_path_buf(),
             roots,
         }
+    }
+
+    /// Returns the scope the scene's own files (meshes' libraries, buffers, images) are read in.
+    pub fn read_scope(&self) -> crate::files::ReadScope {
+        crate::files::ReadScope::within(self.roots.clone())
     }
 
     /// Returns whether the existing file `path` lies in one of the readable trees.

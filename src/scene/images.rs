@@ -7,7 +7,7 @@
 
 use crate::budget::{Account, At, Budget};
 use crate::desc::MaterialDesc;
-use crate::error::{Loc, Result};
+use crate::error::{Error, Loc, Result};
 use crate::geometry::mesh::MeshMaterial;
 use crate::material::Material;
 use crate::material::texture::{BumpMap, Texture};
@@ -47,6 +47,12 @@ impl ImageCache {
     }
 
     fn load(&self, path: &Path, loc: &Loc) -> Result<Option<Texture>> {
+        // A texture a mesh file names must lie in the scene's folders (the script's own names
+        // were checked when it ran); never a warning: the file is there, and not the scene's.
+        self.account
+            .read_scope()
+            .check(path)
+            .map_err(|e| Error::at(loc, format!("texture {}: {e}", path.display())))?;
         // Over budget is an error even in warning mode: the file is there, the scene too big.
         self.charge(path, loc)?;
         match Texture::load(path, loc) {

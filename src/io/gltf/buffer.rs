@@ -90,11 +90,13 @@ pub fn uri_path(uri: &str, dir: &Path) -> Option<PathBuf> {
     (!uri.starts_with("data:")).then(|| dir.join(percent_decode(uri)))
 }
 
-/// Loads every buffer of the document; `bin` is the GLB `BIN` chunk, if any.
+/// Loads every buffer of the document; `bin` is the GLB `BIN` chunk, if any; a buffer file
+/// must lie in `scope`.
 pub fn load_buffers(
     doc: &gltf::Document,
     bin: Option<&[u8]>,
     dir: &Path,
+    scope: &crate::files::ReadScope,
 ) -> Result<Vec<Vec<u8>>, String> {
     let mut out = Vec::new();
     for buffer in doc.buffers() {
@@ -112,7 +114,9 @@ pub fn load_buffers(
                 Some(data) => decode_data_uri(data).map_err(|e| format!("buffer {i}: {e}"))?,
                 None => {
                     let file = dir.join(percent_decode(uri));
-                    crate::files::read_regular(&file)
+                    scope
+                        .check(&file)
+                        .and_then(|()| crate::files::read_regular(&file))
                         .map_err(|e| format!("buffer {i}: cannot read {}: {e}", file.display()))?
                 }
             },

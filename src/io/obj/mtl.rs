@@ -26,15 +26,18 @@ use std::path::{Path, PathBuf};
 pub(super) struct MtlLoader<'a> {
     /// The OBJ file's folder, against which `mtllib` names resolve.
     dir: &'a Path,
+    /// The folders a library may be read from (`docs/security.md`).
+    scope: &'a crate::files::ReadScope,
     /// The first fault found in a library that exists.
     pub fault: RefCell<Option<ObjError>>,
 }
 
 impl<'a> MtlLoader<'a> {
-    /// Returns a loader resolving library names against `dir`.
-    pub fn new(dir: &'a Path) -> MtlLoader<'a> {
+    /// Returns a loader resolving library names against `dir`, reading only inside `scope`.
+    pub fn new(dir: &'a Path, scope: &'a crate::files::ReadScope) -> MtlLoader<'a> {
         MtlLoader {
             dir,
+            scope,
             fault: RefCell::new(None),
         }
     }
@@ -44,7 +47,10 @@ impl<'a> MtlLoader<'a> {
         let file = self.dir.join(name);
         if file.exists()
             && !file.is_dir()
-            && let Err(error) = crate::files::check_regular(&file)
+            && let Err(error) = self
+                .scope
+                .check(&file)
+                .and_then(|()| crate::files::check_regular(&file))
         {
             self.fault
                 .borrow_mut()

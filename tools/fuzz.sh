@@ -3,7 +3,8 @@
 # the gr grammar and glTF structures (tests/fuzz_scenes.rs), photon-map files with valid
 # checksums and single-part, multi-part and tiled EXR tiles (tests/hostile_files.rs, its fuzz_*
 # properties), and the loaders' byte mutations (tests/stability_fuzz.rs). Rounds of
-# CASES cases per property, each round with fresh random seeds, JOBS rounds at a time, until
+# CASES cases per property, each round with fresh random seeds, JOBS rounds at a time (never two
+# of one target), until
 # SECONDS (default 300) of wall time have passed. Each round runs under a virtual-memory limit
 # (GiB, default 8), so a loader that trusted a size it read fails instead of taking the
 # machine, and under a time limit of 20 minutes per round, so a hang fails too. Prints the
@@ -41,23 +42,31 @@ round() {
   echo $? >"$log/$n.status"
 }
 cpu_before=$(awk '{print $14 + $15 + $16 + $17}' /proc/$$/stat)
-pids=()
+# Rounds of one target never overlap (a test binary clears its own output folders), so at most
+# one round per target runs at a time: the next target in turn that is not running.
+declare -A running=()
+declare -a target_of=()
+next=0
 while (( SECONDS - start < budget )); do
-  while (( ${#pids[@]} < jobs )) && (( SECONDS - start < budget )); do
-    round $((rounds % ${#targets[@]})) "$rounds" &
-    pids+=($!)
+  for ((k = 0; k < ${#targets[@]} && ${#running[@]} < jobs; k++)); do
+    t=$(( (next + k) % ${#targets[@]} ))
+    [ -n "${running[$t]:-}" ] && continue
+    round "$t" "$rounds" &
+    running[$t]=$!
+    target_of[$rounds]=$t
     rounds=$((rounds + 1))
+    next=$(( (t + 1) % ${#targets[@]} ))
   done
   wait -n || true
-  alive=()
-  for p in "${pids[@]}"; do kill -0 "$p" 2>/dev/null && alive+=("$p"); done
-  pids=("${alive[@]}")
+  for t in "${!running[@]}"; do
+    kill -0 "${running[$t]}" 2>/dev/null || unset "running[$t]"
+  done
 done
 wait
 for ((n = 0; n < rounds; n++)); do
   if [ "$(cat "$log/$n.status")" != 0 ]; then
     failures=$((failures + 1))
-    echo "fuzz: round $n (${targets[$((n % ${#targets[@]}))]}) failed, see $log/$n.log" >&2
+    echo "fuzz: round $n (${targets[${target_of[$n]}]}) failed, see $log/$n.log" >&2
   fi
 done
 cpu=$(awk -v t="$(getconf CLK_TCK)" '{printf "%.0f", ($14 + $15 + $16 + $17) / t}' /proc/$$/stat)

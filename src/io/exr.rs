@@ -122,6 +122,19 @@ fn check_header(
     let area = header.layer_size.width() as u64 * header.layer_size.height() as u64;
     let per_pixel = (header.channels.bytes_per_pixel as u64).max(16);
     let most = max_expansion(header.compression).saturating_mul(file_len) + DECODE_SLACK;
+    // The reader decodes a whole tile at once, however little of it the data window holds.
+    if let BlockDescription::Tiles(t) = &header.blocks {
+        let tile = t.tile_size.width() as u64 * t.tile_size.height() as u64;
+        if tile.saturating_mul(per_pixel) > most {
+            return Err(format!(
+                "its {}x{} tiles are more than its {file_len} bytes can hold with {} \
+                 compression: a damaged or forged header",
+                t.tile_size.width(),
+                t.tile_size.height(),
+                header.compression
+            ));
+        }
+    }
     if area.saturating_mul(per_pixel) > most {
         return Err(format!(
             "its {}x{} pixels ({} bytes a pixel decoded) are more than its {file_len} bytes \
@@ -130,6 +143,15 @@ fn check_header(
             header.layer_size.height(),
             header.channels.bytes_per_pixel,
             header.compression
+        ));
+    }
+    // The reader allocates an offset table of one u64 per chunk before it reads a pixel: a
+    // file must hold at least those offsets.
+    if (header.chunk_count as u64).saturating_mul(8) > file_len {
+        return Err(format!(
+            "its header claims {} chunks, more than its {file_len} bytes can index: a damaged \
+             or forged header",
+            header.chunk_count
         ));
     }
     Ok(header)

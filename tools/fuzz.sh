@@ -35,11 +35,12 @@ failures=0
 round() {
   local bin=${bins[$1]} name=${targets[$1]} n=$2 filter=""
   [ "$name" = hostile_files ] && filter=fuzz_
+  local status=0
   (
     ulimit -v $((gib * 1024 * 1024))
     PROPTEST_CASES=$cases timeout 1200 "$bin" $filter --test-threads 1 -q
-  ) >"$log/$n.log" 2>&1
-  echo $? >"$log/$n.status"
+  ) >"$log/$n.log" 2>&1 || status=$?
+  echo "$status" >"$log/$n.status"
 }
 cpu_before=$(awk '{print $14 + $15 + $16 + $17}' /proc/$$/stat)
 # Rounds of one target never overlap (a test binary clears its own output folders), so at most
@@ -64,7 +65,7 @@ while (( SECONDS - start < budget )); do
 done
 wait
 for ((n = 0; n < rounds; n++)); do
-  if [ "$(cat "$log/$n.status")" != 0 ]; then
+  if [ "$(cat "$log/$n.status" 2>/dev/null)" != 0 ]; then
     failures=$((failures + 1))
     echo "fuzz: round $n (${targets[${target_of[$n]}]}) failed, see $log/$n.log" >&2
   fi

@@ -259,6 +259,9 @@ fn the_time_budget_stops_loops_wherever_they_hide() {
          collectgarbage() while true do end",
         "string.gsub(string.rep('a', 1000), 'a', function() while true do end end)",
         "table.sort({3, 2, 1, 5, 4}, function(a, b) while true do end end)",
+        // Loops in C that take no memory: the sandbox answers or refuses them, then loops on.
+        "assert(string.rep('', 2^62) == '' and (''):rep(2^62, '') == '') while true do end",
+        "assert(not pcall(table.move, {}, 1, 2^62, 2)) while true do end",
     ] {
         let (fault, message) = refused(src, &dir);
         assert_eq!(fault, Fault::Sandbox, "{src}: {message}");
@@ -452,4 +455,44 @@ fn files_a_mesh_names_outside_the_scene_folder_are_refused() {
         );
         run_source_with(src.as_bytes(), "test.lua", &dir, hook, options).unwrap();
     }
+}
+
+#[test]
+fn run_from_the_home_folder_a_scene_writes_only_in_it_not_below_it() {
+    let home = out_dir("sandbox-home");
+    let pictures = home.join("Pictures");
+    std::fs::create_dir_all(&pictures).unwrap();
+    std::fs::write(pictures.join("wedding.png"), "keep me").unwrap();
+    let scenes = out_dir("sandbox-home-scenes");
+    std::fs::write(scenes.join("s.lua"), tiny_scene("Pictures/wedding.png")).unwrap();
+    let out = caustic()
+        .current_dir(&home)
+        .env("HOME", &home)
+        .args(["render", "-q"])
+        .arg(scenes.join("s.lua"))
+        .output()
+        .unwrap();
+    assert!(
+        !out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(pictures.join("wedding.png")).unwrap(),
+        "keep me"
+    );
+    std::fs::write(scenes.join("t.lua"), tiny_scene("here.png")).unwrap();
+    let out = caustic()
+        .current_dir(&home)
+        .env("HOME", &home)
+        .args(["render", "-q"])
+        .arg(scenes.join("t.lua"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(home.join("here.png").exists());
 }

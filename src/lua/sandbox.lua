@@ -133,4 +133,21 @@ function require(name)
   end
   error("module '" .. name .. "' not found:" .. why, 2)
 end
+-- Two library loops that run in C, where the time budget's hook never fires, with counts
+-- only a hostile script asks for: string.rep of an empty string (no memory is taken, so the
+-- memory limit never stops it) and table.move of nils.
+local rep, move = string.rep, table.move
+string.rep = function(s, n, sep)
+  if type(n) == "number" and n > 2^31 and #tostring(s) + #tostring(sep or "") == 0 then
+    return ""
+  end
+  return rep(s, n, sep)
+end
+table.move = function(a1, f, e, t, a2)
+  if type(f) == "number" and type(e) == "number" and e - f >= 2^27 then
+    error("table.move: " .. string.format("%.0f", e - f + 1) .. " elements is more than a " ..
+      "scene script may move at once (2^27); caustic runs scenes in a sandbox (docs/security.md)", 2)
+  end
+  return move(a1, f, e, t, a2)
+end
 return io

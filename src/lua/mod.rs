@@ -2,8 +2,10 @@
 //!
 //! Nothing below this layer knows Lua exists: a script run yields plain data, and `gr.render`
 //! hands the description as it stands to a [`RenderHook`] (the CLI builds and renders the scene
-//! there). The layer has three parts:
-//! - `sandbox.rs`: the Lua state and its standard library;
+//! there). The layer's parts:
+//! - `sandbox.rs` (with `sandbox.lua`): the Lua state, built from what a scene needs (no
+//!   processes, native code, bytecode or writes; reads confined to the scene's folders), its
+//!   time budget and the command line's watchdog (`docs/security.md`);
 //! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
 //! - `inline.rs`: the inline form of `gr.mesh`, its vertex and face tables checked element by
 //!   element;
@@ -14,10 +16,13 @@
 //!   built-in `readobj`, the Lua 5.1 names, and the warning when a modern run looks legacy.
 //! - [`globals`]: the globals set before the script runs (`-D NAME=VALUE`).
 //!
-//! This module owns what a run shares: the description being filled, path resolution and
-//! warnings. Paths (meshes, textures, output images, `require`d modules) resolve against the
-//! working directory first, as the course does, then against the script's folder, so a corpus
-//! scene runs both from its own folder and by path from anywhere. Files are only resolved here;
+//! This module owns what a run shares: the description being filled (and the memory budget it
+//! is charged to, [`crate::budget`]), path resolution and warnings. Paths (meshes, textures,
+//! output images, `require`d modules) resolve against the working directory first, as the course
+//! does, then against the script's folder, so a corpus scene runs both from its own folder and
+//! by path from anywhere; what they name must lie in the scene's folders
+//! ([`sandbox::Folders`]), and an image `gr.render` names must be written inside the script's
+//! folder or the working directory ([`check_scene_output`]). Files are only resolved here;
 //! the scene build reads them. Two legacy cases read files here: `readobj`, whose tables the
 //! script needs at once, and the legacy warning's check, which reads mesh files' vertices for
 //! their boxes (once per run, only when the transform order matters).
@@ -36,7 +41,7 @@ pub mod globals;
 mod gr;
 mod inline;
 mod legacy;
-mod sandbox;
+pub mod sandbox;
 pub mod settings;
 
 pub use legacy::Dialect;
@@ -209,9 +214,10 @@ pub fn run_source_with(
 }
 
 /// Returns an error unless `output`, an image the script at `script` names in `gr.render`, is
-/// written inside the script's folder tree or the working directory's tree, once its folder's
-/// and its own symlinks are followed: a scene may not choose to overwrite files elsewhere (a
-/// user's `-o` may). A folder that does not exist is left to the write to report.
+/// written inside the script's folder tree or the working directory's tree (only in the folder
+/// itself when that is the home folder or the root), once its folder's and its own symlinks are
+/// followed: a scene may not choose to overwrite files elsewhere (a user's `-o` may). A folder
+/// that does not exist is left to the write to report.
 pub fn check_scene_output(script: &Path, output: &Path) -> std::result::Result<(), String> {
     let Ok((target, _)) = crate::files::check_output(output) else {
         return Ok(());
@@ -231,7 +237,14 @@ pub fn check_scene_output(script: &Path, output: &Path) -> std::result::Result<(
         .iter()
         .filter_map(|d| std::fs::canonicalize(d).ok())
         .collect();
-    if trees.iter().any(|t| folder.starts_with(t)) {
+    // The home folder and the root are never a scene's tree: run from there, a scene writes in
+    // that folder itself, not anywhere below it (`~/Pictures/…`).
+    let home = std::env::var_os("HOME").and_then(|h| std::fs::canonicalize(h).ok());
+    let whole_tree = |t: &Path| t.parent().is_some() && home.as_deref() != Some(t);
+    if trees
+        .iter()
+        .any(|t| folder == *t || (whole_tree(t) && folder.starts_with(t)))
+    {
         return Ok(());
     }
     let shown: Vec<String> = trees.iter().map(|t| t.display().to_string()).collect();

@@ -425,3 +425,30 @@ fn the_description_is_charged_and_scenes_give_their_bytes_back() {
         + "x.png".len();
     assert_eq!(desc.budget.used(), entries as u64);
 }
+
+/// A script that generates water meshes in a loop writes a file for each: the files are charged,
+/// so the loop ends at the budget instead of filling the disk.
+#[test]
+fn generated_mesh_files_are_charged_so_a_loop_cannot_fill_the_disk() {
+    let dir = out_dir("budget-generated");
+    let src = "for i = 1, 1000 do
+                 gr.water_mesh('w', {n = 65, size = 1, amplitude = 0.001 * i})
+               end";
+    let options = ScriptOptions {
+        memory_budget: Some(1 << 20),
+        ..ScriptOptions::default()
+    };
+    let e = run_source_with(
+        src.as_bytes(),
+        "test.lua",
+        &dir,
+        Box::new(|_, _| Ok(())),
+        options,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("generated water mesh"), "{e}");
+    let written = std::fs::read_dir(dir.join(".cache")).map_or(0, |d| d.count());
+    // 65 x 65 x 60 B = 253 KiB each: at most four fit in 1 MiB.
+    assert!((1..=4).contains(&written), "{written} files written");
+}

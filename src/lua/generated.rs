@@ -62,6 +62,16 @@ pub(super) fn water_mesh(s: &mut State, a: &Args) -> mlua::Result<MeshId> {
         fingerprint(&params, depth)
     ));
     if !path.is_file() {
+        // What a script writes is part of what it creates: a loop over parameters would fill
+        // the disk with meshes it never renders. Each new file is charged to the budget, at
+        // about 60 bytes per grid vertex (positions, normals, coordinates and two triangles).
+        let n = u64::from(params.n);
+        super::gr::charge(
+            s,
+            a,
+            (n * n * 60) as usize,
+            &format!("a new {n}x{n} generated water mesh file"),
+        )?;
         let folder = path.parent().expect("the cache path has a folder");
         let written = std::fs::create_dir_all(folder)
             .map_err(|e| e.to_string())

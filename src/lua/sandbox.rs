@@ -349,17 +349,23 @@ fn install_hook(
     lua.set_global_hook(
         HookTriggers::new().every_nth_instruction(LINE_SAMPLE),
         move |lua, debug| {
-            if let (Some(line), Some(source)) = (debug.current_line(), debug.source().source) {
-                let file = source.strip_prefix('@').unwrap_or(&source);
+            // Inside the sandbox's own Lua (a wrapper such as string.rep), the script line is
+            // the one that called it.
+            let here = match (debug.current_line(), debug.source().source) {
+                (_, Some(source)) if source == PRELUDE_NAME => {
+                    Some(super::args::caller_loc(lua)).filter(|l| l.line > 0)
+                }
+                (Some(line), Some(source)) => Some(Loc {
+                    file: source.strip_prefix('@').unwrap_or(&source).into(),
+                    line: line as u32,
+                }),
+                _ => None,
+            };
+            if let Some(here) = here {
                 let mut seen = seen.borrow_mut();
                 match seen.as_mut() {
-                    Some(loc) if &*loc.file == file => loc.line = line as u32,
-                    _ => {
-                        *seen = Some(Loc {
-                            file: file.into(),
-                            line: line as u32,
-                        })
-                    }
+                    Some(loc) if loc.file == here.file => loc.line = here.line,
+                    _ => *seen = Some(here),
                 }
                 if let Some(loc) = seen.as_ref() {
                     clock.saw(loc);

@@ -962,6 +962,25 @@ proptest! {
     }
 }
 
+/// The second fuzz campaign's finding: one byte inserted into a photon-map file (its checksum
+/// recomputed) made a light count of the file's next bytes, and the reader allocated the
+/// counts of up to 2^20 lights (22.5 MiB for 8 KB) before reading any.
+#[test]
+fn a_light_count_the_file_cannot_hold_is_refused_before_it_is_allocated() {
+    let dir = out_dir("hostile_files_light_count");
+    caustic::photon::file::write(&dir.join("maps.bin"), &small_maps(300)).unwrap();
+    let valid = std::fs::read(dir.join("maps.bin")).unwrap();
+    let bytes = forge(&valid, &[MapEdit::Insert(13423561826027610574, 9)]);
+    let path = dir.join("forged.bin");
+    std::fs::write(&path, &bytes).unwrap();
+    let (_, most) = largest_allocation(|| caustic::photon::file::read(&path));
+    assert!(
+        most <= 4 * bytes.len() + (20 << 20),
+        "{most} bytes allocated for {}",
+        bytes.len()
+    );
+}
+
 /// The fuzz campaign's finding: caustic's own tile with one byte changed and two inserted
 /// became a tiled file of 16448 x 64 tiles, whose one tile buffer the reader allocated (12 MiB
 /// for a 612-byte file): the tile's size was bounded by the image limit alone.

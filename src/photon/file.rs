@@ -543,6 +543,13 @@ fn read_map<R: Read>(r: &mut Input<R>, what: &str, size: u64) -> Result<CountedM
     if lights > MAX_LIGHTS {
         return Err(format!("{what}: {lights} lights (at most {MAX_LIGHTS})"));
     }
+    // Each light's counts take 24 bytes of the file: a count the file cannot hold is refused
+    // before the counts are allocated (a forged count made an 8 KB file take 22 MiB).
+    if u64::from(lights) * 24 > size {
+        return Err(format!(
+            "{what}: {lights} lights, more than the file's {size} bytes hold"
+        ));
+    }
     let mut per_light = Vec::with_capacity(lights as usize);
     for _ in 0..lights {
         per_light.push(LightCounts {

@@ -17,15 +17,14 @@
 //! ```
 
 use crate::camera::Camera;
-use crate::desc::MeshSource;
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::film::{Film, Window};
-use crate::integrator::photon_map::{Gi, GiSettings, GiStats, Preloaded, planned};
+use crate::integrator::maps_file::{self, FrameOf, SavedMaps};
+use crate::integrator::photon_map::{GiSettings, GiStats, Prepass};
 use crate::integrator::plan::plan_for;
-use crate::integrator::{GiMode, Integrator, Settings, plan};
+use crate::integrator::{GiMode, Integrator, Plan, Settings, View};
 use crate::lua::MAX_PIXELS;
-use crate::photon::file::{CountedMap, Expected, Fingerprint, Fnv, SavedMaps};
 use crate::photon::trace::{MAX_PHOTONS, MapKind};
 use crate::progress::Progress;
 use crate::scene::{Scene, build_scene};
@@ -39,27 +38,39 @@ pub struct Frame {
     pub stats: Stats,
 }
 
-/// Renders `window` of the image of `scene` through `camera`: plans the frame, applies the
-/// plan's shading features to the scene ([`Scene::apply`]: an effect disabled there stays
-/// disabled), then runs the chosen integrator's phases, reporting each to `progress`.
+/// Returns the effect plan of a frame of `scene` with `settings`
+/// ([`mod@crate::integrator::plan`]) and applies its shading features to the scene
+/// ([`Scene::apply`]: an effect disabled there stays disabled). A frame is planned once;
+/// [`render`] takes the plan.
+pub fn plan(scene: &mut Scene, settings: &Settings) -> Plan {
+    let plan = plan_for(scene, settings);
+    scene.apply(plan.features);
+    plan
+}
+
+/// Renders `window` of the image of `scene` through `camera` as `plan` says (made by [`plan`]
+/// for this scene and these settings): runs the chosen integrator's phases, reporting each to
+/// `progress`.
 pub fn render(
-    scene: &mut Scene,
+    scene: &Scene,
     camera: &Camera,
     window: Window,
     settings: &Settings,
+    plan: Plan,
     progress: &dyn Progress,
 ) -> (Film, Stats) {
-    let plan = plan_for(scene, settings);
-    scene.apply(plan.features);
-    let scene = &*scene;
-    plan.integrator
-        .render(scene, camera, window, settings, plan, progress)
+    let view = View {
+        scene,
+        camera,
+        window,
+    };
+    plan.integrator.render(view, settings, plan, None, progress)
 }
 
 /// Builds the scene of the `gr.render` call `r` and renders it at `scale` times its size, or the
-/// window `crop` (`[x0, y0, x1, y1]`, end exclusive) of it. With `settings.photons.maps_file`,
-/// the photon maps are read from that file ([`crate::photon::file`]) instead of traced, once
-/// the file is found to hold the maps this frame would trace.
+/// window `crop` (`[x0, y0, x1, y1]`, end exclusive) of it. With `settings.maps_file`, the
+/// photon-map prepass is read from that file ([`maps_file::load`]) instead of made, once the
+/// file is found to hold the maps this frame would trace.
 pub fn render_desc(
     desc: &SceneDesc,
     r: &RenderDesc,
@@ -68,14 +79,28 @@ pub fn render_desc(
     settings: &Settings,
     progress: &dyn Progress,
 ) -> Result<Frame> {
-    let (window, mut scene, mut settings, factor) = prepare(desc, r, scale, crop, settings)?;
-    if let Some(path) = settings.photons.maps_file.clone() {
-        let size = (window.full_width, window.full_height);
-        let maps = read_maps(desc, r, &scene, &settings, &path, size)?;
-        settings.photons.preloaded = Some(maps);
-    }
-    let camera = Camera::new(&r.camera, window.full_width, window.full_height);
-    let (film, mut stats) = render(&mut scene, &camera, window, &settings, progress);
+    let f = prepare(desc, r, scale, crop, settings)?;
+    let read = match &f.settings.maps_file {
+        Some(path) => Some(maps_file::load(f.of(desc, r), &f.settings.photons, path)?),
+        None => None,
+    };
+    let size = f.of(desc, r).size;
+    let camera = Camera::new(&r.camera, size.0, size.1);
+    let Prepared {
+        window,
+        scene,
+        settings,
+        plan,
+        factor,
+    } = f;
+    let view = View {
+        scene: &scene,
+        camera: &camera,
+        window,
+    };
+    let (film, mut stats) = plan
+        .integrator
+        .render(view, &settings, plan, read, progress);
     // Why the photon counts differ from the script's and the settings' (see
     // `GiSettings::follow_image`), among the plan's notes.
     if let Some(factor) = factor
@@ -90,15 +115,54 @@ pub fn render_desc(
     Ok(Frame { scene, film, stats })
 }
 
-/// Returns the window, the scene and the settings of a frame of `r` (photon counts scaled with
-/// the image when they follow it, and checked), and the factor they were scaled by.
+/// Runs the photon-map prepass a render of `r` at `scale` with `settings` would run and returns
+/// it as a file holds it, to be saved (`caustic photons --save`, [`maps_file::save`]). Errors
+/// name the flag `--save` when the frame is not photon-mapped.
+pub fn trace_maps(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scale: f64,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<(SavedMaps, GiStats)> {
+    let f = prepare(desc, r, scale, None, settings)?;
+    maps_file::save(f.of(desc, r), &f.settings.photons, progress)
+}
+
+/// A frame ready for its passes: its window, its scene as the plan shades it, its settings
+/// (photon counts scaled with the image when they follow it), its one plan, and the factor
+/// the counts were scaled by.
+struct Prepared {
+    window: Window,
+    scene: Scene,
+    settings: Settings,
+    plan: Plan,
+    factor: Option<f64>,
+}
+
+impl Prepared {
+    /// Returns this frame of `r` of `desc` as the photon-map file sees it.
+    fn of<'a>(&'a self, desc: &'a SceneDesc, r: &'a RenderDesc) -> FrameOf<'a> {
+        FrameOf {
+            desc,
+            render: r,
+            scene: &self.scene,
+            plan: &self.plan,
+            size: (self.window.full_width, self.window.full_height),
+        }
+    }
+}
+
+/// Returns the frame of `r` at `scale` (or its window `crop`) with `settings`: its scene built,
+/// its photon counts scaled with the image when they follow it and checked and charged to the
+/// scene's budget, and its plan made and applied ([`plan`]).
 fn prepare(
     desc: &SceneDesc,
     r: &RenderDesc,
     scale: f64,
     crop: Option<[u32; 4]>,
     settings: &Settings,
-) -> Result<(Window, Scene, Settings, Option<f64>)> {
+) -> Result<Prepared> {
     let window = window(r, scale, crop)?;
     let mut scene = build_scene(desc, r)?;
     let pixels = |w: u32, h: u32| w as f64 * h as f64;
@@ -110,190 +174,17 @@ fn prepare(
     }
     check_photon_budget(desc, r, &scene, &settings)?;
     // Every pass of the frame, and the photon-map file's, sees the scene as the plan shades it.
-    let plan = plan_for(&scene, &settings);
+    let plan = plan(&mut scene, &settings);
     if plan.integrator != Integrator::Whitted {
         charge_photons(desc, r, &scene, &settings.photons, plan.caustics)?;
     }
-    scene.apply(plan.features);
-    Ok((window, scene, settings, follow.then_some(factor)))
-}
-
-/// Returns the photon-mapping settings a frame of `scene` with `settings` traces its maps with,
-/// or a usage error naming `flag` when the frame is not photon-mapped.
-fn map_settings(scene: &Scene, settings: &Settings, flag: &str) -> Result<GiSettings> {
-    let plan = plan_for(scene, settings);
-    if plan.integrator != Integrator::PhotonMap {
-        let what = match plan.integrator {
-            Integrator::Progressive => "progressively, with fresh photon maps every pass",
-            _ => "without photon maps (photon mapping is off for it: see caustic info)",
-        };
-        return Err(Error::Usage(format!(
-            "{flag}: this frame is rendered {what}, so it has no photon maps to share"
-        )));
-    }
-    Ok(GiSettings {
-        maps_file: None,
-        preloaded: None,
-        ..planned(&settings.photons, &plan)
+    Ok(Prepared {
+        window,
+        scene,
+        settings,
+        plan,
+        factor: follow.then_some(factor),
     })
-}
-
-/// Returns the fingerprint of the maps that `gi` traces, and of the irradiance cache it makes,
-/// for the `w × h` frame of `r` ([`file`]).
-fn fingerprint(
-    desc: &SceneDesc,
-    r: &RenderDesc,
-    scene: &Scene,
-    gi: &GiSettings,
-    (width, height): (u32, u32),
-) -> Result<Fingerprint> {
-    let mut h = Fnv::default();
-    let text = format!(
-        "{:?}",
-        (
-            &desc.nodes,
-            &desc.materials,
-            &desc.lights,
-            &desc.meshes,
-            r.root,
-            r.camera,
-            &r.lights
-        )
-    );
-    h.write(text.as_bytes());
-    let meshes = desc.meshes.iter().filter_map(|m| match &m.source {
-        MeshSource::File { path, .. } => Some(path),
-        MeshSource::Inline { .. } => None,
-    });
-    let images = desc
-        .materials
-        .iter()
-        .flat_map(|m| m.texture.iter().chain(&m.bump));
-    for path in meshes.chain(images) {
-        h.write_file(path).map_err(|e| Error::File {
-            path: path.clone(),
-            message: e.to_string(),
-        })?;
-    }
-    let budget = |kind| format!("{:?}", gi.budget(&scene.lights, kind));
-    let caustic = if gi.caustics {
-        budget(MapKind::Caustic)
-    } else {
-        "none".to_string()
-    };
-    Ok(Fingerprint {
-        scene: h.finish(),
-        settings: format!(
-            "caustic {}; seed {}; global photons per light {}; caustic photons per light \
-             {caustic}; image {width}x{height}; k {}; max radius {}; {:?}; {:?}; precomputed points {}; \
-             {:?}",
-            env!("CARGO_PKG_VERSION"),
-            gi.seed,
-            budget(MapKind::Global),
-            gi.k,
-            gi.max_radius,
-            gi.filter,
-            gi.indirect,
-            gi.precompute,
-            gi.cache,
-        ),
-    })
-}
-
-/// Traces the photon maps a render of `r` at `scale` with `settings` would trace and returns
-/// them with their fingerprint, to be saved (`caustic photons --save`). Errors name the flag
-/// `--save` when the frame is not photon-mapped.
-pub fn trace_maps(
-    desc: &SceneDesc,
-    r: &RenderDesc,
-    scale: f64,
-    settings: &Settings,
-    progress: &dyn Progress,
-) -> Result<(SavedMaps, GiStats)> {
-    let (window, scene, settings, _) = prepare(desc, r, scale, None, settings)?;
-    let gi_settings = map_settings(&scene, &settings, "--save")?;
-    let size = (window.full_width, window.full_height);
-    let fingerprint = fingerprint(desc, r, &scene, &gi_settings, size)?;
-    let camera = Camera::new(&r.camera, size.0, size.1);
-    let gi = Gi::build_with(&scene, &gi_settings, progress)
-        .precompute_for(&camera)
-        .with_cache(&scene, &camera, progress);
-    let stats = gi.stats.clone();
-    let maps = SavedMaps {
-        fingerprint,
-        global: CountedMap {
-            map: gi.global,
-            per_light: stats.global.clone(),
-        },
-        caustic: gi_settings.caustics.then(|| CountedMap {
-            map: gi
-                .caustic
-                .unwrap_or_else(|| crate::photon::PhotonMap::build(Vec::new())),
-            per_light: stats.caustic.clone(),
-        }),
-        cache: gi.cache,
-    };
-    Ok((maps, stats))
-}
-
-/// Reads the photon maps at `path` for the frame of `r`, or returns an error naming the file
-/// and, when it holds other maps than this frame traces, what differs.
-fn read_maps(
-    desc: &SceneDesc,
-    r: &RenderDesc,
-    scene: &Scene,
-    settings: &Settings,
-    path: &std::path::Path,
-    size: (u32, u32),
-) -> Result<Preloaded> {
-    let gi_settings = map_settings(scene, settings, "--photon-maps")?;
-    let want = fingerprint(desc, r, scene, &gi_settings, size)?;
-    let bad = |message: String| Error::File {
-        path: path.to_path_buf(),
-        message,
-    };
-    let start = std::time::Instant::now();
-    let saved = crate::photon::file::read(path).map_err(bad)?;
-    if saved.fingerprint.scene != want.scene {
-        return Err(bad(format!(
-            "these photon maps were traced for another scene (scene hash {:016x}, this one's is \
-             {:016x}: the script, a mesh or a texture differs); save them again with caustic \
-             photons --save",
-            saved.fingerprint.scene, want.scene
-        )));
-    }
-    if saved.fingerprint.settings != want.settings {
-        return Err(bad(format!(
-            "these photon maps were traced with other settings\n  saved: {}\n  this render: {}\n\
-             give caustic photons --save the flags this render has",
-            saved.fingerprint.settings, want.settings
-        )));
-    }
-    saved
-        .check(&expected(scene, &gi_settings, size))
-        .map_err(bad)?;
-    Ok(Preloaded::new(saved, start.elapsed()))
-}
-
-/// Returns what a frame of `scene` at `size` with `gi` expects of photon maps read from a file
-/// beyond their fingerprint ([`crate::photon::file::Expected`]).
-fn expected(scene: &Scene, gi: &GiSettings, size: (u32, u32)) -> Expected {
-    use crate::integrator::irradiance_cache::{MIN_IMAGE_SIZE, radius_range};
-    let b = scene
-        .instances
-        .iter()
-        .fold(crate::accel::Bounds::EMPTY, |a, i| a.union(i.bounds));
-    let gathers = matches!(
-        gi.indirect,
-        crate::integrator::photon_map::Indirect::Gather { .. }
-    );
-    let caches = gi.cache.enabled && gathers && size.0.max(size.1) >= MIN_IMAGE_SIZE;
-    Expected {
-        bounds: b.is_finite().then_some((b.min, b.max)),
-        lights: scene.lights.len(),
-        caustic: gi.caustics,
-        cache: caches.then(|| (gi.cache.accuracy, radius_range(scene, size))),
-    }
 }
 
 /// Returns an error at the light's script line when its photon count (its `num_photons` or its
@@ -402,13 +293,13 @@ pub fn photon_view(
     photons: &GiSettings,
     progress: &dyn Progress,
 ) -> (Film, GiStats) {
-    let plan = plan(scene, GiMode::On);
+    let plan = crate::integrator::plan(scene, GiMode::On);
     let settings = GiSettings {
         caustics: plan.caustics,
         precompute: false,
         ..photons.clone()
     };
-    let gi = Gi::build_with(scene, &settings, progress);
+    let gi = Prepass::build_with(scene, &settings, progress);
     let film = crate::photon::view::photon_image(
         scene,
         camera,

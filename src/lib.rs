@@ -7,10 +7,12 @@
 //! ```text
 //! Lua script ──lua::run_script──▶ SceneDesc (desc: plain data, every entry tagged with file:line)
 //!   ──scene::build_scene──▶ Scene (meshes and textures read, world-space instances, two-level BVH)
-//!   ──frame::render──▶ integrator::plan (which integrator, which effects, why)
-//!                    ──▶ the integrator's phases (photon_map: trace photons, build maps,
-//!                        precompute irradiance; then the camera pass, render::camera_pass;
-//!                        progressive: the same per pass with shrinking radii, averaged)
+//!   ──frame::plan──▶ integrator::plan (which integrator, which effects, why; made once a frame)
+//!   ──frame::render──▶ the integrator's phases (photon_map: the prepass — trace photons, build
+//!                        maps, precompute irradiance, cache irradiance — then the camera pass,
+//!                        render::camera_pass; progressive: the same per pass with shrinking
+//!                        radii, averaged; a prepass can be saved and read back,
+//!                        integrator::maps_file)
 //!                    ──▶ Film + Stats ──io::image::write_image──▶ PNG, EXR, PFM or HDR on disk
 //! ```
 //!
@@ -25,8 +27,10 @@
 //! - Directions point *away* from the surface: `wo` towards the viewer, `wi` towards the light.
 //! - A ray's `t` is measured in units of its direction's length; rays transformed into object space
 //!   keep their `t` (directions are not renormalised).
-//! - Colours are linear RGB in `[0, ∞)`; the film clamps to `[0, 1]` and truncates to 8 bits as the
-//!   course's `Image::savePng` does.
+//! - Colours are linear RGB in `[0, ∞)`, kept as `f32` by the film; an 8-bit image (PNG) clamps
+//!   them to `[0, 1]` and truncates as the course's `Image::savePng` does (`--tonemap clamp`, the
+//!   default) or applies the sRGB curve after an exposure (`--tonemap srgb`); EXR, PFM and HDR
+//!   keep the floats.
 //! - Errors: everything that reads user input returns [`Error`], whose message names the script line
 //!   or the file at fault. The hot path (traversal, shading) returns values or `Option`, never `Result`.
 //!
@@ -35,7 +39,7 @@
 //! - *instance*: one placement of a shape in the world, with its transform and material.
 //! - *TLAS/BLAS*: the top-level BVH over instances and the per-mesh BVH over triangles ([`accel`]).
 //! - *integrator*: how a frame computes light transport ([`integrator::Integrator`]); *plan*: the
-//!   decision which one, and which effects, a scene needs ([`integrator::plan`]).
+//!   decision which one, and which effects, a scene needs ([`mod@integrator::plan`]).
 //! - *BSDF*: what a surface does at one hit ([`material::bsdf::Bsdf`]).
 
 pub mod accel;

@@ -147,7 +147,7 @@ fn a_symlink_planted_at_the_temporary_name_is_never_written_through() {
         (
             "maps.bin",
             Box::new(|p| {
-                caustic::photon::file::write(p, &small_maps(50)).map_err(|e| e.to_string())
+                caustic::integrator::maps_file::write(p, &small_maps(50)).map_err(|e| e.to_string())
             }),
         ),
     ];
@@ -413,7 +413,7 @@ const PHOTON_FLAGS: [&str; 10] = [
     "1",
 ];
 
-/// Where the fields of a photon-map file are (see `caustic::photon::file`'s layout).
+/// Where the fields of a photon-map file are (see `caustic::integrator::maps_file`'s layout).
 #[derive(Debug)]
 struct MapFile {
     /// Per map: its per-light counts, photon count, power base, positions and powers.
@@ -598,9 +598,10 @@ fn forged_photon_map_fields_are_refused_though_the_checksum_holds() {
 
 /// Returns maps of `n` photons (and a third as many caustic ones) and a small cache, with
 /// consistent counts, as a render would save them.
-fn small_maps(n: usize) -> caustic::photon::file::SavedMaps {
+fn small_maps(n: usize) -> caustic::integrator::maps_file::SavedMaps {
     use caustic::integrator::irradiance_cache::{IrradianceCache, Record};
-    use caustic::photon::file::{CountedMap, Fingerprint, SavedMaps};
+    use caustic::integrator::maps_file::{Fingerprint, SavedMaps};
+    use caustic::photon::file::CountedMap;
     use caustic::photon::trace::LightCounts;
     use caustic::photon::{Photon, PhotonMap};
     let photon = |i: usize| Photon {
@@ -694,8 +695,8 @@ fn forge(valid: &[u8], edits: &[MapEdit]) -> Vec<u8> {
 }
 
 /// What a frame expects of `small_maps`: its photons and records inside a box of the scene.
-fn small_expected() -> caustic::photon::file::Expected {
-    caustic::photon::file::Expected {
+fn small_expected() -> caustic::integrator::maps_file::Expected {
+    caustic::integrator::maps_file::Expected {
         bounds: Some((Vec3A::splat(-1.0), Vec3A::splat(10.0))),
         lights: 1,
         caustic: true,
@@ -715,14 +716,14 @@ proptest! {
         static VALID: std::sync::OnceLock<(PathBuf, Vec<u8>)> = std::sync::OnceLock::new();
         let (dir, valid) = VALID.get_or_init(|| {
             let dir = out_dir("hostile_files_fuzz_maps");
-            caustic::photon::file::write(&dir.join("maps.bin"), &small_maps(300)).unwrap();
+            caustic::integrator::maps_file::write(&dir.join("maps.bin"), &small_maps(300)).unwrap();
             let valid = std::fs::read(dir.join("maps.bin")).unwrap();
             (dir, valid)
         });
         let path = dir.join("forged.bin");
         let bytes = forge(valid, &edits);
         std::fs::write(&path, &bytes).unwrap();
-        let (read, most) = largest_allocation(|| caustic::photon::file::read(&path));
+        let (read, most) = largest_allocation(|| caustic::integrator::maps_file::read(&path));
         if let Ok(maps) = read {
             let _ = maps.check(&small_expected());
         }
@@ -968,12 +969,12 @@ proptest! {
 #[test]
 fn a_light_count_the_file_cannot_hold_is_refused_before_it_is_allocated() {
     let dir = out_dir("hostile_files_light_count");
-    caustic::photon::file::write(&dir.join("maps.bin"), &small_maps(300)).unwrap();
+    caustic::integrator::maps_file::write(&dir.join("maps.bin"), &small_maps(300)).unwrap();
     let valid = std::fs::read(dir.join("maps.bin")).unwrap();
     let bytes = forge(&valid, &[MapEdit::Insert(13423561826027610574, 9)]);
     let path = dir.join("forged.bin");
     std::fs::write(&path, &bytes).unwrap();
-    let (_, most) = largest_allocation(|| caustic::photon::file::read(&path));
+    let (_, most) = largest_allocation(|| caustic::integrator::maps_file::read(&path));
     assert!(
         most <= 4 * bytes.len() + (20 << 20),
         "{most} bytes allocated for {}",

@@ -61,7 +61,7 @@ fn render(src: &str, settings: &Settings, progress: &dyn Progress) -> (Film, Opt
     let mut scene = build_scene(&d, r).unwrap();
     let camera = Camera::new(&r.camera, r.width, r.height);
     let window = Window::full(r.width, r.height);
-    let (film, stats) = caustic::frame::render(&mut scene, &camera, window, settings, progress);
+    let (film, stats) = common::render_frame(&mut scene, &camera, window, settings, progress);
     (film, stats.interrupted)
 }
 

@@ -4,7 +4,7 @@
 mod common;
 
 use caustic::integrator::irradiance_cache::CacheSettings;
-use caustic::integrator::photon_map::{Gi, GiSettings, Indirect};
+use caustic::integrator::photon_map::{GiSettings, Indirect, Prepass};
 use caustic::integrator::{GiMode, Integrator, Settings, plan};
 use caustic::photon::trace::{MapKind, TracedMap};
 use caustic::scene::build::build_scene;
@@ -45,7 +45,7 @@ fn photon_irradiance_on_a_plane_matches_the_closed_form_and_the_direct_term() {
             caustics: false,
             ..GiSettings::default()
         };
-        let gi = Gi::build(&scene, &settings);
+        let gi = Prepass::build(&scene, &settings);
         let light = &scene.lights[0];
         let mut errors = Vec::new();
         for i in 0..24 {
@@ -116,7 +116,7 @@ fn closed_sphere_has_radiance_one_with_final_gathering() {
             },
             ..common::centre_ray()
         };
-        let (film, stats) = caustic::frame::render(
+        let (film, stats) = common::render_frame(
             &mut scene,
             &camera,
             caustic::film::Window::full(r.width, r.height),
@@ -158,10 +158,10 @@ fn cornell_glass(empty: bool) -> (caustic::desc::SceneDesc, caustic::scene::Scen
     (d, scene)
 }
 
-fn cornell(empty: bool) -> (caustic::scene::Scene, Gi) {
+fn cornell(empty: bool) -> (caustic::scene::Scene, Prepass) {
     let (_, scene) = cornell_glass(empty);
     let p = plan(&scene, GiMode::Auto);
-    let gi = Gi::build(
+    let gi = Prepass::build(
         &scene,
         &GiSettings {
             photons: 100_000,
@@ -345,7 +345,7 @@ fn photon_phases_report_progress_that_adds_up() {
         ..GiSettings::default()
     };
     let rec = Recorder::default();
-    let gi = Gi::build_with(&scene, &settings, &rec);
+    let gi = Prepass::build_with(&scene, &settings, &rec);
     let phases = rec.0.into_inner().unwrap();
     let names: Vec<&str> = phases.iter().map(|p| p.0.as_str()).collect();
     assert_eq!(names, ["tracing global photons", "tracing caustic photons"]);
@@ -440,7 +440,7 @@ fn precomputed_irradiance_is_unbiased_in_a_closed_sphere() {
             caustics: false,
             ..GiSettings::default()
         };
-        let gi = Gi::build(&scene, &settings);
+        let gi = Prepass::build(&scene, &settings);
         let pre = gi
             .precomputed
             .as_ref()
@@ -649,7 +649,7 @@ fn cornell_96(cached: bool, window: Option<caustic::film::Window>) -> caustic::f
         ..common::centre_ray()
     };
     let window = window.unwrap_or(caustic::film::Window::full(96, 96));
-    caustic::frame::render(
+    common::render_frame(
         &mut scene,
         &camera,
         window,

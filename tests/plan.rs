@@ -137,7 +137,7 @@ fn the_passes_follow_the_plan() {
     };
     let mut render = |s: &Settings| {
         let w = caustic::film::Window::full(12, 12);
-        caustic::frame::render(&mut glass, &camera, w, s, &caustic::progress::NoProgress)
+        common::render_frame(&mut glass, &camera, w, s, &caustic::progress::NoProgress)
     };
     let disabled = Settings {
         overrides: Overrides {

@@ -149,7 +149,7 @@ fn progressive_error_falls_at_the_predicted_rate_and_converges_to_the_closed_for
         );
         let snapshots = Snapshots::default();
         let window = Window::full(SIDE, SIDE);
-        let (_, stats) = caustic::frame::render(&mut scene, &camera, window, &settings, &snapshots);
+        let (_, stats) = common::render_frame(&mut scene, &camera, window, &settings, &snapshots);
         assert_eq!(stats.plan.integrator, Integrator::Progressive);
         let snaps = snapshots.0.into_inner().unwrap();
         for (k, &n) in checkpoints.iter().enumerate() {
@@ -206,7 +206,7 @@ fn target_error_stops_near_the_error_it_asks_for() {
             );
             let window = Window::full(SIDE, SIDE);
             let (film, stats) =
-                caustic::frame::render(&mut scene, &camera, window, &settings, &NoProgress);
+                common::render_frame(&mut scene, &camera, window, &settings, &NoProgress);
             let p = stats.progressive.unwrap();
             assert_eq!(p.stop, Stop::TargetError, "target {target}");
             let actual = mse_and_mean(&film, &reference).0.sqrt() / ref_mean;
@@ -239,7 +239,7 @@ fn time_budget_stops_the_render() {
         },
     );
     let window = Window::full(SIDE, SIDE);
-    let (_, stats) = caustic::frame::render(&mut scene, &camera, window, &settings, &NoProgress);
+    let (_, stats) = common::render_frame(&mut scene, &camera, window, &settings, &NoProgress);
     let p = stats.progressive.unwrap();
     assert_eq!(p.stop, Stop::TimeBudget);
     assert!(p.passes >= 1 && p.passes < 1 << 20, "{} passes", p.passes);
@@ -356,9 +356,7 @@ fn progressive_renders_are_deterministic_across_threads_and_tiles() {
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| {
-            caustic::frame::render(&mut scene, &camera, window, &settings, &NoProgress).0
-        })
+        pool.install(|| common::render_frame(&mut scene, &camera, window, &settings, &NoProgress).0)
     };
     let full = Window::full(32, 32);
     let one = render(1, full);

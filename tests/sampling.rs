@@ -50,7 +50,7 @@ fn render(
         ..common::whitted()
     };
     let window = window.unwrap_or(Window::full(w, h));
-    caustic::frame::render(scene, camera, window, &settings, &NoProgress).0
+    common::render_frame(scene, camera, window, &settings, &NoProgress).0
 }
 
 fn rmse(a: &Film, b: &Film, pixels: impl Iterator<Item = usize>) -> f64 {

@@ -45,7 +45,7 @@ fn render(src: &str, shortcut: bool) -> (Vec<glam::Vec3A>, u64, bool) {
     scene.lights_clear_of_media &= shortcut;
     let camera = Camera::new(&r.camera, r.width, r.height);
     let settings: Settings = common::whitted();
-    let (film, stats) = caustic::frame::render(
+    let (film, stats) = common::render_frame(
         &mut scene,
         &camera,
         Window::full(r.width, r.height),

@@ -66,7 +66,7 @@ fn mean_radiance(scene: &mut Scene, camera: &Camera, indirect: Indirect) -> f64 
         ..common::centre_ray()
     };
     let window = Window::full(SIZE, SIZE);
-    let (film, _) = caustic::frame::render(scene, camera, window, &settings, &NoProgress);
+    let (film, _) = common::render_frame(scene, camera, window, &settings, &NoProgress);
     assert!(film.pixels.iter().all(|p| p.is_finite()));
     film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64
 }
@@ -159,7 +159,7 @@ fn white_furnace_matches_the_closed_form_with_the_progressive_integrator() {
             };
             let window = Window::full(SIZE, SIZE);
             let (film, stats) =
-                caustic::frame::render(&mut scene, &camera, window, &settings, &NoProgress);
+                common::render_frame(&mut scene, &camera, window, &settings, &NoProgress);
             assert_eq!(stats.plan.integrator, Integrator::Progressive);
             assert!(film.pixels.iter().all(|p| p.is_finite()));
             let got =

@@ -32,7 +32,7 @@
 //! for a few percent of the light.
 
 use super::irradiance_cache::Probe;
-use super::photon_map::Gi;
+use super::photon_map::Prepass;
 use crate::accel::counters::{self, RayKind};
 use crate::camera::Camera;
 use crate::geometry::{Ray, offset_ray_origin};
@@ -45,15 +45,33 @@ use crate::scene::interaction::{Interaction, Needs};
 use crate::stats::RayCounts;
 use glam::Vec3A;
 
-/// Deepest chain of reflections and refractions followed by deterministic splitting by default;
-/// deeper paths go on by Russian roulette. The plan deepens it for scenes of many nested
-/// dielectric layers ([`super::plan`]).
-pub const MAX_DEPTH: u32 = 12;
+pub use crate::scene::MAX_DEPTH;
 /// Deepest chain followed at all, even under roulette (a closed box of perfect mirrors never
 /// loses weight).
 pub const MAX_PATH_DEPTH: u32 = 1024;
 /// Paths whose weight falls below this are not traced further.
 pub const MIN_WEIGHT: f32 = 1e-3;
+
+/// A surface point an eye path shades: the interaction there (the surface and its BSDF) and
+/// the state of the path that reached it. The shading functions of every integrator take it
+/// rather than the point, the BSDF and the path state one by one.
+#[derive(Clone, Copy)]
+pub struct ShadingPoint<'a> {
+    pub it: &'a Interaction<'a>,
+    pub state: PathState,
+}
+
+impl ShadingPoint<'_> {
+    /// Returns the point's world-space position.
+    pub fn p(&self) -> Vec3A {
+        self.it.surf.p
+    }
+
+    /// Returns the BSDF at the point.
+    pub fn bsdf(&self) -> &Bsdf<'_> {
+        &self.it.bsdf
+    }
+}
 
 /// Where an eye path stands: how deep, how much it still matters, which medium it is in.
 #[derive(Clone, Copy, Debug)]
@@ -166,7 +184,7 @@ pub enum DiffuseTerm<'a> {
     /// The course's ambient term `ambient·kd` (Whitted).
     Ambient(Vec3A),
     /// Caustics and indirect light from photon maps (Jensen).
-    Photons(&'a Gi),
+    Photons(&'a Prepass),
     /// No light: the irradiance cache's record pass, which only follows the eye paths to find
     /// where final gathering happens ([`super::irradiance_cache`]).
     Caching(&'a Probe<'a>),
@@ -260,12 +278,13 @@ impl Tracer<'_> {
                 state.share = Share::All;
             }
             let t = it.bsdf.material.transparency;
+            let at = ShadingPoint { it: &it, state };
             let mut out = Vec3A::ZERO;
             if let Some(crossing) = &crossing {
-                out += t * self.dielectric(&it, crossing, state, rng, counts);
+                out += t * self.dielectric(at, crossing, rng, counts);
             }
             if t < 1.0 {
-                out += (1.0 - t) * self.opaque(&it, state, rng, counts);
+                out += (1.0 - t) * self.opaque(at, rng, counts);
             }
             return scale * out;
         }
@@ -317,14 +336,8 @@ impl Tracer<'_> {
     }
 
     /// Returns the light the opaque part of a surface sends towards its `wo`.
-    fn opaque(
-        &self,
-        it: &Interaction,
-        state: PathState,
-        rng: &mut Rng,
-        counts: &mut RayCounts,
-    ) -> Vec3A {
-        let (p, bsdf) = (it.surf.p, &it.bsdf);
+    fn opaque(&self, at: ShadingPoint, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
+        let (p, bsdf, state) = (at.p(), at.bsdf(), at.state);
         let mat = bsdf.material;
         // At an opaque surface inside a transparent solid, with every light outside all of
         // them, every shadow ray would meet the solid's boundary: no light arrives directly.
@@ -339,12 +352,12 @@ impl Tracer<'_> {
             DiffuseTerm::Ambient(ambient) => colour += ambient * bsdf.kd,
             DiffuseTerm::Photons(gi) => {
                 if bsdf.kd.max_element() > 0.0 {
-                    colour += gi.diffuse(self.scene, p, bsdf, &state, rng, counts);
+                    colour += gi.diffuse(self.scene, &at, rng, counts);
                 }
             }
             DiffuseTerm::Caching(probe) => {
                 if bsdf.kd.max_element() > 0.0 {
-                    probe.visit(self.scene, p, bsdf, &state, rng, counts);
+                    probe.visit(self.scene, &at, rng, counts);
                 }
             }
         }
@@ -378,17 +391,16 @@ impl Tracer<'_> {
     /// reflection and refraction between the media on either side of `crossing`.
     fn dielectric(
         &self,
-        it: &Interaction,
+        at: ShadingPoint,
         crossing: &Crossing,
-        state: PathState,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Vec3A {
-        let (p, ng) = (it.surf.p, it.bsdf.ng);
-        let split = it.bsdf.dielectric(crossing);
+        let (p, ng, state) = (at.p(), at.bsdf().ng, at.state);
+        let split = at.bsdf().dielectric(crossing);
         let f = split.f;
         if !state.splits(self.scene.features.specular_depth) {
-            return self.dielectric_lobe(it, crossing, &split, state, rng, counts);
+            return self.dielectric_lobe(at, crossing, &split, rng, counts);
         }
         let mut out = Vec3A::ZERO;
         if f > 0.0 && state.weight * f > MIN_WEIGHT {
@@ -417,13 +429,13 @@ impl Tracer<'_> {
     /// with probability `F` (always when nothing refracts), then Russian roulette.
     fn dielectric_lobe(
         &self,
-        it: &Interaction,
+        at: ShadingPoint,
         crossing: &Crossing,
         split: &Split,
-        state: PathState,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Vec3A {
+        let (it, state) = (at.it, at.state);
         let p_reflect = if split.refracted.is_some() {
             split.f
         } else {

@@ -49,10 +49,9 @@
 //! The progressive integrator does not use the cache: its estimate must converge, and the cache's
 //! interpolation is a bias that more passes would not remove.
 
-use super::eye::{DiffuseTerm, PathState, Tracer};
-use super::photon_map::Gi;
+use super::eye::{DiffuseTerm, PathState, ShadingPoint, Tracer};
+use super::photon_map::{GatherAt, Prepass};
 use crate::camera::Camera;
-use crate::material::bsdf::Bsdf;
 use crate::progress::Progress;
 use crate::sampling::{Pass, Rng};
 use crate::scene::Scene;
@@ -410,7 +409,7 @@ impl IrradianceCache {
     pub fn build(
         scene: &Scene,
         camera: &Camera,
-        gi: &Gi,
+        gi: &Prepass,
         settings: &CacheSettings,
         seed: u64,
         progress: &dyn Progress,
@@ -486,7 +485,7 @@ impl IrradianceCache {
 /// gather would run and the coarser levels' records do not reach.
 #[derive(Debug)]
 pub struct Probe<'a> {
-    gi: &'a Gi,
+    gi: &'a Prepass,
     cache: &'a IrradianceCache,
     rays: u32,
     r_range: (f32, f32),
@@ -496,23 +495,25 @@ pub struct Probe<'a> {
 }
 
 impl Probe<'_> {
-    /// Visits the diffuse surface of `bsdf` at `p` on an eye path in `state`.
-    pub fn visit(
-        &self,
-        scene: &Scene,
-        p: Vec3A,
-        bsdf: &Bsdf,
-        state: &PathState,
-        rng: &mut Rng,
-        counts: &mut RayCounts,
-    ) {
-        if !self.gi.gathers(state) || self.cache.covers(p, bsdf.ng) {
+    /// Visits the diffuse surface at `at` on an eye path.
+    pub fn visit(&self, scene: &Scene, at: &ShadingPoint, rng: &mut Rng, counts: &mut RayCounts) {
+        let (p, bsdf) = (at.p(), at.bsdf());
+        if !self.gi.gathers(&at.state) || self.cache.covers(p, bsdf.ng) {
             return;
         }
-        let (ng, media) = (bsdf.ng, state.media);
-        let g = self
-            .gi
-            .gather(scene, p, ng, ng, media, self.rays, rng, counts);
+        let (ng, media) = (bsdf.ng, at.state.media);
+        let g = self.gi.gather(
+            scene,
+            GatherAt {
+                p,
+                around: ng,
+                ng,
+                media,
+            },
+            self.rays,
+            rng,
+            counts,
+        );
         let record = Record {
             p,
             n: bsdf.ng,
@@ -678,7 +679,7 @@ mod tests {
         let mut g = Gather::new(Vec3A::Z, rays);
         let mut rng = Rng::new(3, Pass::Cache, 1);
         for u in crate::sampling::stratified_2d(&mut rng, rays) {
-            let d = crate::light::cosine_around(Vec3A::Z, u);
+            let d = crate::sampling::cosine_around(Vec3A::Z, u);
             g.add(d, radiance(d), 2.0);
         }
         let e0 = truth(Vec3A::Z);

@@ -2,8 +2,9 @@
 //! one file per method, each a short list of named phases.
 //!
 //! - [`whitted`]: the course's ray tracer. Phases: camera pass.
-//! - [`photon_map`]: Jensen's photon mapping. Phases: trace photons, build maps, precompute
-//!   irradiance, cache irradiance ([`irradiance_cache`]), camera pass.
+//! - [`photon_map`]: Jensen's photon mapping. Phases: the prepass (trace photons, build maps,
+//!   precompute irradiance, cache irradiance: [`irradiance_cache`]), camera pass. The prepass
+//!   can be saved to a file and read back by a tile of a farm ([`maps_file`]).
 //! - [`progressive`]: progressive photon mapping, the consistent reference. Phases, per pass:
 //!   trace photons, build maps, camera pass with shrinking radii; then the mean of the passes.
 //!
@@ -11,13 +12,14 @@
 //! splitting through the one scattering model ([`crate::material::bsdf`]); they differ in what a
 //! diffuse surface receives besides direct light ([`eye::DiffuseTerm`]) and in how the photon
 //! estimates choose their photons (the `k` nearest, or a radius that shrinks with passes). Which one a frame uses,
-//! and which of its effects, is the effect plan's decision ([`plan`]).
+//! and which of its effects, is the effect plan's decision ([`mod@plan`]).
 //!
 //! To add an integrator: a variant here, a file beside these with its phases, and its case in
 //! [`Integrator::render`] and in [`plan::plan`].
 
 pub mod eye;
 pub mod irradiance_cache;
+pub mod maps_file;
 pub mod photon_map;
 pub mod plan;
 pub mod progressive;
@@ -30,6 +32,14 @@ use crate::scene::Scene;
 use crate::stats::RenderStats;
 
 pub use plan::{GiMode, Plan, plan};
+
+/// What a frame renders: `window` of the image of `scene` seen through `camera`.
+#[derive(Clone, Copy)]
+pub struct View<'a> {
+    pub scene: &'a Scene,
+    pub camera: &'a Camera,
+    pub window: Window,
+}
 
 /// The light-transport methods caustic implements.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,13 +63,16 @@ pub struct Settings {
     pub light_samples: u32,
     /// Whether to simulate global illumination (`--gi`).
     pub gi: GiMode,
-    /// `--force` and `--disable` (see [`plan`]).
+    /// `--force` and `--disable` (see [`mod@plan`]).
     pub overrides: plan::Overrides,
     /// The photon passes and estimates (photon-mapping integrators; per pass for the
     /// progressive one).
     pub photons: photon_map::GiSettings,
     /// Render progressively (`--integrator progressive`) with these settings.
     pub progressive: Option<progressive::ProgressiveSettings>,
+    /// `--photon-maps`: read the frame's photon-map prepass from this file instead of making
+    /// it ([`maps_file`]; [`crate::frame::render_desc`] loads it).
+    pub maps_file: Option<std::path::PathBuf>,
     /// Time material evaluation for `--stats`.
     pub timing: bool,
     /// Record each pixel's traversal counts and time (`--heatmap`; needs
@@ -93,6 +106,7 @@ impl Default for Settings {
             overrides: plan::Overrides::default(),
             photons: photon_map::GiSettings::default(),
             progressive: None,
+            maps_file: None,
             timing: false,
             heatmap: false,
         }
@@ -161,18 +175,20 @@ impl std::fmt::Display for Partial {
 }
 
 impl Integrator {
-    /// Renders `window` of the image through `camera` with this integrator as `plan` says,
-    /// running its phases in turn and reporting each to `progress`.
+    /// Renders `view` with this integrator as `plan` says, running its phases in turn and
+    /// reporting each to `progress`. `read` is a photon-map prepass read from a file
+    /// ([`maps_file::load`], which refuses a frame of another integrator); the others never get
+    /// one.
     pub fn render(
         self,
-        scene: &Scene,
-        camera: &Camera,
-        window: Window,
+        view: View,
         settings: &Settings,
         plan: Plan,
+        read: Option<photon_map::Prepass>,
         progress: &dyn Progress,
     ) -> (Film, Stats) {
-        let rows = window.size().1;
+        debug_assert!(read.is_none() || self == Integrator::PhotonMap);
+        let rows = view.window.size().1;
         let stats = |plan, render: RenderStats, photons| Stats {
             plan,
             interrupted: Partial::of_rows(&render, rows),
@@ -182,31 +198,32 @@ impl Integrator {
         };
         match self {
             Integrator::Whitted => {
-                let (film, render) = whitted::render(scene, camera, window, settings, progress);
+                let (film, render) = whitted::render(view, settings, progress);
                 (film, stats(plan, render, None))
             }
             Integrator::PhotonMap => {
                 let (film, render, photons) =
-                    photon_map::render(scene, camera, window, settings, &plan, progress);
+                    photon_map::render(view, settings, &plan, read, progress);
                 (film, stats(plan, render, Some(photons)))
             }
-            Integrator::Progressive => {
-                progressive::render(scene, camera, window, settings, plan, progress)
-            }
+            Integrator::Progressive => progressive::render(view, settings, plan, progress),
         }
     }
 }
 
-/// Runs the camera pass of a frame: the eye path with the integrator's `diffuse` term, reporting
+/// Runs the camera pass of `view`: the eye path with the integrator's `diffuse` term, reporting
 /// rows to `progress`.
 fn camera_pass(
-    scene: &Scene,
-    camera: &Camera,
+    view: View,
     diffuse: eye::DiffuseTerm,
-    window: Window,
     settings: &Settings,
     progress: &dyn Progress,
 ) -> (Film, RenderStats) {
+    let View {
+        scene,
+        camera,
+        window,
+    } = view;
     let tracer = eye::Tracer {
         scene,
         camera,

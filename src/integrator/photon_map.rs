@@ -1,9 +1,11 @@
 //! The photon-mapping integrator (Jensen): caustics and indirect diffuse light from photon maps.
 //!
-//! Phases ([`render`]): trace and build the global map, then the caustic map, then the map of
-//! precomputation points (together [`Gi::build_with`]), the irradiance cache, and the camera
-//! pass with the maps as the eye path's diffuse term.
-//! [`Gi::diffuse`] answers what a diffuse surface receives other than directly from the lights:
+//! Phases ([`render`]): the prepass ([`prepass`], which makes a [`Prepass`]: trace and build the
+//! global map, then the caustic map, then the map of precomputation points, together
+//! [`Prepass::build_with`]; estimate those points; the irradiance cache), then the camera pass
+//! with the maps as the eye path's diffuse term. A prepass can be saved to a file and read
+//! back instead of made ([`super::maps_file`], which owns those files).
+//! [`Prepass::diffuse`] answers what a diffuse surface receives other than directly from the lights:
 //! - caustics: a density estimate of the caustic map at the point;
 //! - indirect diffuse light, in one of two modes ([`Indirect`]):
 //!   - `Gather` (the default; Jensen's final gathering): `rays` cosine-distributed rays from the
@@ -19,7 +21,7 @@
 //!     By default that estimate is not made afresh for every gather ray. Following Christensen
 //!     (*Faster photon map global illumination*, JGT 1999), the irradiance is estimated at a
 //!     pseudo-random one in [`PRECOMPUTE_STRIDE`] global photons, all up front when there are
-//!     no more of them than the image's pixels ([`Gi::precompute_for`]), else each the first
+//!     no more of them than the image's pixels ([`Prepass::precompute_for`]), else each the first
 //!     time a gather ray reads it ([`Precomputed`]), and a gather ray takes the value of the nearest
 //!     such point whose normal is within 25° of the surface's (one 1-nearest query instead of a
 //!     50-nearest estimate). Where no such point lies within the search radius (a thin wall's
@@ -42,17 +44,16 @@
 //! normal disagrees with the surface's (light leaking round corners and through thin walls), and
 //! weight them with a [`Filter`] that integrates to one.
 
-use super::eye::{DiffuseTerm, PathState};
+use super::eye::{DiffuseTerm, PathState, ShadingPoint};
 use super::irradiance_cache::{CacheSettings, CacheStats, Gather, IrradianceCache};
-use super::{Plan, Settings, camera_pass};
+use super::{Plan, Settings, View, camera_pass};
 use crate::accel::counters::RayKind;
 use crate::camera::Camera;
-use crate::film::{Film, Window};
+use crate::film::Film;
 use crate::geometry::{Ray, offset_ray_origin};
-use crate::material::bsdf::Bsdf;
 use crate::material::medium::MediumStack;
 use crate::photon::estimate::Filter;
-use crate::photon::file::{CountedMap, SavedMaps};
+use crate::photon::file::CountedMap;
 use crate::photon::trace::{LightCounts, MapKind, photon_budget, trace_map_with};
 use crate::photon::{PhotonId, PhotonMap};
 use crate::progress::{NoProgress, Progress};
@@ -64,7 +65,6 @@ use glam::Vec3A;
 use std::cell::RefCell;
 use std::f32::consts::FRAC_1_PI;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// Deepest eye-path depth (specular bounces) at which final gathering is used; deeper points
@@ -100,7 +100,7 @@ pub const PRECOMPUTE_STRIDE: usize = 4;
 /// Returns whether global photon `id` is a precomputation point: a pseudo-random choice of one
 /// in [`PRECOMPUTE_STRIDE`], independent of where the photon is (ids follow the kd-tree's
 /// spatial order, so a stride over ids would pick points that are spread like the photons
-/// near them, correlated with the estimate; see `Gi::point_irradiance`).
+/// near them, correlated with the estimate; see `Prepass::point_irradiance`).
 pub fn is_precompute_point(id: PhotonId) -> bool {
     crate::sampling::mix64(u64::from(id.0) ^ 0x9e37_79b9_7f4a_7c15)
         .is_multiple_of(PRECOMPUTE_STRIDE as u64)
@@ -116,6 +116,19 @@ pub enum Indirect {
     Gather { rays: u32 },
     /// The global map's estimate at the point (photons after a diffuse bounce only).
     Direct,
+}
+
+/// Where a final gather runs ([`Prepass::gather`]).
+#[derive(Clone, Copy, Debug)]
+pub struct GatherAt {
+    pub p: Vec3A,
+    /// The unit axis its rays are cosine-distributed about: the shading normal for a point's
+    /// own gather, `ng` for an irradiance-cache record.
+    pub around: Vec3A,
+    /// The unit geometric normal: rays below the surface it bounds are skipped.
+    pub ng: Vec3A,
+    /// The media the point lies in.
+    pub media: MediumStack,
 }
 
 /// Settings of the photon phases and estimates.
@@ -149,40 +162,6 @@ pub struct GiSettings {
     pub precompute: bool,
     /// Final gathering interpolates an irradiance cache ([`super::irradiance_cache`]).
     pub cache: CacheSettings,
-    /// `--photon-maps`: read the maps from this file ([`crate::photon::file`]) instead of
-    /// tracing them; [`crate::frame::render_desc`] reads and checks it into `preloaded`.
-    pub maps_file: Option<std::path::PathBuf>,
-    /// Maps read from a file, which the next [`Gi::build_with`] takes instead of tracing.
-    pub preloaded: Option<Preloaded>,
-}
-
-/// Photon maps read from a file for one frame ([`GiSettings::preloaded`]): the first build
-/// takes them (they are moved, not copied: a map can be gigabytes).
-#[derive(Clone)]
-pub struct Preloaded(Arc<Mutex<Option<SavedMaps>>>, Duration);
-
-impl Preloaded {
-    /// Wraps maps that took `read` to read.
-    pub fn new(maps: SavedMaps, read: Duration) -> Preloaded {
-        Preloaded(Arc::new(Mutex::new(Some(maps))), read)
-    }
-
-    /// Takes the maps, if no build has yet.
-    fn take(&self) -> Option<SavedMaps> {
-        self.0.lock().unwrap_or_else(|e| e.into_inner()).take()
-    }
-}
-
-impl std::fmt::Debug for Preloaded {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Preloaded(read in {:?})", self.1)
-    }
-}
-
-impl PartialEq for Preloaded {
-    fn eq(&self, other: &Preloaded) -> bool {
-        Arc::ptr_eq(&self.0, &other.0)
-    }
 }
 
 impl GiSettings {
@@ -217,8 +196,6 @@ impl Default for GiSettings {
             caustics: true,
             precompute: true,
             cache: CacheSettings::default(),
-            maps_file: None,
-            preloaded: None,
         }
     }
 }
@@ -251,21 +228,24 @@ pub struct GiStats {
     pub read_records: usize,
 }
 
-/// The photon maps of one render and how shading uses them.
+/// What the photon-map prepass makes for one frame, and how shading reads it: the maps with
+/// their per-light counts (in `stats`), the precomputation points and the irradiance cache.
+/// Made by [`prepass`], or read from a file by [`super::maps_file::load`]; consumed by the
+/// camera pass ([`super::eye::DiffuseTerm::Photons`]).
 #[derive(Debug)]
-pub struct Gi {
+pub struct Prepass {
     pub global: PhotonMap,
     pub caustic: Option<PhotonMap>,
     /// Irradiance at a subset of the global photons, each estimated when first read or up
-    /// front ([`Gi::precompute_for`]; see [`GiSettings::precompute`]).
+    /// front ([`Prepass::precompute_for`]; see [`GiSettings::precompute`]).
     pub precomputed: Option<Precomputed>,
-    /// Records of final gathers that shading points interpolate ([`Gi::with_cache`]).
+    /// Records of final gathers that shading points interpolate ([`Prepass::with_cache`]).
     pub cache: Option<IrradianceCache>,
     pub settings: GiSettings,
     global_r2: f32,
     caustic_r2: f32,
     /// Whether estimates take every photon within the maps' radii (the progressive
-    /// integrator's fixed radii, [`Gi::with_fixed_radii`]) rather than the `k` nearest.
+    /// integrator's fixed radii, [`Prepass::with_fixed_radii`]) rather than the `k` nearest.
     fixed_radii: bool,
     pub stats: GiStats,
 }
@@ -274,28 +254,43 @@ thread_local! {
     static FOUND: RefCell<Vec<(f32, PhotonId)>> = const { RefCell::new(Vec::new()) };
 }
 
-/// Renders `window` of the image of `scene` through `camera` with photon maps, running the
-/// phases in turn: trace and build the maps ([`Gi::build_with`]), the irradiance cache, then
-/// the camera pass with the maps as the eye path's diffuse term.
+/// Renders `view` with photon maps: the prepass ([`prepass`]; `read`, when the frame's maps
+/// came from a file), then the camera pass with the maps as the eye path's diffuse term.
 pub fn render(
-    scene: &Scene,
-    camera: &Camera,
-    window: Window,
+    view: View,
     settings: &Settings,
     plan: &Plan,
+    read: Option<Prepass>,
     progress: &dyn Progress,
 ) -> (Film, RenderStats, GiStats) {
-    let gi = Gi::build_with(scene, &planned(&settings.photons, plan), progress)
-        .precompute_for(camera)
-        .with_cache(scene, camera, progress);
+    let photons = planned(&settings.photons, plan);
+    let gi = prepass(view.scene, view.camera, &photons, read, progress);
     let diffuse = DiffuseTerm::Photons(&gi);
-    let (film, stats) = camera_pass(scene, camera, diffuse, window, settings, progress);
+    let (film, stats) = camera_pass(view, diffuse, settings, progress);
     let evaluated = gi.precomputed.as_ref().map_or(0, Precomputed::evaluated);
     let gi_stats = GiStats {
         precomputed_evaluated: evaluated,
         ..gi.stats
     };
     (film, stats, gi_stats)
+}
+
+/// Runs the photon-map prepass of the frame of `scene` through `camera` with `settings`, the
+/// phases in turn, each reported to `progress`: trace and build the global map, then the
+/// caustic map ([`Prepass::build_with`]; skipped when `read` holds maps read from a file,
+/// [`super::maps_file::load`]), estimate the precomputation points ([`Prepass::precompute_for`]),
+/// and make the irradiance cache ([`Prepass::with_cache`]; skipped when the file held it). The one
+/// chain of these phases: a render and `caustic photons --save` both run it.
+pub fn prepass(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &GiSettings,
+    read: Option<Prepass>,
+    progress: &dyn Progress,
+) -> Prepass {
+    read.unwrap_or_else(|| Prepass::build_with(scene, settings, progress))
+        .precompute_for(camera)
+        .with_cache(scene, camera, progress)
 }
 
 /// Returns `settings` with the plan's choices: a caustic map or none, final gathering or the
@@ -339,7 +334,7 @@ fn trace_and_build(
 
 /// Irradiance at the precomputation points ([`is_precompute_point`]: about one global photon in
 /// [`PRECOMPUTE_STRIDE`]), each estimated the first time a gather ray reads it and kept (or
-/// all up front for an image with at least as many pixels, [`Gi::precompute_for`]).
+/// all up front for an image with at least as many pixels, [`Prepass::precompute_for`]).
 ///
 /// Why lazily: a frame's gather rays land near a fraction of the points (on `room2.lua` at
 /// 128², 10^6 global photons: 1.6 M points, most of them on surfaces no gather ray from the
@@ -395,25 +390,15 @@ impl Precomputed {
     }
 }
 
-impl Gi {
+impl Prepass {
     /// Traces and stores the photons of `scene` (both cores) and builds their kd-trees.
-    pub fn build(scene: &Scene, settings: &GiSettings) -> Gi {
-        Gi::build_with(scene, settings, &NoProgress)
+    pub fn build(scene: &Scene, settings: &GiSettings) -> Prepass {
+        Prepass::build_with(scene, settings, &NoProgress)
     }
 
-    /// [`Gi::build`], reporting each phase to `progress`. The phases: trace and build the
+    /// [`Prepass::build`], reporting each phase to `progress`. The phases: trace and build the
     /// global map, then the caustic map, then the map of precomputation points.
-    pub fn build_with(scene: &Scene, settings: &GiSettings, progress: &dyn Progress) -> Gi {
-        let preloaded = settings.preloaded.as_ref();
-        if let Some(saved) = preloaded.and_then(Preloaded::take) {
-            let mut gi = Gi::of_maps(scene, settings, saved.global, saved.caustic);
-            gi.stats.read_time = preloaded.map(|p| p.1);
-            // The frame's cache, made over the whole image when the maps were saved: the
-            // cache `with_cache` would make (the fingerprint holds what it depends on).
-            gi.cache = saved.cache;
-            gi.stats.read_records = gi.cache.as_ref().map_or(0, |c| c.len());
-            return gi;
-        }
+    pub fn build_with(scene: &Scene, settings: &GiSettings, progress: &dyn Progress) -> Prepass {
         let (global, mut trace_time, mut build_time) =
             trace_and_build(scene, settings, MapKind::Global, progress);
         let caustic = settings.caustics.then(|| {
@@ -423,25 +408,44 @@ impl Gi {
             (map, trace + build)
         });
         let caustic_time = caustic.as_ref().map_or(Duration::ZERO, |c| c.1);
-        let mut gi = Gi::of_maps(scene, settings, global, caustic.map(|c| c.0));
+        let mut gi = Prepass::of_maps(scene, settings, global, caustic.map(|c| c.0));
         gi.stats.trace_time = trace_time;
         gi.stats.build_time = build_time;
         gi.stats.caustic_time = caustic_time;
         gi
     }
 
-    /// Returns the Gi of these maps and their per-light counts, with the precomputation points
-    /// when the settings ask for them.
+    /// Returns the prepass of maps and an irradiance cache read from a file (`maps`: the
+    /// global map, the caustic map and the cache, [`super::maps_file::load`]) in `read`, with
+    /// the precomputation points when `settings` asks for them (estimated by
+    /// [`Prepass::precompute_for`], as for maps traced here). The cache is the frame's, made over
+    /// the whole image when the maps were saved: the cache [`Prepass::with_cache`] would make (the
+    /// file's fingerprint holds what it depends on).
+    pub fn of_read_maps(
+        scene: &Scene,
+        settings: &GiSettings,
+        (global, caustic, cache): (CountedMap, Option<CountedMap>, Option<IrradianceCache>),
+        read: Duration,
+    ) -> Prepass {
+        let mut gi = Prepass::of_maps(scene, settings, global, caustic);
+        gi.stats.read_time = Some(read);
+        gi.stats.read_records = cache.as_ref().map_or(0, |c| c.len());
+        gi.cache = cache;
+        gi
+    }
+
+    /// Returns the prepass of these maps and their per-light counts, with the precomputation
+    /// points when the settings ask for them.
     fn of_maps(
         scene: &Scene,
         settings: &GiSettings,
         global: CountedMap,
         caustic: Option<CountedMap>,
-    ) -> Gi {
+    ) -> Prepass {
         let extent = scene.extent().max(f32::MIN_POSITIVE);
         let r = settings.max_radius * extent;
         let (caustic_map, caustic_counts) = caustic.map(|c| (c.map, c.per_light)).unzip();
-        let mut gi = Gi {
+        let mut gi = Prepass {
             stats: GiStats {
                 global: global.per_light,
                 caustic: caustic_counts.unwrap_or_default(),
@@ -508,17 +512,21 @@ impl Gi {
     }
 
     /// Returns the irradiance at `p` on a surface with normal `n` (facing the side the light
-    /// arrives from) estimated from `map`; `indirect_only` skips photons that made no diffuse
-    /// bounce.
+    /// arrives from) estimated from the `kind` map within its radius (zero without a caustic
+    /// map); `indirect_only` skips photons that made no diffuse bounce.
     pub fn irradiance(
         &self,
-        map: &PhotonMap,
-        max_d2: f32,
+        kind: MapKind,
         p: Vec3A,
         n: Vec3A,
         indirect_only: bool,
         counts: &mut RayCounts,
     ) -> Vec3A {
+        let (map, max_d2) = match (kind, &self.caustic) {
+            (MapKind::Global, _) => (&self.global, self.global_r2),
+            (MapKind::Caustic, Some(c)) => (c, self.caustic_r2),
+            (MapKind::Caustic, None) => return Vec3A::ZERO,
+        };
         FOUND.with_borrow_mut(|found| {
             let r2 = if self.fixed_radii {
                 map.within(p, max_d2, found);
@@ -561,7 +569,7 @@ impl Gi {
     /// map) or `caustic` (the caustic map) of the point, kernel-weighted over that disc, instead
     /// of the `k` nearest: the progressive integrator's estimates, whose radii it shrinks from
     /// pass to pass. Precomputed irradiance is dropped (it was made with the `k` nearest).
-    pub fn with_fixed_radii(mut self, global: f32, caustic: f32) -> Gi {
+    pub fn with_fixed_radii(mut self, global: f32, caustic: f32) -> Prepass {
         self.global_r2 = global * global;
         self.caustic_r2 = caustic * caustic;
         self.fixed_radii = true;
@@ -581,7 +589,7 @@ impl Gi {
     /// 9.90 / 9.45 s lazily (two alternating runs). With more points than pixels (10^7 photons
     /// under a preview) most are never read. The values are the same either way, so this
     /// changes times only, never the image.
-    pub fn precompute_for(mut self, camera: &Camera) -> Gi {
+    pub fn precompute_for(mut self, camera: &Camera) -> Prepass {
         use rayon::prelude::*;
         let (w, h) = camera.size();
         if let Some(pre) = &self.precomputed
@@ -601,7 +609,12 @@ impl Gi {
 
     /// Returns these maps with an irradiance cache for the frame of `scene` through `camera`
     /// when final gathering runs and the settings ask for one ([`IrradianceCache::build`]).
-    pub fn with_cache(mut self, scene: &Scene, camera: &Camera, progress: &dyn Progress) -> Gi {
+    pub fn with_cache(
+        mut self,
+        scene: &Scene,
+        camera: &Camera,
+        progress: &dyn Progress,
+    ) -> Prepass {
         let gathers = matches!(self.settings.indirect, Indirect::Gather { .. });
         let (w, h) = camera.size();
         let small = w.max(h) < super::irradiance_cache::MIN_IMAGE_SIZE;
@@ -630,25 +643,26 @@ impl Gi {
             && state.weight >= GATHER_MIN_WEIGHT
     }
 
-    /// Returns the final gather at `p` (unit geometric normal `ng`, in `media`): `rays`
-    /// stratified cosine-distributed rays about unit `around` (the shading normal for a point's
-    /// own gather, `ng` for a cache record), those below the surface skipped, summed
-    /// ([`Gather`]: the irradiance, its rotational gradient and `R`).
-    #[allow(clippy::too_many_arguments)]
+    /// Returns the final gather at `at`: `rays` stratified cosine-distributed rays about its
+    /// `around`, those below the surface skipped, summed ([`Gather`]: the irradiance, its
+    /// rotational gradient and `R`).
     pub fn gather(
         &self,
         scene: &Scene,
-        p: Vec3A,
-        around: Vec3A,
-        ng: Vec3A,
-        media: MediumStack,
+        at: GatherAt,
         rays: u32,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Gather {
+        let GatherAt {
+            p,
+            around,
+            ng,
+            media,
+        } = at;
         let mut g = Gather::new(around, rays);
         for u in stratified_2d(rng, rays) {
-            let d = crate::light::cosine_around(around, u);
+            let d = crate::sampling::cosine_around(around, u);
             if d.dot(ng) <= 0.0 {
                 continue;
             }
@@ -668,14 +682,7 @@ impl Gi {
 
     /// Returns the global map's irradiance estimate at `p` (all photons).
     pub fn global_irradiance(&self, p: Vec3A, n: Vec3A) -> Vec3A {
-        self.irradiance(
-            &self.global,
-            self.global_r2,
-            p,
-            n,
-            false,
-            &mut RayCounts::default(),
-        )
+        self.irradiance(MapKind::Global, p, n, false, &mut RayCounts::default())
     }
 
     /// Returns the caustic map's irradiance estimate at `p` (zero without a caustic map).
@@ -684,10 +691,7 @@ impl Gi {
     }
 
     fn caustic_at(&self, p: Vec3A, n: Vec3A, counts: &mut RayCounts) -> Vec3A {
-        match &self.caustic {
-            Some(c) => self.irradiance(c, self.caustic_r2, p, n, false, counts),
-            None => Vec3A::ZERO,
-        }
+        self.irradiance(MapKind::Caustic, p, n, false, counts)
     }
 
     /// Returns the irradiance a final-gather ray finds at `p` (normal `n`): the precomputed value
@@ -705,20 +709,19 @@ impl Gi {
                 return self.point_irradiance(pre, id);
             }
         }
-        self.irradiance(&self.global, self.global_r2, p, n, false, counts)
+        self.irradiance(MapKind::Global, p, n, false, counts)
     }
 
-    /// Returns the caustic and indirect light leaving the diffuse lobe of `bsdf` at `p` towards its
-    /// `wo`, for an eye path in `state`.
+    /// Returns the caustic and indirect light leaving the diffuse lobe of the BSDF at `at`
+    /// towards its `wo`.
     pub fn diffuse(
         &self,
         scene: &Scene,
-        p: Vec3A,
-        bsdf: &Bsdf,
-        state: &PathState,
+        at: &ShadingPoint,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Vec3A {
+        let (p, bsdf, state) = (at.p(), at.bsdf(), &at.state);
         let ng = bsdf.ng;
         let mut e = self.caustic_at(p, ng, counts);
         // Where a cache record serves the point, its gather stands for the indirect light of
@@ -731,10 +734,15 @@ impl Gi {
             && self.gathers(state)
         {
             counts.gathered += 1;
-            self.gather(scene, p, bsdf.n, ng, state.media, rays, rng, counts)
-                .irradiance()
+            let at = GatherAt {
+                p,
+                around: bsdf.n,
+                ng,
+                media: state.media,
+            };
+            self.gather(scene, at, rays, rng, counts).irradiance()
         } else {
-            self.irradiance(&self.global, self.global_r2, p, ng, true, counts)
+            self.irradiance(MapKind::Global, p, ng, true, counts)
         };
         bsdf.kd * FRAC_1_PI * e
     }

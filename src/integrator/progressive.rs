@@ -45,9 +45,8 @@
 //! ```
 
 use super::eye::DiffuseTerm;
-use super::photon_map::{Gi, GiSettings, GiStats};
-use super::{Partial, Plan, Settings, Stats, camera_pass};
-use crate::camera::Camera;
+use super::photon_map::{GiSettings, GiStats, Prepass};
+use super::{Partial, Plan, Settings, Stats, View, camera_pass};
 use crate::film::{Film, Window};
 use crate::photon::PhotonMap;
 use crate::progress::{Progress, StopOnly};
@@ -138,17 +137,16 @@ pub struct ProgressiveStats {
     pub time: Duration,
 }
 
-/// Renders `window` of the image of `scene` through `camera` progressively: passes of photon
-/// tracing, map building and a camera pass with shrinking fixed-radius estimates, averaged,
-/// until the settings' passes, target error or time budget stop it.
+/// Renders `view` progressively: passes of photon tracing, map building and a camera pass with
+/// shrinking fixed-radius estimates, averaged, until the settings' passes, target error or time
+/// budget stop it.
 pub fn render(
-    scene: &Scene,
-    camera: &Camera,
-    window: Window,
+    view: View,
     settings: &Settings,
     plan: Plan,
     progress: &dyn Progress,
 ) -> (Film, Stats) {
+    let View { scene, window, .. } = view;
     let prog = settings.progressive.clone().unwrap_or_default();
     let start = Instant::now();
     let mut acc = Accumulator::new(window);
@@ -166,7 +164,7 @@ pub fn render(
             precompute: false,
             ..super::photon_map::planned(&settings.photons, &plan)
         };
-        let gi = Gi::build_with(scene, &gi_settings, &inner);
+        let gi = Prepass::build_with(scene, &gi_settings, &inner);
         if pass == 0 {
             first_radii = first_pass_radii(scene, &gi, &prog);
             radii = first_radii;
@@ -178,7 +176,7 @@ pub fn render(
             ..settings.clone()
         };
         let diffuse = DiffuseTerm::Photons(&gi);
-        let (film, rs) = camera_pass(scene, camera, diffuse, window, &pass_settings, &inner);
+        let (film, rs) = camera_pass(view, diffuse, &pass_settings, &inner);
         render_stats.add(&rs);
         add_photon_stats(&mut photon_stats, &gi.stats);
         drop(gi);
@@ -258,7 +256,7 @@ pub fn shrink((global, caustic): (f32, f32), passes: u32, alpha: f32) -> (f32, f
 
 /// Returns the first pass's radii: the settings' fraction of the scene's diagonal, or each map's
 /// [`initial_radius`] (no larger than the photon mapper's largest search radius).
-fn first_pass_radii(scene: &Scene, gi: &Gi, prog: &ProgressiveSettings) -> (f32, f32) {
+fn first_pass_radii(scene: &Scene, gi: &Prepass, prog: &ProgressiveSettings) -> (f32, f32) {
     let extent = scene.extent().max(f32::MIN_POSITIVE);
     if let Some(f) = prog.initial_radius {
         return (f * extent, 0.5 * f * extent);

@@ -5,21 +5,13 @@
 //! Phases: the camera pass, nothing before it.
 
 use super::eye::DiffuseTerm;
-use super::{Settings, camera_pass};
-use crate::camera::Camera;
-use crate::film::{Film, Window};
+use super::{Settings, View, camera_pass};
+use crate::film::Film;
 use crate::progress::Progress;
-use crate::scene::Scene;
 use crate::stats::RenderStats;
 
-/// Renders `window` of the image of `scene` through `camera`.
-pub fn render(
-    scene: &Scene,
-    camera: &Camera,
-    window: Window,
-    settings: &Settings,
-    progress: &dyn Progress,
-) -> (Film, RenderStats) {
-    let diffuse = DiffuseTerm::Ambient(scene.ambient);
-    camera_pass(scene, camera, diffuse, window, settings, progress)
+/// Renders `view`.
+pub fn render(view: View, settings: &Settings, progress: &dyn Progress) -> (Film, RenderStats) {
+    let diffuse = DiffuseTerm::Ambient(view.scene.ambient);
+    camera_pass(view, diffuse, settings, progress)
 }

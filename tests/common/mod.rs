@@ -178,7 +178,7 @@ pub fn render_scene(
     height: u32,
     settings: &Settings,
 ) -> Film {
-    caustic::frame::render(
+    render_frame(
         scene,
         camera,
         Window::full(width, height),
@@ -186,6 +186,19 @@ pub fn render_scene(
         &NoProgress,
     )
     .0
+}
+
+/// Renders `window` of `scene` through `camera` with `settings` as a frame does: plans it once
+/// (applying the plan to the scene, [`caustic::frame::plan`]) and runs the plan's passes.
+pub fn render_frame(
+    scene: &mut Scene,
+    camera: &Camera,
+    window: Window,
+    settings: &Settings,
+    progress: &dyn caustic::progress::Progress,
+) -> (Film, caustic::frame::Stats) {
+    let plan = caustic::frame::plan(scene, settings);
+    caustic::frame::render(scene, camera, window, settings, plan, progress)
 }
 
 /// Renders a corpus script as if run from its own folder.

@@ -219,7 +219,7 @@ fn open_exclusive(path: &Path, mode: u32) -> io::Result<std::fs::File> {
 fn create_temporary(
     target: &Path,
     mode: u32,
-) -> Result<(std::fs::File, PathBuf, cleanup::Guard), String> {
+) -> Result<(std::fs::File, PathBuf, crate::interrupt::cleanup::Guard), String> {
     let name = target
         .file_name()
         .ok_or_else(|| "the output path names no file".to_string())?;
@@ -230,7 +230,7 @@ fn create_temporary(
             name.to_string_lossy(),
             random_u64()
         ));
-        let guard = cleanup::register(&tmp);
+        let guard = crate::interrupt::cleanup::register(&tmp);
         match open_exclusive(&tmp, mode) {
             Ok(file) => return Ok((file, tmp, guard)),
             Err(e) if e.kind() == io::ErrorKind::AlreadyExists => last = Some(e),
@@ -291,120 +291,6 @@ pub fn write_replacing_io(
     write: impl FnOnce(&mut std::fs::File) -> io::Result<()>,
 ) -> io::Result<()> {
     write_replacing(path, |file| write(file).map_err(|e| e.to_string())).map_err(io::Error::other)
-}
-
-/// Installs the SIGINT and SIGTERM handlers now rather than at the first file written (for
-/// [`crate::interrupt::catch_sigint`]); installing them twice does nothing.
-pub fn install_signal_handlers() {
-    cleanup::install_once();
-}
-
-/// Removing temporary files when SIGINT or SIGTERM arrives, with libc's `sigaction` (already a
-/// dependency on Linux; the handler only unlinks and re-raises, or records a first SIGINT as
-/// [`crate::interrupt`] asks, all async-signal-safe).
-#[cfg(target_os = "linux")]
-mod cleanup {
-    use std::ffi::CString;
-    use std::os::unix::ffi::OsStrExt;
-    use std::path::Path;
-    use std::sync::Once;
-    use std::sync::atomic::{AtomicPtr, Ordering};
-
-    /// Temporary files being written at once (more are written, just not cleaned up).
-    const SLOTS: usize = 16;
-    /// The paths of the temporary files being written, as C strings; null when free. A path
-    /// is never freed once published, so the handler can read it at any moment.
-    static PENDING: [AtomicPtr<libc::c_char>; SLOTS] =
-        [const { AtomicPtr::new(std::ptr::null_mut()) }; SLOTS];
-
-    /// Unregisters its temporary file when dropped.
-    pub struct Guard(Option<usize>);
-
-    impl Drop for Guard {
-        fn drop(&mut self) {
-            if let Some(slot) = self.0 {
-                PENDING[slot].store(std::ptr::null_mut(), Ordering::SeqCst);
-            }
-        }
-    }
-
-    /// Installs the signal handlers, once.
-    pub fn install_once() {
-        static INSTALL: Once = Once::new();
-        INSTALL.call_once(install);
-    }
-
-    /// Registers `tmp` for removal on SIGINT and SIGTERM until the guard is dropped.
-    pub fn register(tmp: &Path) -> Guard {
-        install_once();
-        let Ok(c) = CString::new(tmp.as_os_str().as_bytes()) else {
-            return Guard(None);
-        };
-        // Leaked on purpose (a few bytes per image written): see PENDING.
-        let ptr = c.into_raw();
-        for (k, slot) in PENDING.iter().enumerate() {
-            let free = std::ptr::null_mut();
-            if slot
-                .compare_exchange(free, ptr, Ordering::SeqCst, Ordering::SeqCst)
-                .is_ok()
-            {
-                return Guard(Some(k));
-            }
-        }
-        Guard(None)
-    }
-
-    extern "C" fn on_signal(sig: libc::c_int) {
-        if crate::interrupt::absorb(sig) {
-            return;
-        }
-        for slot in &PENDING {
-            let p = slot.load(Ordering::SeqCst);
-            if !p.is_null() {
-                // SAFETY: p is a NUL-terminated path that is never freed; unlink is
-                // async-signal-safe.
-                unsafe { libc::unlink(p) };
-            }
-        }
-        // SAFETY: restoring the default action and re-raising are async-signal-safe; the
-        // process then ends as the signal would have ended it.
-        unsafe {
-            libc::signal(sig, libc::SIG_DFL);
-            libc::raise(sig);
-        }
-    }
-
-    fn install() {
-        for sig in [libc::SIGINT, libc::SIGTERM] {
-            // SAFETY: a zeroed sigaction with a handler and an empty mask is valid; the
-            // handler only does async-signal-safe work. SA_RESTART: a SIGINT the handler
-            // absorbs must not fail a read or write in progress with EINTR.
-            unsafe {
-                let mut action: libc::sigaction = std::mem::zeroed();
-                action.sa_sigaction = on_signal as extern "C" fn(libc::c_int) as usize;
-                action.sa_flags = libc::SA_RESTART;
-                libc::sigemptyset(&mut action.sa_mask);
-                libc::sigaction(sig, &action, std::ptr::null_mut());
-            }
-        }
-    }
-}
-
-/// Elsewhere no signal handler is installed; temporary files are still removed on errors.
-#[cfg(not(target_os = "linux"))]
-mod cleanup {
-    use std::path::Path;
-
-    /// Stands for the Linux guard.
-    pub struct Guard;
-
-    /// Does nothing: no signal cleanup on this platform.
-    pub fn register(_tmp: &Path) -> Guard {
-        Guard
-    }
-
-    /// Does nothing: no signal handlers on this platform.
-    pub fn install_once() {}
 }
 
 #[cfg(all(test, target_os = "linux"))]

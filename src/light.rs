@@ -34,6 +34,7 @@
 
 use crate::desc::{LightDesc, LightShape};
 use crate::geometry::Ray;
+use crate::sampling::{cosine_around, uniform_sphere};
 use glam::Vec3A;
 use std::f32::consts::{PI, TAU};
 
@@ -294,25 +295,6 @@ impl Light {
     }
 }
 
-/// Returns a uniformly distributed unit vector (pdf `1/4π`).
-pub fn uniform_sphere(u: (f32, f32)) -> Vec3A {
-    let z = 1.0 - 2.0 * u.0;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = TAU * u.1;
-    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
-}
-
-/// Returns a cosine-distributed unit vector around unit `n` (pdf `cos θ / π`; Malley's method).
-pub fn cosine_around(n: Vec3A, u: (f32, f32)) -> Vec3A {
-    let r = u.0.sqrt();
-    let phi = TAU * u.1;
-    let (x, y) = (r * phi.cos(), r * phi.sin());
-    let z = (1.0 - u.0).max(0.0).sqrt();
-    let t = n.any_orthonormal_vector();
-    let b = n.cross(t);
-    (t * x + b * y + n * z).normalize()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -376,23 +358,6 @@ mod tests {
             .sum::<Vec3A>()
             / n as f32;
         assert!((mean.x - 3.0).abs() < 0.03, "{mean}");
-    }
-
-    #[test]
-    fn emission_directions_follow_their_densities() {
-        let mut rng = Rng::new(2, Pass::Photon, 0);
-        let n = 200_000;
-        let (mut mean_cos, mut above) = (0.0f64, 0usize);
-        for _ in 0..n {
-            let d = cosine_around(Vec3A::Y, (rng.next_f32(), rng.next_f32()));
-            assert!((d.length() - 1.0).abs() < 1e-5);
-            mean_cos += d.y as f64;
-            above += usize::from(d.y >= 0.0);
-            let s = uniform_sphere((rng.next_f32(), rng.next_f32()));
-            assert!((s.length() - 1.0).abs() < 1e-5);
-        }
-        // E[cos θ] under cos θ/π is 2/3.
-        assert!((mean_cos / n as f64 - 2.0 / 3.0).abs() < 0.005 && above == n);
     }
 
     #[test]

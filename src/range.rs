@@ -11,6 +11,7 @@
 //! | reflectances `kd`, `ks` (script and MTL) | `[0, 10]` ([`MAX_REFLECTANCE`]) | course scenes use up to `1.5`; see the note below on values above 1 |
 //! | light `power` | `[0, 1e30]` ([`MAX_POWER`]) | only a weight among lights: the sum over many lights must stay finite |
 //! | sphere-light radius, area-light size `√|u × v|` | `≥ 1e-6` ([`MIN_LIGHT_SIZE`]) | an emitter's radiance is `rgb/R²` (`π·rgb/area`): a radius of `1e-30` was infinite |
+//! | photons one light emits for one map (`num_photons`, its share of `--photons`, times `--photon-scale`) | `≤ 1e9` ([`MAX_PHOTONS`]) | 10^9 stored photons would need 20 GB |
 //!
 //! A reflectance above 1 amplifies light at every bounce: a path between two facing mirrors of
 //! `ks = 1.5` grows as `1.5ⁿ` and no finite bound above 1 keeps every path finite. Such values are
@@ -34,6 +35,10 @@ pub const MAX_FALLOFF: f64 = 1e6;
 pub const MAX_POWER: f64 = 1e30;
 /// Smallest sphere-light radius, and smallest square root of an area light's area.
 pub const MIN_LIGHT_SIZE: f64 = 1e-6;
+/// Most photons one light may emit for one map: 10^9 stored photons would need 20 GB, most of
+/// a workstation's memory. Script counts, `--photons` and `--photon-scale` are checked against
+/// it.
+pub const MAX_PHOTONS: u64 = 1_000_000_000;
 
 /// Returns the message for a point with a coordinate outside `±MAX_COORDINATE`, if it has one.
 pub fn coordinate<T: Copy + Into<f64> + Display + LowerExp>(p: [T; 3]) -> Result<(), String> {

@@ -6,6 +6,13 @@
 //! tile rendered alone equals the same tile of a full render.
 //!
 //! The generator is PCG32 (O'Neill 2014; pbrt-v4's `RNG`), seeded by a 64-bit mix of the key.
+//!
+//! The direction samplers every pass draws from live here too, each with its pdf
+//! ([`uniform_sphere`], [`cosine_around`]): the BSDF, the lights, photon emission and final
+//! gathering share them.
+
+use glam::Vec3A;
+use std::f32::consts::{FRAC_1_PI, TAU};
 
 /// What a random stream is used for; part of every stream's key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,9 +111,84 @@ pub fn stratified_2d(rng: &mut Rng, n: u32) -> Vec<(f32, f32)> {
         .collect()
 }
 
+/// Returns a uniformly distributed unit vector (pdf [`uniform_sphere_pdf`]).
+pub fn uniform_sphere(u: (f32, f32)) -> Vec3A {
+    let z = 1.0 - 2.0 * u.0;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = TAU * u.1;
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Returns a cosine-distributed unit vector around unit `n` (pdf [`cosine_pdf`]; Malley's
+/// method).
+pub fn cosine_around(n: Vec3A, u: (f32, f32)) -> Vec3A {
+    let r = u.0.sqrt();
+    let phi = TAU * u.1;
+    let (x, y) = (r * phi.cos(), r * phi.sin());
+    let z = (1.0 - u.0).max(0.0).sqrt();
+    let t = n.any_orthonormal_vector();
+    let b = n.cross(t);
+    (t * x + b * y + n * z).normalize()
+}
+
+/// Returns the density of [`uniform_sphere`]'s directions: `1/4π` per steradian.
+pub fn uniform_sphere_pdf() -> f32 {
+    0.25 * FRAC_1_PI
+}
+
+/// Returns the density of [`cosine_around`]'s direction at `cos_theta` from its axis:
+/// `cos θ / π` per steradian above the surface, zero below.
+pub fn cosine_pdf(cos_theta: f32) -> f32 {
+    cos_theta.max(0.0) * FRAC_1_PI
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn emission_directions_follow_their_densities() {
+        let mut rng = Rng::new(2, Pass::Photon, 0);
+        let n = 200_000;
+        let (mut mean_cos, mut above) = (0.0f64, 0usize);
+        for _ in 0..n {
+            let d = cosine_around(Vec3A::Y, (rng.next_f32(), rng.next_f32()));
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            mean_cos += d.y as f64;
+            above += usize::from(d.y >= 0.0);
+            let s = uniform_sphere((rng.next_f32(), rng.next_f32()));
+            assert!((s.length() - 1.0).abs() < 1e-5);
+        }
+        // E[cos θ] under cos θ/π is 2/3.
+        assert!((mean_cos / n as f64 - 2.0 / 3.0).abs() < 0.005 && above == n);
+    }
+
+    /// Each pdf integrates to one over the sphere: the mean of `pdf / uniform pdf` over
+    /// uniform directions is 1 (200k samples; standard error about 0.4%, tolerance 2%).
+    #[test]
+    fn the_direction_pdfs_integrate_to_one() {
+        let mut rng = Rng::new(4, Pass::Photon, 1);
+        let n = 200_000;
+        let axis = Vec3A::new(0.3, -0.5, 0.8).normalize();
+        let (mut cos, mut uni) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let d = uniform_sphere((rng.next_f32(), rng.next_f32()));
+            cos += (cosine_pdf(d.dot(axis)) / uniform_sphere_pdf()) as f64;
+            uni += 1.0;
+        }
+        assert!((cos / n as f64 - 1.0).abs() < 0.02, "{}", cos / n as f64);
+        assert!(
+            (uni / n as f64 * (uniform_sphere_pdf() as f64 * 4.0 * std::f64::consts::PI) - 1.0)
+                .abs()
+                < 1e-6
+        );
+        // And cosine_around's directions have the mean cosine its pdf gives: 2/3 about any axis.
+        let mean: f64 = (0..n)
+            .map(|_| cosine_around(axis, (rng.next_f32(), rng.next_f32())).dot(axis) as f64)
+            .sum::<f64>()
+            / n as f64;
+        assert!((mean - 2.0 / 3.0).abs() < 0.005, "{mean}");
+    }
 
     #[test]
     fn streams_depend_only_on_their_key() {

@@ -92,7 +92,7 @@ pub fn write(
     for (i, v) in values.iter().enumerate() {
         rgb[3 * i..3 * i + 3].copy_from_slice(&colour(v / max));
     }
-    let text = crate::study::plot::font_ready();
+    let text = crate::io::font::font_ready();
     legend(&mut rgb, full, measure, max, text)
         .map_err(|e| Error::Usage(format!("drawing the heatmap's legend: {e}")))?;
     crate::io::image::write_rgb8_png(path, full.0, full.1, &rgb)?;
@@ -121,7 +121,7 @@ fn legend(
         ))?;
     }
     if text {
-        let style = (crate::study::plot::FAMILY, 13).into_font().color(&BLACK);
+        let style = (crate::io::font::FAMILY, 13).into_font().color(&BLACK);
         let (caption, top) = measure.caption(max);
         let y = y1 + 4;
         root.draw(&Text::new("0", (x0, y), style.clone()))?;

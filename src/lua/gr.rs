@@ -402,13 +402,13 @@ fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Res
     }
     let photons = a.opt_number(5)?;
     if let Some(n) = photons
-        && !(0.0..=crate::photon::trace::MAX_PHOTONS as f64).contains(&n)
+        && !(0.0..=crate::range::MAX_PHOTONS as f64).contains(&n)
     {
         return Err(a.bad(
             5,
             format!(
                 "photon count must be in [0, {}], got {n}",
-                crate::photon::trace::MAX_PHOTONS
+                crate::range::MAX_PHOTONS
             ),
         ));
     }

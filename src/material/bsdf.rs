@@ -29,8 +29,8 @@
 use super::medium::{Crossing, MediumStack};
 use super::{Lobes, Material, fresnel};
 use crate::geometry::hit::SurfaceHit;
-use crate::light::cosine_around;
 use crate::sampling::Rng;
+use crate::sampling::cosine_around;
 use glam::Vec3A;
 
 /// The scattering at one surface point, for one outgoing direction.

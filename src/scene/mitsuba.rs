@@ -23,12 +23,12 @@
 //! dielectrics. Never a silent approximation. Caustic's background gradient has no Mitsuba
 //! counterpart (black there): validation scenes are closed.
 
+use super::{Scene, Shape};
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Loc, Result};
 use crate::geometry::Analytic;
 use crate::light::{Light, Shape as LightShape};
 use crate::material::Material;
-use crate::scene::{Scene, Shape};
 use glam::{Affine3A, Vec3A};
 use std::fmt::Write as _;
 use std::path::Path;

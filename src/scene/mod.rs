@@ -5,14 +5,17 @@
 //! - [`build`]: description → scene (flattening, instancing, CSG trees, the two-level BVH), reading
 //!   files through [`meshes`] (mesh files) and [`images`] (textures and normal maps);
 //! - [`query`]: closest hit, any hit and the surface at a hit;
-//! - [`interaction`]: the per-hit set-up every path shares (surface + BSDF).
+//! - [`interaction`]: the per-hit set-up every path shares (surface + BSDF);
+//! - [`mitsuba`]: a built scene written as a Mitsuba 3 scene (`caustic export-mitsuba`), for
+//!   validation against its path tracer.
 
 pub mod build;
 pub mod images;
 pub mod interaction;
 pub mod meshes;
+pub mod mitsuba;
 pub mod query;
 pub mod types;
 
 pub use build::build_scene;
-pub use types::{Features, Instance, Scene, Shape};
+pub use types::{Features, Instance, MAX_DEPTH, Scene, Shape};

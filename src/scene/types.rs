@@ -102,7 +102,7 @@ pub struct Scene {
     pub account: crate::budget::Account,
 }
 
-/// The parts of shading the effect plan can leave out ([`crate::integrator::plan`]). Each hit is
+/// The parts of shading the effect plan can leave out ([`mod@crate::integrator::plan`]). Each hit is
 /// shaded by a kernel compiled for these flags ([`Scene::interaction`]), so the code of an effect
 /// that is off is not reached at all, rather than skipped by a check at every ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -123,6 +123,11 @@ pub struct Features {
     pub specular_depth: u32,
 }
 
+/// Deepest chain of reflections and refractions an eye path follows by deterministic splitting
+/// by default ([`Features::specular_depth`]); deeper paths go on by Russian roulette. The plan
+/// deepens it for scenes of many nested dielectric layers ([`mod@crate::integrator::plan`]).
+pub const MAX_DEPTH: u32 = 12;
+
 impl Features {
     /// Everything on, at the fixed depth: the kernel that handles any material.
     pub const GENERAL: Features = Features {
@@ -131,7 +136,7 @@ impl Features {
         noise: true,
         refraction: true,
         soft_shadows: true,
-        specular_depth: crate::integrator::eye::MAX_DEPTH,
+        specular_depth: MAX_DEPTH,
     };
 }
 

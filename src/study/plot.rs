@@ -2,49 +2,18 @@
 //! (points along the first sweep), the compared curves dashed, the Pareto front drawn over
 //! them, as a PNG drawn with `plotters`.
 //!
-//! Text needs a font file, found at run time so nothing is bundled: `CAUSTIC_PLOT_FONT`, or
-//! DejaVu Sans or Liberation Sans where Linux distributions put them, or Arial on macOS and
-//! Windows. Without one the plot is drawn without text (and [`draw`] says so): the Markdown
-//! table carries the numbers either way.
+//! Text needs a font file, found at run time ([`crate::io::font`]). Without one the plot is
+//! drawn without text (and [`draw`] says so): the Markdown table carries the numbers either
+//! way.
 
 use super::{Curve, Summary};
 use crate::error::{Error, Result};
+use crate::io::font::{FAMILY, font_ready};
 use plotters::prelude::*;
 use std::path::Path;
 
 /// Size of the picture in pixels.
 const SIZE: (u32, u32) = (900, 600);
-
-/// Font files tried in turn, after `CAUSTIC_PLOT_FONT`.
-const FONTS: [&str; 7] = [
-    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf",
-    "/usr/share/fonts/TTF/DejaVuSans.ttf",
-    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-    "/usr/share/fonts/liberation-sans/LiberationSans-Regular.ttf",
-    "/System/Library/Fonts/Supplemental/Arial.ttf",
-    "C:\\Windows\\Fonts\\arial.ttf",
-];
-
-/// The family name the font is registered under.
-pub(crate) const FAMILY: &str = "caustic-plot";
-
-/// Registers the first readable font (once per process); returns whether text can be drawn.
-pub(crate) fn font_ready() -> bool {
-    static READY: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *READY.get_or_init(|| {
-        let env = std::env::var("CAUSTIC_PLOT_FONT").ok();
-        env.iter()
-            .map(String::as_str)
-            .chain(FONTS)
-            .filter_map(|p| crate::files::read_regular(Path::new(p)).ok())
-            .any(|bytes| {
-                // Registered fonts live as long as the process (plotters wants 'static).
-                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                plotters::style::register_font(FAMILY, FontStyle::Normal, bytes).is_ok()
-            })
-    })
-}
 
 /// Draws the study's summaries and the compared curves to `out` (PNG); returns whether the
 /// picture has text (a font was found).
@@ -78,6 +47,10 @@ fn range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
 
 type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
+/// Draws the picture into the RGB buffer `buf` ([`SIZE`]), with its text when `text`.
+/// Long: one chart drawn layer by layer (axes, the study's series, the compared curves, the
+/// Pareto front, the legend), each layer a few calls on the same `plotters` chart, whose
+/// generic type would make a function per layer longer than the layer.
 fn draw_into(
     buf: &mut [u8],
     title: &str,

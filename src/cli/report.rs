@@ -90,14 +90,44 @@ impl Progress for Snapshots<'_> {
     }
 }
 
-/// Prints `--stats` for one frame written to `out` from the `gr.render` call `r`.
+/// Prints `--stats` for one frame written to `out` from the `gr.render` call `r`: the scene,
+/// the camera pass, the plan with its phases' times, the photon passes and the memory.
 pub fn print_stats(
     frame: &Frame,
     r: &RenderDesc,
     out: &Path,
     traversal: Option<&crate::accel::counters::ByKind>,
 ) {
-    let (scene, film, rstats) = (&frame.scene, &frame.film, &frame.stats.render);
+    print_scene(frame, r, out);
+    let secs = print_camera_pass(frame, traversal);
+    print_plan(frame, secs);
+    let rstats = &frame.stats.render;
+    if let Some(photons) = &frame.stats.photons {
+        print_photon_stats(photons, rstats);
+    }
+    if let Some(p) = &frame.stats.progressive {
+        let error = p
+            .estimated_error
+            .map_or("none".to_string(), |e| format!("{e:.4}"));
+        println!(
+            "  progressive: {} passes in {:.3} s (stopped by {:?}); radii global {:.4e} -> {:.4e}, caustic {:.4e} -> {:.4e}; estimated relative RMSE {error}",
+            p.passes,
+            p.time.as_secs_f64(),
+            p.stop,
+            p.first_radii.0,
+            p.last_radii.0,
+            p.first_radii.1,
+            p.last_radii.1,
+        );
+    }
+    if let Some(kib) = crate::mem::peak_resident_kib() {
+        println!("  peak resident memory: {:.1} MiB", kib as f64 / 1024.0);
+    }
+}
+
+/// Prints the frame's image, its scene's instances and lights, and its triangles and BVH.
+fn print_scene(frame: &Frame, r: &RenderDesc, out: &Path) {
+    let (scene, film) = (&frame.scene, &frame.film);
     let b = &scene.stats;
     println!(
         "image {}: {}x{} from {}",
@@ -120,6 +150,12 @@ pub fn print_stats(
         b.bvh_bytes,
         b.build_time.as_secs_f64()
     );
+}
+
+/// Prints the camera pass's rays, traversal (by ray kind, when counted), capped paths, weak
+/// branches and material time; returns the pass's wall time in seconds.
+fn print_camera_pass(frame: &Frame, traversal: Option<&crate::accel::counters::ByKind>) -> f64 {
+    let (film, rstats) = (&frame.film, &frame.stats.render);
     let n = film.samples.len().max(1) as f64;
     let total: u64 = film.samples.iter().map(|&s| s as u64).sum();
     let (lo, hi) = (
@@ -183,28 +219,7 @@ pub fn print_stats(
         rstats.material_time.as_secs_f64(),
         100.0 * rstats.material_time.as_secs_f64() / busy.max(1e-9)
     );
-    print_plan(frame, secs);
-    if let Some(photons) = &frame.stats.photons {
-        print_photon_stats(photons, rstats);
-    }
-    if let Some(p) = &frame.stats.progressive {
-        let error = p
-            .estimated_error
-            .map_or("none".to_string(), |e| format!("{e:.4}"));
-        println!(
-            "  progressive: {} passes in {:.3} s (stopped by {:?}); radii global {:.4e} -> {:.4e}, caustic {:.4e} -> {:.4e}; estimated relative RMSE {error}",
-            p.passes,
-            p.time.as_secs_f64(),
-            p.stop,
-            p.first_radii.0,
-            p.last_radii.0,
-            p.first_radii.1,
-            p.last_radii.1,
-        );
-    }
-    if let Some(kib) = crate::mem::peak_resident_kib() {
-        println!("  peak resident memory: {:.1} MiB", kib as f64 / 1024.0);
-    }
+    secs
 }
 
 /// Prints the plan, each decision with the time of the phases it ran (the camera pass, `secs`,

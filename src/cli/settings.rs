@@ -65,81 +65,20 @@ impl RenderJob {
     /// Returns the job the arguments ask for, or a usage error naming the flag out of range.
     pub fn from_args(a: &RenderArgs) -> Result<RenderJob> {
         let progressive = progressive_settings(a)?;
-        let spp = a.spp.unwrap_or(if progressive.is_some() {
-            1
-        } else {
-            crate::integrator::DEFAULT_SPP
-        });
-        if spp == 0 || spp > 1 << 16 {
-            return Err(Error::Usage(format!(
-                "--spp must be in [1, 65536], got {spp}"
-            )));
-        }
-        if !(a.aa_threshold >= 0.0 && a.aa_threshold.is_finite()) || a.aa_depth > 8 {
-            return Err(Error::Usage(
-                "--aa-threshold must be >= 0 and --aa-depth at most 8".into(),
-            ));
-        }
-        let photon_scale = a.photon_scale.unwrap_or(1.0);
-        if !(0.0..=1e3).contains(&photon_scale) {
-            return Err(Error::Usage(format!(
-                "--photon-scale must be in [0, 1000], got {photon_scale}"
-            )));
-        }
-        let (photons, caustic_photons) = match progressive {
-            Some(_) => (PASS_GLOBAL_PHOTONS, PASS_CAUSTIC_PHOTONS),
-            None => (GLOBAL_PHOTONS, CAUSTIC_PHOTONS),
-        };
-        let photons = a.photons.unwrap_or(photons);
-        let caustic_photons = a.caustic_photons.unwrap_or(caustic_photons);
-        if !a.exposure.is_finite() {
-            return Err(Error::Usage("--exposure must be finite".into()));
-        }
+        let sampling = sampling(a, progressive.is_some())?;
+        let photons = photon_settings(a, progressive.is_some())?;
+        let tonemap = tonemap(a)?;
         if let Some(e) = a.force.iter().find(|e| a.disable.contains(e)) {
             return Err(Error::Usage(format!(
                 "--force {0} and --disable {0} contradict each other",
                 e.name()
             )));
         }
-        check_photons("--photons", photons)?;
-        check_photons("--caustic-photons", caustic_photons)?;
         if a.heatmap.is_some() && progressive.is_some() {
             return Err(Error::Usage(
                 "--heatmap: the progressive integrator has no single camera pass to measure".into(),
             ));
         }
-        for (name, value, max) in [
-            ("--light-samples", a.light_samples as u64, 4096),
-            ("--photon-k", a.photon_k as u64, 10_000),
-            ("--gather-rays", a.gather_rays as u64, 65_536),
-            ("--cache-rays", a.cache_rays as u64, 65_536),
-        ] {
-            if !(1..=max).contains(&value) {
-                return Err(Error::Usage(format!(
-                    "{name} must be in [1, {max}], got {value}"
-                )));
-            }
-        }
-        if !(a.cache_accuracy > 0.0 && a.cache_accuracy <= 1.0) {
-            return Err(Error::Usage(format!(
-                "--cache-accuracy must be in (0, 1], got {}",
-                a.cache_accuracy
-            )));
-        }
-        let sampling = if a.adaptive {
-            Sampling::Adaptive {
-                threshold: a.aa_threshold,
-                max_depth: a.aa_depth,
-            }
-        } else {
-            Sampling::Stratified { spp }
-        };
-        let tonemap = match a.tonemap {
-            TonemapArg::Clamp => Tonemap::Clamp,
-            TonemapArg::Srgb => Tonemap::Srgb {
-                exposure: a.exposure,
-            },
-        };
         let settings = Settings {
             seed: a.seed,
             sampling,
@@ -155,31 +94,9 @@ impl RenderJob {
                 force: a.force.clone(),
                 disable: a.disable.clone(),
             },
-            photons: GiSettings {
-                seed: a.seed,
-                photons,
-                caustic_photons,
-                photon_scale,
-                follow_image: a.photons.is_none()
-                    && a.caustic_photons.is_none()
-                    && a.photon_scale.is_none(),
-                k: a.photon_k,
-                indirect: match a.indirect {
-                    IndirectArg::Gather => Indirect::Gather {
-                        rays: a.gather_rays,
-                    },
-                    IndirectArg::Direct => Indirect::Direct,
-                },
-                precompute: a.gather_lookup == GatherLookup::Precomputed,
-                cache: CacheSettings {
-                    enabled: a.irradiance_cache == Switch::On,
-                    accuracy: a.cache_accuracy,
-                    rays: a.cache_rays,
-                },
-                maps_file: a.photon_maps.clone(),
-                ..GiSettings::default()
-            },
+            photons,
             progressive,
+            maps_file: a.photon_maps.clone(),
         };
         Ok(RenderJob {
             settings,
@@ -196,6 +113,111 @@ impl RenderJob {
             progress: !a.quiet && std::io::stderr().is_terminal(),
         })
     }
+}
+
+/// Returns the pixel sampling the arguments ask for (one jittered sample per pass by default
+/// for a `progressive` render), or a usage error for `--spp`, `--aa-threshold`, `--aa-depth`
+/// or `--light-samples` out of range.
+fn sampling(a: &RenderArgs, progressive: bool) -> Result<Sampling> {
+    let spp = a.spp.unwrap_or(if progressive {
+        1
+    } else {
+        crate::integrator::DEFAULT_SPP
+    });
+    if spp == 0 || spp > 1 << 16 {
+        return Err(Error::Usage(format!(
+            "--spp must be in [1, 65536], got {spp}"
+        )));
+    }
+    if !(a.aa_threshold >= 0.0 && a.aa_threshold.is_finite()) || a.aa_depth > 8 {
+        return Err(Error::Usage(
+            "--aa-threshold must be >= 0 and --aa-depth at most 8".into(),
+        ));
+    }
+    check_count("--light-samples", a.light_samples.into(), 4096)?;
+    Ok(if a.adaptive {
+        Sampling::Adaptive {
+            threshold: a.aa_threshold,
+            max_depth: a.aa_depth,
+        }
+    } else {
+        Sampling::Stratified { spp }
+    })
+}
+
+/// Returns the photon passes' settings the arguments ask for (a `progressive` render's
+/// per-pass photon counts by default), or a usage error naming the flag out of range.
+fn photon_settings(a: &RenderArgs, progressive: bool) -> Result<GiSettings> {
+    let photon_scale = a.photon_scale.unwrap_or(1.0);
+    if !(0.0..=1e3).contains(&photon_scale) {
+        return Err(Error::Usage(format!(
+            "--photon-scale must be in [0, 1000], got {photon_scale}"
+        )));
+    }
+    let (photons, caustic_photons) = match progressive {
+        true => (PASS_GLOBAL_PHOTONS, PASS_CAUSTIC_PHOTONS),
+        false => (GLOBAL_PHOTONS, CAUSTIC_PHOTONS),
+    };
+    let photons = a.photons.unwrap_or(photons);
+    let caustic_photons = a.caustic_photons.unwrap_or(caustic_photons);
+    check_photons("--photons", photons)?;
+    check_photons("--caustic-photons", caustic_photons)?;
+    check_count("--photon-k", a.photon_k as u64, 10_000)?;
+    check_count("--gather-rays", a.gather_rays.into(), 65_536)?;
+    check_count("--cache-rays", a.cache_rays.into(), 65_536)?;
+    if !(a.cache_accuracy > 0.0 && a.cache_accuracy <= 1.0) {
+        return Err(Error::Usage(format!(
+            "--cache-accuracy must be in (0, 1], got {}",
+            a.cache_accuracy
+        )));
+    }
+    Ok(GiSettings {
+        seed: a.seed,
+        photons,
+        caustic_photons,
+        photon_scale,
+        follow_image: a.photons.is_none()
+            && a.caustic_photons.is_none()
+            && a.photon_scale.is_none(),
+        k: a.photon_k,
+        indirect: match a.indirect {
+            IndirectArg::Gather => Indirect::Gather {
+                rays: a.gather_rays,
+            },
+            IndirectArg::Direct => Indirect::Direct,
+        },
+        precompute: a.gather_lookup == GatherLookup::Precomputed,
+        cache: CacheSettings {
+            enabled: a.irradiance_cache == Switch::On,
+            accuracy: a.cache_accuracy,
+            rays: a.cache_rays,
+        },
+        ..GiSettings::default()
+    })
+}
+
+/// Returns a usage error naming `flag` when `value` is not in `[1, max]`.
+fn check_count(flag: &str, value: u64, max: u64) -> Result<()> {
+    if !(1..=max).contains(&value) {
+        return Err(Error::Usage(format!(
+            "{flag} must be in [1, {max}], got {value}"
+        )));
+    }
+    Ok(())
+}
+
+/// Returns the tone map the arguments ask for, or a usage error for an `--exposure` that is
+/// not finite.
+fn tonemap(a: &RenderArgs) -> Result<Tonemap> {
+    if !a.exposure.is_finite() {
+        return Err(Error::Usage("--exposure must be finite".into()));
+    }
+    Ok(match a.tonemap {
+        TonemapArg::Clamp => Tonemap::Clamp,
+        TonemapArg::Srgb => Tonemap::Srgb {
+            exposure: a.exposure,
+        },
+    })
 }
 
 /// Returns the progressive settings the arguments ask for (`None` without `--integrator

@@ -9,7 +9,7 @@ use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::metrics::{Image, Metrics, Region, pair_block_bias};
 use crate::progress::NoProgress;
-use crate::study::{Curve, MAX_SEEDS, Row, Sweep, grid, summarise};
+use crate::study::{Curve, MAX_SEEDS, Point, Row, Sweep, grid, summarise};
 use clap::{Args, Parser as _};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -55,7 +55,9 @@ pub struct StudyArgs {
     pub output: PathBuf,
 }
 
-/// Runs `caustic study`.
+/// Runs `caustic study`: checks every setting, the references and the outputs before it
+/// renders anything ([`Study::prepare`]), then renders the script's first `gr.render` at every
+/// setting and seed and writes the tables and the plot.
 pub fn study_command(args: StudyArgs) -> Result<()> {
     if args.seeds == 0 || args.seeds > MAX_SEEDS {
         return Err(Error::Usage(format!(
@@ -66,75 +68,7 @@ pub fn study_command(args: StudyArgs) -> Result<()> {
     if let Some(n) = args.threads {
         super::set_threads(n)?;
     }
-    let sweeps = args
-        .sweep
-        .iter()
-        .map(|s| Sweep::parse(s))
-        .collect::<Result<Vec<_>>>()?;
-    let points = grid(&sweeps)?;
-    let base: Vec<String> = args
-        .base
-        .as_deref()
-        .unwrap_or("")
-        .split_whitespace()
-        .map(String::from)
-        .collect();
-    // Check every setting's flags before rendering any.
-    let jobs = points
-        .iter()
-        .map(|p| {
-            let flags: Vec<String> = base.iter().cloned().chain(p.flags()).collect();
-            parse_job(&args.scene, &flags, 0)
-                .map_err(|e| Error::Usage(format!("setting '{}': {e}", p.label())))?;
-            Ok(flags)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let curves = args
-        .compare
-        .iter()
-        .map(|c| {
-            let (label, file) = c
-                .split_once('=')
-                .ok_or_else(|| Error::Usage(format!("--compare {c}: expected LABEL=FILE.csv")))?;
-            Curve::read(label, Path::new(file))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let r1 = crate::io::image::read_rgb(&args.reference)?;
-    let r2 = match &args.second {
-        Some(p) => {
-            let r2 = crate::io::image::read_rgb(p)?;
-            same_size(&r2, p, &r1, &args.reference)?;
-            r2
-        }
-        None => r1.clone(),
-    };
-    let region = super::parse_region(args.region.as_deref(), r1.width, r1.height)?;
-    let second = args.second.as_ref().unwrap_or(&args.reference);
-    for (img, path) in [(&r1, &args.reference), (&r2, second)] {
-        super::check_finite(img, path, region)?;
-    }
-    let images = args.output.join("images");
-    std::fs::create_dir_all(&images).map_err(|e| Error::File {
-        path: images.clone(),
-        message: format!("cannot create the study's folder: {e}"),
-    })?;
-    // The tables and the plot: writable, and none of the study's inputs.
-    let compared: Vec<&Path> = args
-        .compare
-        .iter()
-        .filter_map(|c| c.split_once('=').map(|(_, f)| Path::new(f)))
-        .collect();
-    let mut inputs = vec![args.scene.as_path(), args.reference.as_path()];
-    inputs.extend(args.second.as_deref().into_iter().chain(compared));
-    for name in ["study.csv", "study.md", "study.png"] {
-        super::check_out(&args.output.join(name), &inputs)?;
-    }
-    let out = args.output.clone();
-    let (scene, seeds) = (args.scene.clone(), args.seeds);
-    let title = args
-        .title
-        .clone()
-        .unwrap_or_else(|| format!("Study of {}", args.scene.display()));
+    let study = Study::prepare(&args)?;
     let mut done = false;
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
         if std::mem::replace(&mut done, true) {
@@ -144,35 +78,123 @@ pub fn study_command(args: StudyArgs) -> Result<()> {
             );
             return Ok(());
         }
-        // Every setting's image must have the reference's size: check before rendering any.
-        for (p, flags) in points.iter().zip(&jobs) {
-            let (w, h) = crate::frame::scaled_size(r, parse_job(&scene, flags, 0)?.scale);
-            if (w, h) != (r1.width, r1.height) {
+        study.check_sizes(r)?;
+        let (rows, pair) = study.render_rows(desc, r)?;
+        study.write(&rows, &pair)
+    });
+    crate::lua::run_script_with(&args.scene, hook, args.script.options())?;
+    Ok(())
+}
+
+/// A study ready to render: its settings with their flags checked, the references read and
+/// the outputs checked.
+struct Study {
+    points: Vec<Point>,
+    /// Each point's `caustic render` flags (the shared `--base` ones first).
+    jobs: Vec<Vec<String>>,
+    curves: Vec<Curve>,
+    r1: Image,
+    /// The second reference, or the first again.
+    r2: Image,
+    region: Region,
+    scene: PathBuf,
+    reference: PathBuf,
+    seeds: u32,
+    out: PathBuf,
+    title: String,
+}
+
+impl Study {
+    /// Returns the study `args` ask for, or the first error in its settings, its compared
+    /// curves, its references or its outputs, before anything is rendered.
+    fn prepare(args: &StudyArgs) -> Result<Study> {
+        let sweeps = args
+            .sweep
+            .iter()
+            .map(|s| Sweep::parse(s))
+            .collect::<Result<Vec<_>>>()?;
+        let points = grid(&sweeps)?;
+        let base: Vec<String> = args
+            .base
+            .as_deref()
+            .unwrap_or("")
+            .split_whitespace()
+            .map(String::from)
+            .collect();
+        // Check every setting's flags before rendering any.
+        let jobs = points
+            .iter()
+            .map(|p| {
+                let flags: Vec<String> = base.iter().cloned().chain(p.flags()).collect();
+                parse_job(&args.scene, &flags, 0)
+                    .map_err(|e| Error::Usage(format!("setting '{}': {e}", p.label())))?;
+                Ok(flags)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let curves = args
+            .compare
+            .iter()
+            .map(|c| {
+                let (label, file) = c.split_once('=').ok_or_else(|| {
+                    Error::Usage(format!("--compare {c}: expected LABEL=FILE.csv"))
+                })?;
+                Curve::read(label, Path::new(file))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let (r1, r2, region) = references(args)?;
+        check_outputs(args)?;
+        Ok(Study {
+            points,
+            jobs,
+            curves,
+            r1,
+            r2,
+            region,
+            scene: args.scene.clone(),
+            reference: args.reference.clone(),
+            seeds: args.seeds,
+            out: args.output.clone(),
+            title: args
+                .title
+                .clone()
+                .unwrap_or_else(|| format!("Study of {}", args.scene.display())),
+        })
+    }
+
+    /// Returns an error at `r`'s line when a setting's image would not have the reference's
+    /// size (checked before rendering any).
+    fn check_sizes(&self, r: &RenderDesc) -> Result<()> {
+        for (p, flags) in self.points.iter().zip(&self.jobs) {
+            let (w, h) = crate::frame::scaled_size(r, parse_job(&self.scene, flags, 0)?.scale);
+            if (w, h) != (self.r1.width, self.r1.height) {
                 return Err(Error::at(
                     &r.loc,
                     format!(
                         "setting '{}' renders {w}x{h} but {} is {}x{}",
                         p.label(),
-                        args.reference.display(),
-                        r1.width,
-                        r1.height
+                        self.reference.display(),
+                        self.r1.width,
+                        self.r1.height
                     ),
                 ));
             }
         }
-        let refs = References {
-            r1: &r1,
-            r2: &r2,
-            path: &args.reference,
-            region,
-        };
+        Ok(())
+    }
+
+    /// Renders every setting at every seed; returns the rows and, per setting, the block bias
+    /// of its first two seeds' images when it has two.
+    fn render_rows(
+        &self,
+        desc: &SceneDesc,
+        r: &RenderDesc,
+    ) -> Result<(Vec<Row>, Vec<Option<f64>>)> {
         let mut rows = Vec::new();
         let mut pair = Vec::new();
-        for (p, flags) in points.iter().zip(&jobs) {
+        for (p, flags) in self.points.iter().zip(&self.jobs) {
             let mut first_two = Vec::new();
-            for seed in 0..seeds as u64 {
-                let (row, image) =
-                    render_point(desc, r, (&scene, p.index), flags, seed, &refs, &out)?;
+            for seed in 0..self.seeds as u64 {
+                let (row, image) = self.render_point(desc, r, p, flags, seed)?;
                 eprintln!(
                     "study: {} seed {seed}: {:.2} s CPU, relative RMSE {:.4}",
                     p.label(),
@@ -189,34 +211,115 @@ pub fn study_command(args: StudyArgs) -> Result<()> {
                 }
             }
             pair.push(match &first_two[..] {
-                [a, b] => Some(pair_block_bias(a, b, &r1, &r2, region)),
+                [a, b] => Some(pair_block_bias(a, b, &self.r1, &self.r2, self.region)),
                 _ => None,
             });
         }
-        let summaries = summarise(&points, &rows, &pair);
-        write(&out.join("study.csv"), &crate::study::csv(&rows))?;
-        let text = crate::study::plot::draw(&title, &summaries, &curves, &out.join("study.png"))?;
+        Ok((rows, pair))
+    }
+
+    /// Writes `study.csv`, `study.png` and `study.md` of `rows` and `pair` (as
+    /// [`Study::render_rows`] returns them), and prints the table.
+    fn write(&self, rows: &[Row], pair: &[Option<f64>]) -> Result<()> {
+        let summaries = summarise(&self.points, rows, pair);
+        write(&self.out.join("study.csv"), &crate::study::csv(rows))?;
+        let png = self.out.join("study.png");
+        let text = crate::study::plot::draw(&self.title, &summaries, &self.curves, &png)?;
         if !text {
             eprintln!(
                 "warning: no font found for the plot's text (set CAUSTIC_PLOT_FONT to a .ttf); \
                  study.png has curves only"
             );
         }
-        let md = crate::study::markdown(&title, &summaries, &curves, Some("study.png"));
-        write(&out.join("study.md"), &md)?;
+        let md = crate::study::markdown(&self.title, &summaries, &self.curves, Some("study.png"));
+        write(&self.out.join("study.md"), &md)?;
         print!("{md}");
         Ok(())
-    });
-    crate::lua::run_script_with(&args.scene, hook, args.script.options())?;
-    Ok(())
+    }
+
+    /// Renders setting `p` (its `flags`) at `seed`, writes its image and returns its row (the
+    /// point's index and label are the caller's to fill) and its image.
+    fn render_point(
+        &self,
+        desc: &SceneDesc,
+        r: &RenderDesc,
+        p: &Point,
+        flags: &[String],
+        seed: u64,
+    ) -> Result<(Row, Image)> {
+        let job = parse_job(&self.scene, flags, seed)?;
+        let (cpu0, wall0) = (crate::stats::process_cpu_time(), Instant::now());
+        let settings = &job.settings;
+        let frame = crate::frame::render_desc(desc, r, job.scale, None, settings, &NoProgress)?;
+        let wall_s = wall0.elapsed().as_secs_f64();
+        let cpu_s = match (cpu0, crate::stats::process_cpu_time()) {
+            (Some(a), Some(b)) => (b - a).as_secs_f64(),
+            // No CPU clock here: wall time on every worker is the closest stand-in.
+            _ => wall_s * rayon::current_num_threads() as f64,
+        };
+        let film = &frame.film;
+        let image = Image {
+            width: film.width,
+            height: film.height,
+            pixels: film.pixels.clone(),
+        };
+        same_size(&image, Path::new("the render"), &self.r1, &self.reference)?;
+        let name = format!("p{}_{}_s{seed}.exr", p.index, image_stem(flags));
+        let path = self.out.join("images").join(&name);
+        crate::io::image::write_image(film, &path, job.tonemap)?;
+        let metrics = Metrics::against_two(&image, &self.r1, &self.r2, self.region);
+        let row = Row {
+            point: 0,
+            seed,
+            setting: String::new(),
+            cpu_s,
+            wall_s,
+            metrics,
+            image: format!("images/{name}"),
+        };
+        Ok((row, image))
+    }
 }
 
-/// The reference images and the region measured.
-struct References<'a> {
-    r1: &'a Image,
-    r2: &'a Image,
-    path: &'a Path,
-    region: Region,
+/// Returns the study's references (the second one, or the first again) and the region
+/// measured, or an error naming a reference that differs in size or is not finite there.
+fn references(args: &StudyArgs) -> Result<(Image, Image, Region)> {
+    let r1 = crate::io::image::read_rgb(&args.reference)?;
+    let r2 = match &args.second {
+        Some(p) => {
+            let r2 = crate::io::image::read_rgb(p)?;
+            same_size(&r2, p, &r1, &args.reference)?;
+            r2
+        }
+        None => r1.clone(),
+    };
+    let region = super::parse_region(args.region.as_deref(), r1.width, r1.height)?;
+    let second = args.second.as_ref().unwrap_or(&args.reference);
+    for (img, path) in [(&r1, &args.reference), (&r2, second)] {
+        super::check_finite(img, path, region)?;
+    }
+    Ok((r1, r2, region))
+}
+
+/// Makes the study's image folder and checks that its tables and plot can be written and are
+/// none of the study's inputs.
+fn check_outputs(args: &StudyArgs) -> Result<()> {
+    let images = args.output.join("images");
+    std::fs::create_dir_all(&images).map_err(|e| Error::File {
+        path: images.clone(),
+        message: format!("cannot create the study's folder: {e}"),
+    })?;
+    let compared: Vec<&Path> = args
+        .compare
+        .iter()
+        .filter_map(|c| c.split_once('=').map(|(_, f)| Path::new(f)))
+        .collect();
+    let mut inputs = vec![args.scene.as_path(), args.reference.as_path()];
+    inputs.extend(args.second.as_deref().into_iter().chain(compared));
+    for name in ["study.csv", "study.md", "study.png"] {
+        super::check_out(&args.output.join(name), &inputs)?;
+    }
+    Ok(())
 }
 
 /// Returns the settings of `caustic render SCENE FLAGS --seed SEED`, checked.
@@ -245,48 +348,6 @@ fn parse_job(scene: &Path, flags: &[String], seed: u64) -> Result<RenderJob> {
     }
     super::settings::check_scale(a.scale)?;
     RenderJob::from_args(&a)
-}
-
-/// Renders one setting at one seed, writes its image and returns its row (the point's index and
-/// label are the caller's to fill) and its image.
-fn render_point(
-    desc: &SceneDesc,
-    r: &RenderDesc,
-    (scene, index): (&Path, usize),
-    flags: &[String],
-    seed: u64,
-    refs: &References,
-    out: &Path,
-) -> Result<(Row, Image)> {
-    let job = parse_job(scene, flags, seed)?;
-    let (cpu0, wall0) = (crate::stats::process_cpu_time(), Instant::now());
-    let frame = crate::frame::render_desc(desc, r, job.scale, None, &job.settings, &NoProgress)?;
-    let wall_s = wall0.elapsed().as_secs_f64();
-    let cpu_s = match (cpu0, crate::stats::process_cpu_time()) {
-        (Some(a), Some(b)) => (b - a).as_secs_f64(),
-        // No CPU clock here: wall time on every worker is the closest stand-in.
-        _ => wall_s * rayon::current_num_threads() as f64,
-    };
-    let film = &frame.film;
-    let image = Image {
-        width: film.width,
-        height: film.height,
-        pixels: film.pixels.clone(),
-    };
-    same_size(&image, Path::new("the render"), refs.r1, refs.path)?;
-    let name = format!("p{index}_{}_s{seed}.exr", image_stem(flags));
-    crate::io::image::write_image(film, &out.join("images").join(&name), job.tonemap)?;
-    let metrics = Metrics::against_two(&image, refs.r1, refs.r2, refs.region);
-    let row = Row {
-        point: 0,
-        seed,
-        setting: String::new(),
-        cpu_s,
-        wall_s,
-        metrics,
-        image: format!("images/{name}"),
-    };
-    Ok((row, image))
 }
 
 /// Returns a file-name stem naming a setting's flags (`photons-10000_gather-rays-16`).

@@ -40,7 +40,7 @@
 //! text by `Display`, so tests and tools read the plan without parsing sentences.
 
 use super::Integrator;
-use super::eye::MAX_DEPTH;
+use crate::scene::MAX_DEPTH;
 use crate::scene::{Features, Scene};
 use std::fmt;
 
@@ -332,14 +332,117 @@ fn progressive_plan(scene: &Scene, settings: &super::Settings, gather: bool) -> 
 }
 
 /// Returns the effect plan for `scene` under `mode` and `overrides`; `gather` is whether the
-/// settings ask for final gathering (`--indirect gather`).
+/// settings ask for final gathering (`--indirect gather`). Each decision is one function below,
+/// in the order the plan lists them.
 pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: bool) -> Plan {
-    let decide = |effect, auto: (bool, Why)| match overrides.get(effect) {
-        Some(true) => (true, Why::Forced),
-        Some(false) => (false, Why::Disabled),
-        None => auto,
+    let materials = scene.placed_materials();
+    let mut d = Decisions {
+        overrides,
+        list: Vec::new(),
     };
-    let mut decisions = Vec::new();
+    let photon_maps = photon_maps(&mut d, scene, mode);
+    let caustics = caustics(&mut d, scene, &materials, photon_maps);
+    let final_gathering = final_gathering(&mut d, photon_maps, gather);
+    let soft_shadows = soft_shadows(&mut d, scene);
+    let refraction = d.material_effect(
+        Effect::Refraction,
+        &materials,
+        |m| m.transparency > 0.0,
+        "no material is transparent: nothing refracts",
+    );
+    let textures = d.material_effect(
+        Effect::Textures,
+        &materials,
+        |m| m.texture.is_some(),
+        "no material has a texture: the general kernel looks for one and finds none",
+    );
+    let normal_maps = d.material_effect(
+        Effect::NormalMaps,
+        &materials,
+        |m| m.bump.is_some(),
+        "no material has a bump or normal map: the general kernel finds none",
+    );
+    let noise = d.material_effect(
+        Effect::Noise,
+        &materials,
+        |m| m.perlin_scale > 0.0,
+        "no material has Perlin noise: the general kernel finds none",
+    );
+    d.push(Effect::Adaptive, false, Why::FixedSamples);
+    let specular = materials
+        .iter()
+        .any(|m| m.is_reflective() || (refraction && m.transparency > 0.0));
+    let (specular_depth, depth_why) = specular_depth(scene, specular && refraction, specular);
+    Plan {
+        integrator: if photon_maps {
+            Integrator::PhotonMap
+        } else {
+            Integrator::Whitted
+        },
+        caustics,
+        final_gathering,
+        features: Features {
+            textures,
+            normal_maps,
+            noise,
+            refraction,
+            soft_shadows,
+            specular_depth,
+        },
+        depth_why,
+        decisions: d.list,
+        notes: Vec::new(),
+    }
+}
+
+/// The decisions of a plan being made, and the overrides they obey.
+struct Decisions<'a> {
+    overrides: &'a Overrides,
+    list: Vec<Decision>,
+}
+
+impl Decisions<'_> {
+    /// Returns the decision about `effect`: the override's, if the user gave one, else `auto`.
+    fn decide(&self, effect: Effect, auto: (bool, Why)) -> (bool, Why) {
+        match self.overrides.get(effect) {
+            Some(true) => (true, Why::Forced),
+            Some(false) => (false, Why::Disabled),
+            None => auto,
+        }
+    }
+
+    /// Records a decision.
+    fn push(&mut self, effect: Effect, on: bool, why: Why) {
+        self.list.push(Decision { effect, on, why });
+    }
+
+    /// Decides and records a shading effect that `materials` call for when one `has` it; a
+    /// forced one that none has says `vain`. Returns whether it is on.
+    fn material_effect(
+        &mut self,
+        effect: Effect,
+        materials: &[&crate::material::Material],
+        has: impl Fn(&crate::material::Material) -> bool,
+        vain: &'static str,
+    ) -> bool {
+        let n = materials.iter().filter(|m| has(m)).count();
+        let auto = if n > 0 {
+            (true, Why::Materials(n))
+        } else {
+            (false, Why::NoMaterial)
+        };
+        let (on, mut why) = self.decide(effect, auto);
+        if on && n == 0 {
+            why = Why::ForcedInVain(vain);
+        }
+        self.push(effect, on, why);
+        on
+    }
+}
+
+/// Decides photon maps: on under `--gi on`, off under `--gi off`, and with `--gi auto` when a
+/// light was given the extended project's `power` or `num_photons`.
+fn photon_maps(d: &mut Decisions, scene: &Scene, mode: GiMode) -> bool {
     let extended = scene
         .lights
         .iter()
@@ -350,15 +453,21 @@ pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: boo
         GiMode::Auto if extended => (true, Why::LightAsks),
         GiMode::Auto => (false, Why::NoLightAsks),
     };
-    let (photon_maps, why) = decide(Effect::PhotonMaps, auto);
-    decisions.push(Decision {
-        effect: Effect::PhotonMaps,
-        on: photon_maps,
-        why,
-    });
-    // Specular as the passes will see it: with refraction disabled a clear glass turns opaque.
-    let materials = scene.placed_materials();
-    let refracts = overrides
+    let (on, why) = d.decide(Effect::PhotonMaps, auto);
+    d.push(Effect::PhotonMaps, on, why);
+    on
+}
+
+/// Decides the caustic map: on with photon maps when a placed surface is specular as the passes
+/// will see it (with refraction disabled a clear glass turns opaque).
+fn caustics(
+    d: &mut Decisions,
+    scene: &Scene,
+    materials: &[&crate::material::Material],
+    photon_maps: bool,
+) -> bool {
+    let refracts = d
+        .overrides
         .get(Effect::Refraction)
         .unwrap_or_else(|| materials.iter().any(|m| m.transparency > 0.0));
     let specular = scene
@@ -380,7 +489,7 @@ pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: boo
         (true, 0) => (false, Why::NoSpecular),
         (true, n) => (true, Why::Specular(n)),
     };
-    let (caustics, mut why) = decide(Effect::Caustics, auto);
+    let (caustics, mut why) = d.decide(Effect::Caustics, auto);
     if caustics && why == Why::Forced {
         if !photon_maps {
             why = Why::ForcedInVain("photon maps are off: no caustic map is traced");
@@ -388,106 +497,42 @@ pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: boo
             why = Why::ForcedInVain("no surface is specular or refractive: the map stays empty");
         }
     }
-    decisions.push(Decision {
-        effect: Effect::Caustics,
-        on: caustics && photon_maps,
-        why,
-    });
+    d.push(Effect::Caustics, caustics && photon_maps, why);
+    caustics && photon_maps
+}
+
+/// Decides final gathering: on with photon maps under `--indirect gather` (`gather`).
+fn final_gathering(d: &mut Decisions, photon_maps: bool, gather: bool) -> bool {
     let auto = match (photon_maps, gather) {
         (false, _) => (false, Why::NoPhotonMaps),
         (true, true) => (true, Why::Gather),
         (true, false) => (false, Why::DirectVisualisation),
     };
-    let (mut final_gathering, mut why) = decide(Effect::FinalGathering, auto);
-    if final_gathering && !photon_maps {
-        (final_gathering, why) = (
+    let (mut on, mut why) = d.decide(Effect::FinalGathering, auto);
+    if on && !photon_maps {
+        (on, why) = (
             false,
             Why::ForcedInVain("photon maps are off: there is nothing to gather"),
         );
     }
-    decisions.push(Decision {
-        effect: Effect::FinalGathering,
-        on: final_gathering,
-        why,
-    });
+    d.push(Effect::FinalGathering, on, why);
+    on
+}
+
+/// Decides soft shadows: on when the scene has area or sphere lights.
+fn soft_shadows(d: &mut Decisions, scene: &Scene) -> bool {
     let area = scene.lights.iter().filter(|l| l.is_area()).count();
     let auto = if area > 0 {
         (true, Why::AreaLights(area))
     } else {
         (false, Why::PointLightsOnly)
     };
-    let (soft_shadows, mut why) = decide(Effect::SoftShadows, auto);
-    if soft_shadows && area == 0 {
+    let (on, mut why) = d.decide(Effect::SoftShadows, auto);
+    if on && area == 0 {
         why = Why::ForcedInVain("point lights only: there is no area to soften shadows over");
     }
-    decisions.push(Decision {
-        effect: Effect::SoftShadows,
-        on: soft_shadows,
-        why,
-    });
-    let mut material_effect = |effect, has: &dyn Fn(&crate::material::Material) -> bool, vain| {
-        let n = materials.iter().filter(|m| has(m)).count();
-        let auto = if n > 0 {
-            (true, Why::Materials(n))
-        } else {
-            (false, Why::NoMaterial)
-        };
-        let (on, mut why) = decide(effect, auto);
-        if on && n == 0 {
-            why = Why::ForcedInVain(vain);
-        }
-        decisions.push(Decision { effect, on, why });
-        on
-    };
-    let refraction = material_effect(
-        Effect::Refraction,
-        &|m| m.transparency > 0.0,
-        "no material is transparent: nothing refracts",
-    );
-    let textures = material_effect(
-        Effect::Textures,
-        &|m| m.texture.is_some(),
-        "no material has a texture: the general kernel looks for one and finds none",
-    );
-    let normal_maps = material_effect(
-        Effect::NormalMaps,
-        &|m| m.bump.is_some(),
-        "no material has a bump or normal map: the general kernel finds none",
-    );
-    let noise = material_effect(
-        Effect::Noise,
-        &|m| m.perlin_scale > 0.0,
-        "no material has Perlin noise: the general kernel finds none",
-    );
-    decisions.push(Decision {
-        effect: Effect::Adaptive,
-        on: false,
-        why: Why::FixedSamples,
-    });
-    let specular = materials
-        .iter()
-        .any(|m| m.is_reflective() || (refraction && m.transparency > 0.0));
-    let (specular_depth, depth_why) = specular_depth(scene, specular && refraction, specular);
-    Plan {
-        integrator: if photon_maps {
-            Integrator::PhotonMap
-        } else {
-            Integrator::Whitted
-        },
-        caustics: caustics && photon_maps,
-        final_gathering,
-        features: Features {
-            textures,
-            normal_maps,
-            noise,
-            refraction,
-            soft_shadows,
-            specular_depth,
-        },
-        depth_why,
-        decisions,
-        notes: Vec::new(),
-    }
+    d.push(Effect::SoftShadows, on, why);
+    on
 }
 
 /// Returns the depth eye paths split over and why: 0 when no surface is specular; else

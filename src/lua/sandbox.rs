@@ -462,75 +462,117 @@ fn refusal(lua: &Lua, name: &'static str, why: &'static str) -> mlua::Result<Fun
     })
 }
 
+/// A standard library the sandbox rebuilds: the functions it keeps, and those it refuses
+/// with the reason each refusal gives (see the module doc).
+struct Kept {
+    name: &'static str,
+    kept: &'static [&'static str],
+    refused: &'static [(&'static str, &'static str)],
+}
+
+/// The libraries the sandbox keeps only parts of.
+const KEPT: [Kept; 2] = [
+    Kept {
+        name: "debug",
+        kept: &["traceback", "getinfo"],
+        refused: &[
+            ("sethook", INTERNALS),
+            ("gethook", INTERNALS),
+            ("getlocal", INTERNALS),
+            ("setlocal", INTERNALS),
+            ("getregistry", INTERNALS),
+        ],
+    },
+    Kept {
+        name: "os",
+        kept: &["time", "clock", "date", "difftime"],
+        refused: &[
+            ("execute", "it runs a program"),
+            ("remove", "it deletes files"),
+            ("rename", "it moves files"),
+            ("tmpname", "it creates files"),
+            ("exit", "it ends the process"),
+            ("getenv", "it reads the environment"),
+            ("setlocale", "it changes the process's locale"),
+        ],
+    },
+];
+
+/// Why the `debug` functions that are refused are.
+const INTERNALS: &str = "it reaches the interpreter's internals";
+
+/// What the sandbox refuses of the libraries it otherwise keeps whole (`io` is the prelude's,
+/// with these added), with the reason each refusal gives.
+const REFUSED: [(&str, &str, &str); 7] = [
+    ("string", "dump", "scenes load text chunks only"),
+    ("package", "loadlib", "it loads native code"),
+    ("io", "popen", "it runs a program"),
+    ("io", "output", "it writes files"),
+    ("io", "input", "it opens files"),
+    ("io", "read", "it reads standard input"),
+    ("io", "tmpfile", "it creates files"),
+];
+
 /// Builds the sandbox's globals over the libraries opened: see the module doc.
 fn confine(lua: &Lua, folders: &Rc<Folders>) -> mlua::Result<()> {
     let g = lua.globals();
-    // debug: traceback and getinfo only.
-    let full_debug: Table = g.get("debug")?;
-    let debug = lua.create_table()?;
-    for f in ["traceback", "getinfo"] {
-        debug.raw_set(f, full_debug.get::<Value>(f)?)?;
+    for Kept {
+        name,
+        kept,
+        refused,
+    } in KEPT
+    {
+        let full: Table = g.get(name)?;
+        let lib = lua.create_table()?;
+        for f in kept {
+            lib.raw_set(*f, full.get::<Value>(*f)?)?;
+        }
+        for (f, why) in refused {
+            lib.raw_set(*f, refusal(lua, leak(format!("{name}.{f}")), why)?)?;
+        }
+        g.raw_set(name, lib)?;
     }
-    for f in ["sethook", "gethook", "getlocal", "setlocal", "getregistry"] {
-        debug.raw_set(
-            f,
-            refusal(
-                lua,
-                leak(format!("debug.{f}")),
-                "it reaches the interpreter's internals",
-            )?,
-        )?;
-    }
-    g.raw_set("debug", debug)?;
-    // os: the clock and the calendar.
-    let full_os: Table = g.get("os")?;
-    let os = lua.create_table()?;
-    for f in ["time", "clock", "date", "difftime"] {
-        os.raw_set(f, full_os.get::<Value>(f)?)?;
-    }
-    for (f, why) in [
-        ("execute", "it runs a program"),
-        ("remove", "it deletes files"),
-        ("rename", "it moves files"),
-        ("tmpname", "it creates files"),
-        ("exit", "it ends the process"),
-        ("getenv", "it reads the environment"),
-        ("setlocale", "it changes the process's locale"),
-    ] {
-        os.raw_set(f, refusal(lua, leak(format!("os.{f}")), why)?)?;
-    }
-    g.raw_set("os", os)?;
-    // string: no bytecode out (there is no way back in, but nothing needs it).
-    let string: Table = g.get("string")?;
-    string.raw_set(
-        "dump",
-        refusal(lua, "string.dump", "scenes load text chunks only")?,
-    )?;
-    // collectgarbage: no control that could defeat the memory limit's collections.
-    let gc: Function = g.get("collectgarbage")?;
     g.raw_set(
         "collectgarbage",
-        lua.create_function(move |lua, args: MultiValue| {
-            let opt = match args.front() {
-                None | Some(Value::Nil) => "collect".to_string(),
-                Some(v) => v.to_string()?,
-            };
-            if !matches!(opt.as_str(), "collect" | "count" | "step" | "isrunning") {
-                return Err(mlua::Error::external(Error::fault_at(
-                    Fault::Sandbox,
-                    &super::args::caller_loc(lua),
-                    format!(
-                        "collectgarbage('{opt}') is not available to scene scripts (only \
-                         'collect', 'count', 'step' and 'isrunning' are); caustic runs scenes in \
-                         a sandbox (docs/security.md)"
-                    ),
-                )));
-            }
-            gc.call::<MultiValue>(args)
-        })?,
+        collectgarbage_limited(lua, g.get("collectgarbage")?)?,
     )?;
     g.raw_set("load", load_text(lua)?)?;
     g.raw_set("setmetatable", setmetatable_without_gc(lua)?)?;
+    g.raw_set("io", io_in_folders(lua, folders)?)?;
+    for (name, f, why) in REFUSED {
+        let lib: Table = g.get(name)?;
+        lib.raw_set(f, refusal(lua, leak(format!("{name}.{f}")), why)?)?;
+    }
+    Ok(())
+}
+
+/// Returns `collectgarbage` (`gc`) limited to `collect`, `count`, `step` and `isrunning`: no
+/// control that could defeat the memory limit's collections.
+fn collectgarbage_limited(lua: &Lua, gc: Function) -> mlua::Result<Function> {
+    lua.create_function(move |lua, args: MultiValue| {
+        let opt = match args.front() {
+            None | Some(Value::Nil) => "collect".to_string(),
+            Some(v) => v.to_string()?,
+        };
+        if !matches!(opt.as_str(), "collect" | "count" | "step" | "isrunning") {
+            return Err(mlua::Error::external(Error::fault_at(
+                Fault::Sandbox,
+                &super::args::caller_loc(lua),
+                format!(
+                    "collectgarbage('{opt}') is not available to scene scripts (only \
+                     'collect', 'count', 'step' and 'isrunning' are); caustic runs scenes in \
+                     a sandbox (docs/security.md)"
+                ),
+            )));
+        }
+        gc.call::<MultiValue>(args)
+    })
+}
+
+/// Returns the sandbox's `io` table (the prelude's, over `folders`): `write` to standard
+/// output, `open` and `lines` that read text files in the scene's folders, and the module
+/// finder `require` uses.
+fn io_in_folders(lua: &Lua, folders: &Rc<Folders>) -> mlua::Result<Table> {
     let f = Rc::clone(folders);
     let read = lua.create_function(move |lua, given: String| read_file(lua, &f, &given))?;
     let f = Rc::clone(folders);
@@ -558,23 +600,7 @@ fn confine(lua: &Lua, folders: &Rc<Folders>) -> mlua::Result<()> {
         .set_name(PRELUDE_NAME)
         .set_mode(ChunkMode::Text)
         .into_function()?;
-    let io: Table = prelude.call((write, read, find))?;
-    for (f, why) in [
-        ("popen", "it runs a program"),
-        ("output", "it writes files"),
-        ("input", "it opens files"),
-        ("read", "it reads standard input"),
-        ("tmpfile", "it creates files"),
-    ] {
-        io.raw_set(f, refusal(lua, leak(format!("io.{f}")), why)?)?;
-    }
-    g.raw_set("io", io)?;
-    let package: Table = g.get("package")?;
-    package.raw_set(
-        "loadlib",
-        refusal(lua, "package.loadlib", "it loads native code")?,
-    )?;
-    Ok(())
+    prelude.call((write, read, find))
 }
 
 /// Returns a `'static` name for a refusal (a few short strings, made once per state).

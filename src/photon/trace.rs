@@ -41,9 +41,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// interface crossings count too: a cap of 12 cut off light after three bounces under water,
 /// 5% of the whole image of a water scene (tools/validate).
 pub const MAX_BOUNCES: u32 = 256;
-/// Most photons one light may emit for one map: 10^9 stored photons would need 20 GB, most of
-/// this machine's memory. Script counts, `--photons` and `--photon-scale` are checked against it.
-pub const MAX_PHOTONS: u64 = 1_000_000_000;
+pub use crate::range::MAX_PHOTONS;
 /// Least photons a light gets when the budget is shared, so a dim light over a pool still casts
 /// caustics: this fraction of an equal share.
 const MIN_SHARE: f64 = 0.1;
@@ -387,7 +385,7 @@ impl ProjectionMap {
             .map(|t| separating_axis(origin, &t.bounds))
             .collect();
         let n = PROJECTION_SIDE;
-        let at = |i: f32, j: f32| crate::light::uniform_sphere((i / n as f32, j / n as f32));
+        let at = |i: f32, j: f32| crate::sampling::uniform_sphere((i / n as f32, j / n as f32));
         // Rows in parallel (thousands of instances make it 4096 × 16384 cone tests).
         use rayon::prelude::*;
         let cells: Vec<u32> = (0..n * n)
@@ -426,7 +424,7 @@ impl ProjectionMap {
     }
 
     /// Returns a direction uniform over the kept cells from `u` in [0, 1)³: `u.2` picks the
-    /// cell, `u.0` and `u.1` place the direction in it as [`crate::light::uniform_sphere`] does.
+    /// cell, `u.0` and `u.1` place the direction in it as [`crate::sampling::uniform_sphere`] does.
     fn sample(&self, u: (f32, f32, f32)) -> Vec3A {
         let k = ((u.2 * self.cells.len() as f32) as usize).min(self.cells.len() - 1);
         let (i, j) = (
@@ -434,7 +432,7 @@ impl ProjectionMap {
             self.cells[k] % PROJECTION_SIDE,
         );
         let n = PROJECTION_SIDE as f32;
-        crate::light::uniform_sphere(((i as f32 + u.0) / n, (j as f32 + u.1) / n))
+        crate::sampling::uniform_sphere(((i as f32 + u.0) / n, (j as f32 + u.1) / n))
     }
 }
 
@@ -549,6 +547,14 @@ pub fn trace_map_with(
             },
             stream: std::mem::take(&mut out.photons),
         });
+        let pass = LightPass {
+            scene,
+            light,
+            n,
+            kind,
+            targets: &targets,
+            projection,
+        };
         rayon::broadcast(|_| {
             // The cones a chunk's caustic photons aim through (see `trace_one`).
             let mut cones = Vec::new();
@@ -564,15 +570,7 @@ pub fn trace_map_with(
                     for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
                         let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
                         let mut rng = Rng::new(seed, Pass::Photon, key);
-                        let hit = trace_one(
-                            scene,
-                            light,
-                            n,
-                            kind,
-                            (&targets, &mut cones, projection),
-                            &mut rng,
-                            &mut photons,
-                        );
+                        let hit = trace_one(&pass, &mut cones, &mut rng, &mut photons);
                         on_specular += u64::from(hit == FirstHit::Specular);
                         met += u64::from(hit != FirstHit::Nothing);
                     }
@@ -627,20 +625,47 @@ enum FirstHit {
     Other,
 }
 
-/// Traces one photon of `light` (one of `n`), appending what it stores to `out`; returns what
-/// it met first. A global photon of a point light leaves through the light's projection map
-/// when it has one ([`ProjectionMap`]). A caustic photon aims through the cones around `aim.0`'s targets from where
-/// it leaves the light, kept in `aim.1`: made afresh for each photon of an area or sphere light,
-/// and once for a point light, whose photons all leave from the same place.
-fn trace_one(
-    scene: &Scene,
-    light: &Light,
+/// What every photon of one light's share of a map has in common.
+struct LightPass<'a> {
+    scene: &'a Scene,
+    light: &'a Light,
+    /// The light's photons for the map: each carries `1/n` of what it emits.
     n: u64,
     kind: MapKind,
-    (targets, cones, projection): (&[Target], &mut Vec<Cone>, Option<&ProjectionMap>),
+    /// The specular objects caustic photons aim at.
+    targets: &'a [Target],
+    /// The light's projection map, for global photons of a point light that has one.
+    projection: Option<&'a ProjectionMap>,
+}
+
+/// Traces one photon of `pass`, appending what it stores to `out`; returns what it met first.
+/// A global photon of a point light leaves through the light's projection map when it has one
+/// ([`ProjectionMap`]). A caustic photon aims through the cones around the pass's targets from
+/// where it leaves the light, kept in `cones`: made afresh for each photon of an area or sphere
+/// light, and once for a point light, whose photons all leave from the same place.
+fn trace_one(
+    pass: &LightPass,
+    cones: &mut Vec<Cone>,
     rng: &mut Rng,
     out: &mut Vec<Staged>,
 ) -> FirstHit {
+    match leave_light(pass, cones, rng) {
+        Some((ray, power)) => bounce(pass, ray, power, rng, out),
+        None => FirstHit::Nothing,
+    }
+}
+
+/// Returns the ray a photon of `pass` leaves its light along and the power it carries, or
+/// `None` when it carries none (see [`trace_one`] for `cones`).
+fn leave_light(pass: &LightPass, cones: &mut Vec<Cone>, rng: &mut Rng) -> Option<(Ray, Vec3A)> {
+    let LightPass {
+        light,
+        n,
+        kind,
+        targets,
+        projection,
+        ..
+    } = *pass;
     let u = [
         rng.next_f32(),
         rng.next_f32(),
@@ -648,7 +673,7 @@ fn trace_one(
         rng.next_f32(),
     ];
     let e = light.emit(u);
-    let (dir, mut power) = match kind {
+    let (dir, power) = match kind {
         // Through the projection map's cells, with the flux of the directions it keeps.
         MapKind::Global => match projection {
             Some(map) => (
@@ -690,14 +715,30 @@ fn trace_one(
         }
     };
     if power.max_element() <= 0.0 {
-        return FirstHit::Nothing;
+        return None;
     }
     let start = if e.normal == Vec3A::ZERO {
         e.origin
     } else {
         offset_ray_origin(e.origin, e.normal, dir)
     };
-    let mut ray = Ray::new(start, dir);
+    Some((Ray::new(start, dir), power))
+}
+
+/// Follows a photon of `pass` from `ray` with `power` through the scene by Russian roulette over
+/// the one BSDF's lobes, appending what it stores to `out` (every diffuse hit of a global
+/// photon; a caustic photon's first diffuse hit after a specular bounce, where it ends);
+/// returns what it met first.
+fn bounce(
+    pass: &LightPass,
+    mut ray: Ray,
+    mut power: Vec3A,
+    rng: &mut Rng,
+    out: &mut Vec<Staged>,
+) -> FirstHit {
+    let LightPass {
+        scene, light, kind, ..
+    } = *pass;
     let mut media = MediumStack::air();
     let mut first = true;
     let mut diffuse_bounced = false;
@@ -808,7 +849,7 @@ mod tests {
         let mut met = 0;
         for _ in 0..200_000 {
             let u = (rng.next_f32(), rng.next_f32());
-            let d = crate::light::uniform_sphere(u);
+            let d = crate::sampling::uniform_sphere(u);
             if boxes.iter().any(|b| hits(d, b)) {
                 met += 1;
                 let cell = ((u.0 * n) as u32) * PROJECTION_SIDE + (u.1 * n) as u32;

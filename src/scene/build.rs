@@ -543,7 +543,7 @@ impl Builder<'_> {
                 let mut nodes = Vec::new();
                 let material = self.desc.node(p.node).material.map(|m| m.0);
                 let (root, bounds) =
-                    self.csg_node(p.node, DAffine3::IDENTITY, material, &mut nodes, 0, true)?;
+                    self.csg_node(p.node, DAffine3::IDENTITY, material, &mut nodes, 0)?;
                 self.csgs.push(CsgTree { nodes, root });
                 (Shape::Csg(self.csgs.len() as u32 - 1), bounds)
             }
@@ -663,8 +663,8 @@ impl Builder<'_> {
         n
     }
 
-    /// Appends the CSG subtree of `id` to `nodes`; `frame` is `csg_from_parent`. Returns the
-    /// subtree's index and its bounds in the CSG frame.
+    /// Appends the CSG subtree of `id`, `depth` below the tree's root, to `nodes`; `frame` is
+    /// `csg_from_parent`. Returns the subtree's index and its bounds in the CSG frame.
     fn csg_node(
         &mut self,
         id: NodeId,
@@ -672,7 +672,6 @@ impl Builder<'_> {
         inherited: Option<u32>,
         nodes: &mut Vec<CsgNode>,
         depth: usize,
-        is_root: bool,
     ) -> Result<(u32, Bounds)> {
         let node = self.desc.node(id);
         if depth > MAX_CSG_DEPTH {
@@ -685,15 +684,15 @@ impl Builder<'_> {
             ));
         }
         // The root's own transform is already in the instance's world transform.
-        let m = if is_root {
+        let m = if depth == 0 {
             frame
         } else {
             frame * node.transform
         };
         if let NodeKind::Csg { op, a, b } = &node.kind {
             let material = node.material.map(|m| m.0).or(inherited);
-            let (ia, ba) = self.csg_node(*a, m, material, nodes, depth + 1, false)?;
-            let (ib, bb) = self.csg_node(*b, m, material, nodes, depth + 1, false)?;
+            let (ia, ba) = self.csg_node(*a, m, material, nodes, depth + 1)?;
+            let (ib, bb) = self.csg_node(*b, m, material, nodes, depth + 1)?;
             nodes.push(CsgNode::Op {
                 op: *op,
                 a: ia,

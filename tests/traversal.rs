@@ -88,6 +88,14 @@ fn assert_bounds(data: &MeshData, geom: &MeshGeom) {
     );
     let got = (geom.bounds.min, geom.bounds.max);
     assert_eq!(got, (lo, hi), "the mesh's bounds");
+    assert_eq!(geom.validate(), Ok(()), "the mesh's BVH");
+    for builder in [
+        caustic::accel::Builder::Ploc,
+        caustic::accel::Builder::BinnedSah,
+    ] {
+        let other = MeshGeom::with_builder(data, 0, builder);
+        assert_eq!(other.validate(), Ok(()), "the {builder:?} BVH");
+    }
 }
 
 fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
@@ -368,6 +376,7 @@ fn large_height_field_matches_brute_force_and_builds_alike_on_one_and_two_thread
         pool.install(|| MeshGeom::new(&data, 0))
     };
     let (one, two) = (build(1), build(2));
+    assert_eq!(one.validate(), Ok(()));
     assert_eq!(
         one.bvh.order(),
         two.bvh.order(),

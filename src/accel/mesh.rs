@@ -152,6 +152,22 @@ impl MeshGeom {
         std::mem::size_of_val(self.blocks.as_slice())
     }
 
+    /// Returns what is wrong with the mesh's BVH, if anything: the wide BVH's checks
+    /// ([`Bvh::validate`]) over its triangles' boxes, in BVH order as `triangles` holds them.
+    pub fn validate(&self) -> Result<(), String> {
+        let box_at = |j: usize| {
+            let [a, b, c] = self.triangles[j].map(|k| self.positions[k as usize]);
+            Bounds {
+                min: a.min(b).min(c),
+                max: a.max(b).max(c),
+            }
+        };
+        match &self.bvh.inner {
+            Some(bvh) => bvh.validate(box_at),
+            None => Ok(()),
+        }
+    }
+
     /// Returns the closest triangle hit by an object-space ray and its barycentrics.
     pub fn intersect(&self, ray: &Ray) -> Option<(u32, TriangleHit)> {
         // Made at the first leaf: most random rays miss the mesh's box and never need it.

@@ -207,6 +207,18 @@ impl Bvh {
         }
     }
 
+    /// Returns what is wrong with this BVH over primitives whose boxes `box_of(i)` gives (the
+    /// caller's indices, as at the build), if anything: the checks of the wide BVH's own
+    /// `validate` (a tree, the leaves a partition of the primitives, every box holding its
+    /// subtree). Tests call it after every build.
+    pub fn validate(&self, box_of: impl Fn(usize) -> Bounds) -> Result<(), String> {
+        match &self.inner {
+            Some(b) => b.validate(|j| box_of(b.order[j] as usize)),
+            None if self.len <= 1 => Ok(()),
+            None => Err(format!("{} primitives without a tree", self.len)),
+        }
+    }
+
     /// Returns the bytes the nodes, leaves and index take.
     pub fn bytes(&self) -> usize {
         self.inner.as_ref().map_or(0, WideBvh::bytes)
@@ -571,9 +583,54 @@ mod tests {
         }
     }
 
+    /// `validate` finds each kind of damage: a child box that does not hold a primitive, a
+    /// node reached twice, a leaf reached twice, and an order that is not a permutation.
+    #[test]
+    fn validate_finds_a_broken_bvh() {
+        let boxes: Vec<Bounds> = (0..500)
+            .map(|i| {
+                unit_box(Vec3A::new(
+                    (i % 10) as f32,
+                    (i / 10 % 10) as f32,
+                    (i / 100) as f32,
+                ))
+            })
+            .collect();
+        for builder in BUILDERS {
+            let fresh = || Bvh::build_with(&boxes, builder);
+            assert_eq!(fresh().validate(|i| boxes[i]), Ok(()));
+            let broken = |damage: &dyn Fn(&mut WideBvh)| {
+                let mut bvh = fresh();
+                damage(bvh.inner.as_mut().unwrap());
+                bvh.validate(|i| boxes[i]).unwrap_err()
+            };
+            let e = broken(&|b| b.nodes[0].planes[1][0] = b.nodes[0].planes[0][0]);
+            assert!(e.contains("does not hold"), "{e}");
+            let e = broken(&|b| {
+                let inner = (0..wide::WIDTH).find(|&s| b.nodes[0].child[s] & wide::LEAF == 0);
+                let s = inner.unwrap();
+                let (c, boxes) = (b.nodes[0].child[s], b.nodes[0].planes);
+                let t = (s + 1) % wide::WIDTH;
+                b.nodes[0].child[t] = c;
+                for (p, plane) in boxes.iter().enumerate() {
+                    b.nodes[0].planes[p][t] = plane[s];
+                }
+            });
+            assert!(e.contains("twice"), "{e}");
+            let e = broken(&|b| b.order[3] = b.order[4]);
+            assert!(e.contains("order holds"), "{e}");
+            let e = broken(&|b| b.leaves[1] = b.leaves[0]);
+            assert!(
+                e.contains("two leaves") || e.contains("does not hold"),
+                "{e}"
+            );
+        }
+    }
+
     const BUILDERS: [Builder; 2] = [Builder::Ploc, Builder::BinnedSah];
 
     fn check_partition(boxes: &[Bounds], bvh: &Bvh, builder: Builder) {
+        assert_eq!(bvh.validate(|i| boxes[i]), Ok(()), "{builder:?}");
         let mut seen = vec![0; boxes.len()];
         for l in bvh.leaves() {
             assert!((1..=MAX_LEAF as u32).contains(&l.count));

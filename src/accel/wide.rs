@@ -221,6 +221,120 @@ impl WideBvh {
 }
 
 impl WideBvh {
+    /// Returns what is wrong with this BVH, if anything, given the box of the primitive at each
+    /// BVH-order index (`box_at(j)`, for `j` below `order.len()`):
+    /// - `order` is a permutation of the primitives;
+    /// - the nodes form a tree from the root: every child index in range, every node reached
+    ///   once, and no deeper than the traversal stack ([`WideBvh::stack_len`]) holds;
+    /// - every leaf is reached once and holds 1 to [`super::MAX_LEAF`] primitives, the leaves
+    ///   cover the BVH order once, and a [`PAIR`] names two leaves side by side;
+    /// - an empty slot holds the inverted box; every other child box is finite and holds its
+    ///   subtree: the boxes of a child node's children, the primitives of a leaf.
+    pub(super) fn validate(&self, box_at: impl Fn(usize) -> super::Bounds) -> Result<(), String> {
+        let n = self.order.len();
+        let mut seen = vec![false; n];
+        for &i in &self.order {
+            match seen.get_mut(i as usize) {
+                Some(s) if !*s => *s = true,
+                _ => return Err(format!("order holds {i} twice or out of range (of {n})")),
+            }
+        }
+        let mut node_seen = vec![false; self.nodes.len()];
+        let mut leaf_seen = vec![false; self.leaves.len()];
+        let mut covered = vec![false; n];
+        // (node, depth in node levels), from the root.
+        let mut todo = vec![(0usize, 1usize)];
+        while let Some((i, depth)) = todo.pop() {
+            let node = self.nodes.get(i).ok_or(format!("node {i} out of range"))?;
+            if std::mem::replace(&mut node_seen[i], true) {
+                return Err(format!("node {i} is reached twice"));
+            }
+            if (WIDTH - 1) * depth + 1 > self.stack_len {
+                return Err(format!(
+                    "node {i} is {depth} levels deep, beyond the stack's"
+                ));
+            }
+            for slot in 0..WIDTH {
+                let (min, max) = slot_box(node, slot);
+                let empty =
+                    min.cmpeq(Vec3A::INFINITY).all() && max.cmpeq(Vec3A::NEG_INFINITY).all();
+                if empty {
+                    continue;
+                }
+                if !(min.is_finite() && max.is_finite() && min.cmple(max).all()) {
+                    return Err(format!("node {i} slot {slot}: box {min}..{max}"));
+                }
+                let holds = |b: super::Bounds| min.cmple(b.min).all() && b.max.cmple(max).all();
+                let c = node.child[slot];
+                if c & LEAF == 0 {
+                    let child = self
+                        .nodes
+                        .get(c as usize)
+                        .ok_or(format!("node {i} slot {slot}: child {c} out of range"))?;
+                    for s in 0..WIDTH {
+                        let (cmin, cmax) = slot_box(child, s);
+                        let inverted = cmin.cmpgt(cmax).any();
+                        if !inverted
+                            && !holds(super::Bounds {
+                                min: cmin,
+                                max: cmax,
+                            })
+                        {
+                            return Err(format!(
+                                "node {i} slot {slot} does not hold node {c}'s child {s}"
+                            ));
+                        }
+                    }
+                    todo.push((c as usize, depth + 1));
+                    continue;
+                }
+                for id in leaf_ids(c) {
+                    let leaf = self
+                        .leaves
+                        .get(id as usize)
+                        .ok_or(format!("node {i} slot {slot}: leaf {id} out of range"))?;
+                    if std::mem::replace(&mut leaf_seen[id as usize], true) {
+                        return Err(format!("leaf {id} is reached twice"));
+                    }
+                    if !(1..=super::MAX_LEAF as u32).contains(&leaf.count) || leaf.range().end > n {
+                        return Err(format!(
+                            "leaf {id}: {} primitives from {}",
+                            leaf.count, leaf.first
+                        ));
+                    }
+                    for j in leaf.range() {
+                        if std::mem::replace(&mut covered[j], true) {
+                            return Err(format!("BVH-order primitive {j} is in two leaves"));
+                        }
+                        if !holds(box_at(j)) {
+                            return Err(format!(
+                                "node {i} slot {slot} does not hold primitive {j} of leaf {id}"
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(l) = leaf_seen.iter().position(|s| !s) {
+            return Err(format!("leaf {l} is not reached"));
+        }
+        if let Some(j) = covered.iter().position(|c| !c) {
+            return Err(format!("BVH-order primitive {j} is in no leaf"));
+        }
+        Ok(())
+    }
+}
+
+/// Returns child `slot`'s box in `node` (inverted for an empty slot).
+fn slot_box(node: &Node, slot: usize) -> (Vec3A, Vec3A) {
+    let p = &node.planes;
+    (
+        Vec3A::new(p[0][slot], p[2][slot], p[4][slot]),
+        Vec3A::new(p[1][slot], p[3][slot], p[5][slot]),
+    )
+}
+
+impl WideBvh {
     /// [`WideBvh::closest`] for each ray of a stream, [`super::stream::LANES`] rays in flight:
     /// `leaf_fn(lane, i, ray, ids)` is the leaf callback for ray `i` of `rays`, traced in lane
     /// `lane` (below `LANES`; a lane's previous ray is done when it starts another).

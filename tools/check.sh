@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The one gate: formatting, lints and the whole test suite, in release mode.
+# The one gate: formatting, lints, the library's docs and the whole test suite, in release mode.
 # People run it before committing; .ci/run runs exactly this. On a fresh machine it first adds
 # what the gate needs and the machine may lack, and says what it adds:
 # - a C compiler (Rust links with it; mlua builds its vendored Lua with it): build-essential
@@ -84,4 +84,8 @@ for tool in fmt clippy; do
 done
 cargo fmt --all -- --check
 cargo clippy --release --workspace --all-targets --locked -- -D warnings
+# Every doc comment's links resolve and every module doc builds: the library's docs with its
+# private items, the docs a newcomer reads (links to private items are fine there).
+RUSTDOCFLAGS="-D warnings -A rustdoc::private-intra-doc-links" \
+  cargo doc --release --no-deps --lib --locked --document-private-items --quiet
 cargo test --release --locked

@@ -80,7 +80,7 @@ pub fn max_expansion(compression: Compression) -> u64 {
 }
 
 /// Returns an error unless the one header of an EXR file of `file_len` bytes is one that
-/// [`read`] may allocate for: a single flat part (not multi-part, not deep) whose windows
+/// [`read()`] may allocate for: a single flat part (not multi-part, not deep) whose windows
 /// and tiles hold at most `max_pixels`, and whose decoded pixels (as stored, and as the RGB
 /// floats read) are no more than the file's compression can expand its bytes to.
 fn check_header(

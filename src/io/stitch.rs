@@ -2,7 +2,7 @@
 //! byte-identical to a full render because every random stream is keyed by pixel and seed.
 //!
 //! A tile remembers its place in its image. A PNG tile carries a `tEXt` chunk
-//! [`WINDOW_KEY`](super::image::WINDOW_KEY) with `x0 y0 x1 y1 full_width full_height`; an EXR
+//! [`WINDOW_KEY`] with `x0 y0 x1 y1 full_width full_height`; an EXR
 //! tile says it as OpenEXR does, its data window inside its display window ([`super::exr`]).
 //! [`stitch`] reads tiles of one kind: PNG tiles make a PNG, EXR tiles a float image (EXR, PFM
 //! or HDR) with every value as rendered. Every pixel must be covered by exactly one tile, all

@@ -2,7 +2,7 @@
 //! queries, and the invariant check.
 //!
 //! The index range `lo..hi` is a subtree. If it holds at most [`LEAF_SIZE`] photons it is a leaf
-//! bucket (split axis [`AXIS_NONE`](super::store::AXIS_NONE) on each of its photons), otherwise its
+//! bucket (split axis [`AXIS_NONE`] on each of its photons), otherwise its
 //! root is photon `m = lo + (hi - lo) / 2`, whose code word names the split axis `a`, and
 //! `pos[lo..m][a] <= pos[m][a] <= pos[m + 1..hi][a]`. The split axis is the one along which the
 //! range's bounding box is longest (the lowest axis on ties), so coplanar photons are never split

@@ -3,11 +3,9 @@
 //! edge. Each object is watertight alone; the hard part is the tie between two objects' surfaces
 //! at the same `t` and the crack along a shared edge.
 
-mod common;
-
+use crate::common::{render_films_with, run_lua, whitted};
 use caustic::camera::Camera;
 use caustic::scene::build::build_scene;
-use common::{render_films_with, run_lua, whitted};
 use glam::Vec3A;
 use std::path::Path;
 

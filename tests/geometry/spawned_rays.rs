@@ -13,8 +13,7 @@
 //! side at the distance the bisection of membership gives, within the tolerance. Edges where no
 //! offset along the normal can clear both faces are counted and bounded ([`Failure::Edge`]).
 
-mod common;
-
+use crate::common::run_lua;
 use caustic::desc::CsgOp;
 use caustic::geometry::csg::{CsgNode, CsgTree};
 use caustic::geometry::{Analytic, Ray, offset_ray_origin};
@@ -24,7 +23,6 @@ use caustic::sampling::{Pass, Rng};
 use caustic::scene::build::build_scene;
 use caustic::scene::interaction::Needs;
 use caustic::scene::{Scene, Shape};
-use common::run_lua;
 use glam::{Affine3A, DMat3, DVec3, Vec3A};
 use std::collections::BTreeMap;
 

@@ -1,11 +1,9 @@
 //! CSG through the whole pipeline (Lua → scene → BVH): analytic entry/exit points, nested and
 //! transformed operands, per-operand materials, and coincident faces without speckles.
 
-mod common;
-
+use crate::common::run_lua;
 use caustic::geometry::Ray;
 use caustic::scene::build::build_scene;
-use common::run_lua;
 use glam::Vec3A;
 
 /// Builds the scene of a script ending in a render of `root`.

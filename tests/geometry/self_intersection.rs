@@ -1,13 +1,11 @@
 //! Spawned rays never re-hit the surface they leave, on every primitive kind (CSG and instanced
 //! meshes included) and at scene scales from 1e-3 to 1e5.
 
-mod common;
-
+use crate::common::run_lua;
 use caustic::geometry::Analytic;
 use caustic::geometry::{Ray, offset_ray_origin};
 use caustic::scene::build::build_scene;
 use caustic::scene::{Scene, Shape};
-use common::run_lua;
 use glam::Vec3A;
 
 /// A small deterministic random stream (splitmix64).

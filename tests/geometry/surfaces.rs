@@ -1,11 +1,9 @@
 //! Surfaces through the whole pipeline: world-space points, normals and texture coordinates at
 //! known places on each primitive kind, transformed and inside CSG.
 
-mod common;
-
+use crate::common::run_lua;
 use caustic::geometry::Ray;
 use caustic::scene::build::{SurfaceHit, build_scene};
-use common::run_lua;
 use glam::{Vec2, Vec3A};
 
 /// Returns the surface the ray from `o` along `d` sees in the scene of `body` (root `root`).

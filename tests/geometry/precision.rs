@@ -2,11 +2,9 @@
 //! that overflows: each is rejected at its script line or handled, and no NaN or infinite value
 //! ever reaches the image.
 
-mod common;
-
+use crate::common::{caustic, lua_error, out_dir, run_lua, run_ok, whitted};
 use caustic::frame::{Frame, render_desc};
 use caustic::progress::NoProgress;
-use common::{caustic, lua_error, out_dir, run_lua, run_ok, whitted};
 
 /// A scene: `{material}` and `{sphere}` replace the material and the sphere's construction,
 /// `{view}` the view direction of the 5×5 render.

@@ -1,14 +1,14 @@
 //! Photon mapping against closed forms: irradiance from photons equals the direct-lighting term,
 //! pbrt's closed sphere, caustics only where a specular surface makes them, determinism.
 
-mod common;
+use crate::common;
 
+use crate::common::{caustic, out_dir, run_lua, run_ok};
 use caustic::integrator::irradiance_cache::CacheSettings;
 use caustic::integrator::photon_map::{Gi, GiSettings, Indirect};
 use caustic::integrator::{GiMode, Integrator, Settings, plan};
 use caustic::photon::trace::{MapKind, TracedMap};
 use caustic::scene::build::build_scene;
-use common::{caustic, out_dir, run_lua, run_ok};
 use glam::Vec3A;
 use std::path::Path;
 

@@ -1,10 +1,10 @@
 //! The first renderer against closed forms: Phong direct light with falloff, shadows, ambient,
 //! the background, and the look of the course's simple.lua.
 
-mod common;
+use crate::common;
 
+use crate::common::{a4_assets, render_corpus_script, render_films};
 use caustic::integrator::eye::background;
-use common::{a4_assets, render_corpus_script, render_films};
 use glam::Vec3A;
 use std::path::Path;
 

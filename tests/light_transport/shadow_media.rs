@@ -2,7 +2,7 @@
 //! rays: each would cross the solid's boundary, which blocks it (that light is the caustic
 //! map's). Checked against the same frame with the shortcut off, which traces the rays.
 
-mod common;
+use crate::common;
 
 use caustic::camera::Camera;
 use caustic::film::Window;

@@ -3,7 +3,7 @@
 //! weight, and the others skip it. Checked on a mirror that reflects only the background, so
 //! every pixel's value is known: `ks` times the background along the reflected ray.
 
-mod common;
+use crate::common;
 
 use glam::Vec3A;
 

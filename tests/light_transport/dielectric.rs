@@ -1,10 +1,8 @@
 //! Refraction through the renderer against closed forms: Fresnel-weighted interfaces summed over
 //! all internal reflections, and nested media that refract with the ratio of both indices.
 
-mod common;
-
+use crate::common::render_films;
 use caustic::integrator::eye::background;
-use common::render_films;
 use glam::Vec3A;
 use std::path::Path;
 

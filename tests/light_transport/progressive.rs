@@ -2,8 +2,7 @@
 //! progressive photon mapping predicts, it converges to the right image, its memory does not
 //! grow with passes, it is deterministic, and `--target-error` stops near the error it asks for.
 
-mod common;
-
+use crate::common::{caustic, out_dir, run_lua, run_ok};
 use caustic::camera::Camera;
 use caustic::film::{Film, Window};
 use caustic::integrator::photon_map::{GiSettings, Indirect};
@@ -12,7 +11,6 @@ use caustic::integrator::{Integrator, Settings};
 use caustic::progress::{NoProgress, Progress};
 use caustic::render::Sampling;
 use caustic::scene::build::build_scene;
-use common::{caustic, out_dir, run_lua, run_ok};
 use glam::Vec3A;
 use std::sync::Mutex;
 

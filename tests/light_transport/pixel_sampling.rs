@@ -1,8 +1,9 @@
 //! Pixel sampling: determinism across threads, crops and stitched tiles equal the full render,
 //! and the adaptive scheme against uniform supersampling.
 
-mod common;
+use crate::common;
 
+use crate::common::{a4_assets, caustic, out_dir, run_lua, run_ok};
 use caustic::camera::Camera;
 use caustic::film::{Film, Window};
 use caustic::integrator::Settings;
@@ -10,7 +11,6 @@ use caustic::progress::NoProgress;
 use caustic::render::Sampling;
 use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
-use common::{a4_assets, caustic, out_dir, run_lua, run_ok};
 
 /// A large flat floor and a ball against the sky: mostly flat areas, a few long edges.
 const FLAT_SCENE: &str = "

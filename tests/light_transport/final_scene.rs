@@ -2,9 +2,7 @@
 //! ball's caustic on the floor under the water brighter than the floor around it, because of
 //! the caustic map.
 
-mod common;
-
-use common::{caustic, out_dir};
+use crate::common::{caustic, out_dir};
 use std::path::Path;
 
 /// Renders the final scene at 128 × 128 with `flags` and returns its linear RGB values.

@@ -1,13 +1,13 @@
 //! Paths deeper than any fixed depth: nested glass shells and facing mirrors. Beyond the eye
 //! path's splitting depth a path must go on by Russian roulette, never turn silently black.
 
-mod common;
+use crate::common;
 
+use crate::common::{render_films_with, whitted};
 use caustic::camera::Camera;
 use caustic::film::Film;
 use caustic::integrator::Settings;
 use caustic::integrator::eye::{MAX_DEPTH, MAX_PATH_DEPTH, background};
-use common::{render_films_with, whitted};
 use glam::Vec3A;
 use std::path::Path;
 

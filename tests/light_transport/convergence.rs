@@ -2,7 +2,7 @@
 //! estimator of the same quantity pin down, each failing on a renderer that loses or gains
 //! light along some kind of path.
 
-mod common;
+use crate::common;
 
 use caustic::film::Film;
 use caustic::integrator::photon_map::{GiSettings, Indirect};

@@ -8,8 +8,9 @@
 //! `a` of it: `E = π/(1 − a)`, and the radiance the camera sees is `L = a·E/π = a/(1 − a)`
 //! (9 at a = 0.9: ten bounces on average, 20% of the light after fifteen).
 
-mod common;
+use crate::common;
 
+use crate::common::run_lua;
 use caustic::camera::Camera;
 use caustic::film::Window;
 use caustic::integrator::photon_map::{GiSettings, Indirect};
@@ -19,7 +20,6 @@ use caustic::photon::trace::{MapKind, trace_map};
 use caustic::progress::NoProgress;
 use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
-use common::run_lua;
 
 /// Pixels along each side of the furnace image.
 const SIZE: u32 = 48;

@@ -1,14 +1,14 @@
 //! The effect plan (issue 14): decided from the scene and the settings before any pass runs, as
 //! typed decisions the passes read, overruled by --force and --disable, printed by `info`.
 
-mod common;
+use crate::common;
 
+use crate::common::caustic;
 use caustic::integrator::photon_map::{GiSettings, Indirect};
 use caustic::integrator::plan::{Decision, Effect, Overrides, Why, plan_with};
 use caustic::integrator::{GiMode, Integrator, Settings};
 use caustic::scene::Scene;
 use caustic::scene::build::build_scene;
-use common::caustic;
 use std::path::Path;
 
 fn desc(path: &str) -> caustic::desc::SceneDesc {

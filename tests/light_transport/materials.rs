@@ -2,12 +2,12 @@
 //! primitive kind, normal maps act in the surface's tangent frame, and the corpus's textured
 //! scenes render with their images.
 
-mod common;
+use crate::common;
 
+use crate::common::{out_dir, render_films};
 use caustic::film::Film;
 use caustic::geometry::Ray;
 use caustic::material::texture::Texture;
-use common::{out_dir, render_films};
 use glam::Vec3A;
 use std::path::Path;
 

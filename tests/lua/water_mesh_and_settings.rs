@@ -2,11 +2,9 @@
 //! of water, generated once into a cache as glTF) and `gr.settings` (the scene's own defaults
 //! for `caustic render`'s quality flags, under the command line's).
 
-mod common;
-
+use crate::common::{caustic, out_dir, run_lua_in};
 use caustic::desc::MeshSource;
 use caustic::geometry::water::{WaveParams, close_volume, wave_mesh};
-use common::{caustic, out_dir, run_lua_in};
 use std::path::{Path, PathBuf};
 
 /// Returns the file the script's only mesh resolved to.

@@ -5,11 +5,9 @@
 //! long campaign under a memory limit, which turns an allocation the budget missed into a
 //! failure. CI runs 32 cases per property (`PROPTEST_CASES` raises it).
 
-mod common;
-
+use crate::common::out_dir;
 use caustic::lua::{ScriptOptions, run_source_with};
 use caustic::scene::build::build_scene;
-use common::out_dir;
 use proptest::prelude::*;
 use std::time::Duration;
 

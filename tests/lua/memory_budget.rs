@@ -3,13 +3,13 @@
 //! an error naming the script line or file and the amount, never an allocation abort; the
 //! top-level BVH stays near-linear on stacked instances.
 
-mod common;
+use crate::common;
 
+use crate::common::{caustic, out_dir};
 use caustic::desc::{CameraDesc, NodeKind, RenderDesc, SceneDesc};
 use caustic::lua::{ScriptOptions, run_source_with};
 use caustic::scene::build::build_scene;
 use caustic::{Error, Loc};
-use common::{caustic, out_dir};
 use glam::{DAffine3, DVec3, Vec3};
 use std::path::Path;
 

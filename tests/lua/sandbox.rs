@@ -3,11 +3,9 @@
 //! may do (read its folder, require its modules, load text) still works; the time budget stops
 //! loops however they hide; outputs a scene names stay in its folders.
 
-mod common;
-
+use crate::common::caustic;
 use caustic::error::{Error, Fault};
 use caustic::lua::{ScriptOptions, run_source_with};
-use common::caustic;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 

@@ -1,13 +1,13 @@
 //! The `gr` API's semantics: transform order, instancing, argument checks, optional extended
 //! arguments, and error messages that name the script line.
 
-mod common;
+use crate::common;
 
+use crate::common::{lua_error, out_dir, run_lua, run_lua_in};
 use caustic::Fault;
 use caustic::desc::{CsgOp, NodeKind};
 use caustic::scene::build::{build_scene, count_placements};
 use caustic::scene::meshes::load_meshes;
-use common::{lua_error, out_dir, run_lua, run_lua_in};
 use glam::DVec3;
 
 #[test]
@@ -241,8 +241,8 @@ fn unknown_functions_and_lua_errors_name_the_line() {
     assert!(e.starts_with("test.lua:3:"), "{e}");
     let e = lua_error("error('boom')");
     assert!(e.starts_with("test.lua:1: boom"), "{e}");
-    // The sandbox's library is there, with the Lua 5.1 names (tests/legacy.rs calls them);
-    // what it refuses is a function that fails (tests/lua_sandbox.rs).
+    // The sandbox's library is there, with the Lua 5.1 names (tests/lua/legacy_dialect.rs calls
+    // them); what it refuses is a function that fails (tests/lua/sandbox.rs).
     run_lua(
         "assert(io and os and string and math and table and debug and coroutine and utf8)\n\
              assert(unpack and string.gfind and table.getn)\n\

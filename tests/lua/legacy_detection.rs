@@ -4,11 +4,11 @@
 //! Measured on every modern scene we have (the corpus, `scenes/`, the guide's examples) and on
 //! their legacy copies (each node's calls reversed).
 
-mod common;
+use crate::common;
 
+use crate::common::{guide_dir, guide_examples, lua_scripts, out_dir, reverse_transform_calls};
 use caustic::desc::SceneDesc;
 use caustic::lua::{Dialect, ScriptOptions, run_source_with};
-use common::{guide_dir, guide_examples, lua_scripts, out_dir, reverse_transform_calls};
 use std::path::Path;
 
 /// Runs script text named `name` in `dialect` (paths resolve in `dir`) without rendering.

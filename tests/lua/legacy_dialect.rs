@@ -5,12 +5,12 @@
 //! `require('readobj')` gets a built-in OBJ reader, modules load from the script's folder, and
 //! the Lua 5.1 names work.
 
-mod common;
+use crate::common;
 
+use crate::common::{a4_assets, caustic, legacy_copy, out_dir, reverse_transform_calls, run_ok};
 use caustic::Fault;
 use caustic::desc::{MeshSource, NodeId, SceneDesc};
 use caustic::lua::{Dialect, ScriptOptions, run_source_with};
-use common::{a4_assets, caustic, legacy_copy, out_dir, reverse_transform_calls, run_ok};
 use glam::{DAffine3, DVec3};
 use std::path::{Path, PathBuf};
 

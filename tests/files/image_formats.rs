@@ -2,11 +2,9 @@
 //! within the format's stated precision (PFM and EXR exact, Radiance RGBE within 1% of a pixel's
 //! largest channel, PNG its 8-bit codes), and the command line writes and compares them.
 
-mod common;
-
+use crate::common::{caustic, out_dir, run_ok};
 use caustic::film::{Film, Window};
 use caustic::io::image::{Tonemap, read_rgb, write_image};
-use common::{caustic, out_dir, run_ok};
 use glam::Vec3A;
 
 /// Returns a 7×5 film of distinct values over six orders of magnitude, black included.

@@ -2,11 +2,11 @@
 //! marks and CRLF line ends in every text format, the inline `gr.mesh` form's argument errors,
 //! and the numeric ranges the renderer enforces (each proved safe by a render at its edge).
 
-mod common;
+use crate::common;
 
+use crate::common::{GltfFile, assert_same_mesh, out_dir};
 use caustic::io::gltf::load_gltf;
 use caustic::io::obj::load_obj;
-use common::{GltfFile, assert_same_mesh, out_dir};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 

@@ -7,9 +7,7 @@
 //! allocation by the file's size.
 #![cfg(target_os = "linux")]
 
-mod common;
-
-use common::{caustic, out_dir};
+use crate::common::{caustic, out_dir};
 use glam::Vec3A;
 use proptest::prelude::*;
 use std::alloc::{GlobalAlloc, Layout, System};

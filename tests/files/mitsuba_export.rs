@@ -1,9 +1,9 @@
 //! `caustic export-mitsuba`: the validation scenes export, the lighting model maps to Mitsuba's
 //! units, and everything outside the shared subset is refused with the object and line at fault.
 
-mod common;
+use crate::common;
 
-use common::{caustic, out_dir};
+use crate::common::{caustic, out_dir};
 use std::path::Path;
 
 fn export(dir: &Path, src: &str) -> std::process::Output {

@@ -2,11 +2,9 @@
 //! numbers, and files that are no PNG, give an error naming the tile, never a panic or an abort
 //! allocating the image they claim.
 
-mod common;
-
+use crate::common::out_dir;
 use caustic::io::image::WINDOW_KEY;
 use caustic::io::stitch::stitch;
-use common::out_dir;
 use std::path::{Path, PathBuf};
 
 /// Writes a `width × height` grey RGB PNG at `dir/name` with `record` as its window record

@@ -3,9 +3,7 @@
 //! a file for another scene, other photon settings, a damaged or truncated file, and flags
 //! that cannot use one are refused with an error naming the file or the flag.
 
-mod common;
-
-use common::{caustic, out_dir, run_ok};
+use crate::common::{caustic, out_dir, run_ok};
 use std::path::Path;
 
 /// A glass ball on a floor under a point light: both maps, final gathering, a caustic.

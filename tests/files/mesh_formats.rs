@@ -2,12 +2,10 @@
 //! materials, faults), OBJ materials from MTL, the loaders behind `gr.mesh`, and the same wave
 //! mesh through OBJ and glTF. Every file is written by the test itself under `target/`.
 
-mod common;
-
+use crate::common::{GltfFile, assert_same_mesh, out_dir};
 use caustic::geometry::mesh::MeshMaterial;
 use caustic::io::gltf::{load_gltf, parse_gltf};
 use caustic::scene::meshes::load_meshes;
-use common::{GltfFile, assert_same_mesh, out_dir};
 use glam::{Vec2, Vec3, vec3};
 use std::path::Path;
 
@@ -419,7 +417,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
 
 // ---- Mesh materials in scenes, and gr.mesh's choice of loader ----
 
-use common::{render_films, run_lua_in};
+use crate::common::{render_films, run_lua_in};
 
 #[test]
 fn render_shows_the_mtl_colour_unless_the_script_sets_a_material() {

@@ -3,9 +3,7 @@
 //! process killed while writing.
 #![cfg(target_os = "linux")]
 
-mod common;
-
-use common::{caustic, out_dir};
+use crate::common::{caustic, out_dir};
 use std::ffi::CString;
 use std::os::unix::ffi::OsStrExt;
 use std::os::unix::fs::{FileTypeExt, PermissionsExt};
@@ -174,13 +172,11 @@ fn sigterm_while_writing_removes_the_temporary_file() {
     }
     let dir = out_dir("stability_output_sigterm");
     std::fs::write(dir.join("out.png"), b"old").unwrap();
+    // The test's name in this binary: its module path without the crate's name.
+    let (_, module) = module_path!().split_once("::").unwrap();
+    let name = format!("{module}::sigterm_while_writing_removes_the_temporary_file");
     let status = std::process::Command::new(std::env::current_exe().unwrap())
-        .args([
-            "--exact",
-            "sigterm_while_writing_removes_the_temporary_file",
-            "--test-threads",
-            "1",
-        ])
+        .args(["--exact", &name, "--test-threads", "1"])
         .env("STABILITY_SIGTERM_CHILD", "1")
         .status()
         .unwrap();

@@ -5,11 +5,9 @@
 //! quietly. CI runs 48 cases per property; `tools/fuzz.sh SECONDS` runs a long campaign
 //! (`PROPTEST_CASES`) under a `ulimit -v` memory limit.
 
-mod common;
-
+use crate::common::out_dir;
 use caustic::error::Loc;
 use caustic::scene::images::ImageCache;
-use common::out_dir;
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -86,7 +84,7 @@ fn numbers_and_edits(n: usize) -> impl Strategy<Value = (Vec<String>, Vec<Edit>)
     )
 }
 
-const SCENE: &str = include_str!("../scenes/cornell_glass.lua");
+const SCENE: &str = include_str!("../../scenes/cornell_glass.lua");
 
 fn loc() -> Loc {
     Loc {

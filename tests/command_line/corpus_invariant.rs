@@ -2,7 +2,7 @@
 //! `PROVENANCE.md`): every `gr.render` of every scene, rendered tiny by both integrators, has
 //! only finite pixels and dropped no NaN or infinite camera sample.
 
-mod common;
+use crate::common;
 
 use caustic::desc::{RenderDesc, SceneDesc};
 use caustic::frame::render_desc;

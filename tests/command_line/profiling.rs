@@ -2,9 +2,7 @@
 //! counts by ray kind. The kinds' ray counts agree with the renderer's own ray counters, the
 //! heatmap is black exactly where nothing was traversed, and counting changes no pixel.
 
-mod common;
-
-use common::{caustic, out_dir, run_ok};
+use crate::common::{caustic, out_dir, run_ok};
 
 /// A mesh floor (a 16 × 16 grid of quads, x in [-4, 0]) on the left half of the view, the
 /// background on the right,

@@ -1,11 +1,9 @@
 //! The user guide (`docs/guide.md`) is true to the code: every Lua example in it runs, builds
 //! its scenes and renders a tiny image of each, and every CLI flag it names exists.
 
-mod common;
-
+use crate::common::{caustic, guide_dir, guide_examples, render_films_with};
 use caustic::integrator::Settings;
 use caustic::render::Sampling;
-use common::{caustic, guide_dir, guide_examples, render_films_with};
 
 /// Every Lua example of the guide (at least 5) runs from a folder holding the files it names
 /// (`tri.obj`, `tiles.png`), and each of its `gr.render` calls renders (one ray per pixel, few

@@ -1,9 +1,7 @@
 //! `caustic diff`: the metrics of an image against a reference, on images with closed-form
 //! answers, and clear errors for images that cannot be compared.
 
-mod common;
-
-use common::{caustic, out_dir};
+use crate::common::{caustic, out_dir};
 use std::path::Path;
 
 fn write_exr(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> f32) {

@@ -1,8 +1,8 @@
 //! Every scene in `scenes/` runs and renders (generated meshes from the shared test cache).
 
-mod common;
+use crate::common;
 
-use common::{caustic, out_dir};
+use crate::common::{caustic, out_dir};
 use std::path::Path;
 
 #[test]

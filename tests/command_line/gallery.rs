@@ -7,9 +7,7 @@
 //! Regions are fractions of the image `[x0, x1, y0, y1]`, read off the scenes' thumbnails; a scene
 //! whose composition changes must update its region here.
 
-mod common;
-
-use common::{caustic, mesh_cache, out_dir, run_ok};
+use crate::common::{caustic, mesh_cache, out_dir, run_ok};
 use image::Rgb32FImage;
 use std::path::{Path, PathBuf};
 

@@ -1,9 +1,9 @@
 //! The standard A4 scenes of the course render, from their own folder and by path, at the size
 //! their scripts ask for, and look like what they describe.
 
-mod common;
+use crate::common;
 
-use common::{a4_assets, caustic, out_dir, run_ok};
+use crate::common::{a4_assets, caustic, out_dir, run_ok};
 use std::path::Path;
 
 /// Every A4 scene, with the image size its `gr.render` call asks for.

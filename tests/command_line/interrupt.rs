@@ -2,15 +2,15 @@
 //! say so; the command line writes it as `NAME.partial.EXT`, marked, and exits with status 130;
 //! a second SIGINT and `--no-partial` end the process at once, writing nothing.
 
-mod common;
+use crate::common;
 
+use crate::common::run_lua;
 use caustic::camera::Camera;
 use caustic::film::{Film, Window};
 use caustic::integrator::progressive::ProgressiveSettings;
 use caustic::integrator::{Partial, Settings};
 use caustic::progress::Progress;
 use caustic::scene::build::build_scene;
-use common::run_lua;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A lit back wall behind a ball, so that every rendered pixel has light and an unrendered
@@ -136,8 +136,8 @@ fn a_stopped_progressive_render_keeps_the_mean_of_its_finished_passes() {
 /// The command line, sent real signals.
 #[cfg(target_os = "linux")]
 mod signals {
-    use super::common::{caustic, out_dir};
     use super::scene;
+    use crate::common::{caustic, out_dir};
     use std::os::unix::process::{CommandExt, ExitStatusExt};
     use std::path::{Path, PathBuf};
     use std::process::{Child, Stdio};

@@ -1,10 +1,8 @@
 //! `caustic study` and `caustic diff` on a small scene: one CSV row per setting and seed whose
 //! errors recompute from the images it wrote, a table row per setting, a plot.
 
-mod common;
-
+use crate::common::{caustic, out_dir, run_ok};
 use caustic::metrics::{Metrics, Region};
-use common::{caustic, out_dir, run_ok};
 use std::path::Path;
 
 /// A diffuse box under a point light with a glass ball: photon maps, a caustic, 24 × 24.

@@ -7,7 +7,7 @@
 //! allocation by the file's size.
 #![cfg(target_os = "linux")]
 
-use crate::common::{caustic, out_dir};
+use crate::common::{Edit, caustic, mutate, out_dir, proptest_config};
 use glam::Vec3A;
 use proptest::prelude::*;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -65,18 +65,6 @@ fn largest_allocation<T>(f: impl FnOnce() -> T) -> (T, usize) {
     let out = f();
     let most = TRACKING.with(|t| t.replace((false, 0)).1);
     (out, most)
-}
-
-fn config() -> ProptestConfig {
-    let cases = std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(48);
-    ProptestConfig {
-        cases,
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
 }
 
 /// A 4×4 scene writing `out.png`.
@@ -702,7 +690,7 @@ fn small_expected() -> caustic::photon::file::Expected {
 }
 
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(proptest_config(48))]
 
     /// A photon-map file with edits and its checksum recomputed is read as maps (that the
     /// frame's check then accepts or refuses) or refused, never a panic; the largest
@@ -895,15 +883,6 @@ fn png_claiming(w: u32, h: u32) -> Vec<u8> {
 }
 
 /// One edit of a byte string: overwrite a byte, set a 32-bit word, insert, delete or truncate.
-#[derive(Clone, Debug)]
-enum Edit {
-    Set(usize, u8),
-    Word(usize, u32),
-    Insert(usize, u8),
-    Delete(usize),
-    Truncate(usize),
-}
-
 fn edit() -> impl Strategy<Value = Edit> {
     prop_oneof![
         (any::<usize>(), any::<u8>()).prop_map(|(i, b)| Edit::Set(i, b)),
@@ -915,30 +894,8 @@ fn edit() -> impl Strategy<Value = Edit> {
     ]
 }
 
-/// Returns `valid` with `edits` applied.
-fn mutate(valid: &[u8], edits: &[Edit]) -> Vec<u8> {
-    let mut b = valid.to_vec();
-    for e in edits {
-        let n = b.len().max(1);
-        match *e {
-            Edit::Set(i, v) if !b.is_empty() => b[i % n] = v,
-            Edit::Word(i, w) if b.len() >= 4 => {
-                let at = i % (b.len() - 3);
-                b[at..at + 4].copy_from_slice(&w.to_le_bytes());
-            }
-            Edit::Insert(i, v) => b.insert(i % (b.len() + 1), v),
-            Edit::Delete(i) if !b.is_empty() => {
-                b.remove(i % n);
-            }
-            Edit::Truncate(i) => b.truncate(i % (b.len() + 1)),
-            _ => {}
-        }
-    }
-    b
-}
-
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(proptest_config(48))]
 
     /// An EXR file (caustic's own tile, a multi-part file, a tiled one), mutated and given to
     /// stitch's reader, is read or refused, never a panic; its largest allocation is bounded

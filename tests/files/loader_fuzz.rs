@@ -5,35 +5,14 @@
 //! quietly. CI runs 48 cases per property; `tools/fuzz.sh SECONDS` runs a long campaign
 //! (`PROPTEST_CASES`) under a `ulimit -v` memory limit.
 
-use crate::common::out_dir;
+use crate::common::{Edit, mutate, out_dir, proptest_config};
 use caustic::error::Loc;
 use caustic::scene::images::ImageCache;
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-fn config() -> ProptestConfig {
-    let cases = std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(48);
-    ProptestConfig {
-        cases,
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
-}
-
 /// One edit of a byte string: overwrite, flip a bit, insert, delete or truncate.
-#[derive(Clone, Debug)]
-enum Edit {
-    Set(usize, u8),
-    Flip(usize, u8),
-    Insert(usize, u8),
-    Delete(usize),
-    Truncate(usize),
-}
-
 fn edit() -> impl Strategy<Value = Edit> {
     prop_oneof![
         (any::<usize>(), any::<u8>()).prop_map(|(i, b)| Edit::Set(i, b)),
@@ -42,24 +21,6 @@ fn edit() -> impl Strategy<Value = Edit> {
         any::<usize>().prop_map(Edit::Delete),
         any::<usize>().prop_map(Edit::Truncate),
     ]
-}
-
-fn mutate(valid: &[u8], edits: &[Edit]) -> Vec<u8> {
-    let mut b = valid.to_vec();
-    for e in edits {
-        let n = b.len().max(1);
-        match *e {
-            Edit::Set(i, v) if !b.is_empty() => b[i % n] = v,
-            Edit::Flip(i, bit) if !b.is_empty() => b[i % n] ^= 1 << bit,
-            Edit::Insert(i, v) => b.insert(i % (b.len() + 1), v),
-            Edit::Delete(i) if !b.is_empty() => {
-                b.remove(i % n);
-            }
-            Edit::Truncate(i) => b.truncate(i % (b.len() + 1)),
-            _ => {}
-        }
-    }
-    b
 }
 
 /// Numbers that stress parsers: huge, tiny, negative, non-finite spellings and index-like ones.
@@ -137,7 +98,7 @@ fn run_script(src: &str, dir: &Path) {
 }
 
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(proptest_config(48))]
 
     /// Random sequences of gr calls with hostile arguments: a located error or a scene.
     #[test]

@@ -5,23 +5,11 @@
 //! long campaign under a memory limit, which turns an allocation the budget missed into a
 //! failure. CI runs 32 cases per property (`PROPTEST_CASES` raises it).
 
-use crate::common::out_dir;
+use crate::common::{out_dir, proptest_config};
 use caustic::lua::{ScriptOptions, run_source_with};
 use caustic::scene::build::build_scene;
 use proptest::prelude::*;
 use std::time::Duration;
-
-fn config() -> ProptestConfig {
-    let cases = std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(32);
-    ProptestConfig {
-        cases,
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
-}
 
 /// A number a hostile or careless script might pass.
 fn number() -> impl Strategy<Value = String> {
@@ -159,7 +147,7 @@ fn run_and_build(src: &str, dir: &std::path::Path) {
 }
 
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(proptest_config(32))]
 
     #[test]
     fn fuzz_generated_scene_scripts_fail_cleanly_or_build(src in script()) {
@@ -272,25 +260,10 @@ impl GltfShape {
             accessors.join(",")
         );
         if self.glb {
-            let mut json = format!(
+            let json = format!(
                 r#"{{"asset":{{"version":"2.0"}},{rest},"buffers":[{{"byteLength":{len}}}]}}"#
-            )
-            .into_bytes();
-            json.resize(json.len().next_multiple_of(4), b' ');
-            let mut body = bin;
-            body.resize(body.len().next_multiple_of(4), 0);
-            let total = 12 + 8 + json.len() + 8 + body.len();
-            let mut out = Vec::with_capacity(total);
-            out.extend(b"glTF");
-            out.extend(2u32.to_le_bytes());
-            out.extend((total as u32).to_le_bytes());
-            out.extend((json.len() as u32).to_le_bytes());
-            out.extend(b"JSON");
-            out.extend(json);
-            out.extend((body.len() as u32).to_le_bytes());
-            out.extend(b"BIN\0");
-            out.extend(body);
-            out
+            );
+            crate::common::glb(&json, &bin)
         } else {
             use base64::Engine;
             let data = base64::engine::general_purpose::STANDARD.encode(&bin);
@@ -303,7 +276,7 @@ impl GltfShape {
 }
 
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(proptest_config(32))]
 
     #[test]
     fn fuzz_gltf_structures_load_cleanly_or_fail_with_a_message(shape in gltf_shape()) {

@@ -45,8 +45,8 @@ One small scene per capability of caustic, in [\`scenes/gallery/\`](../scenes/ga
 script starts with a comment saying what it shows; copy one to start a scene of your own. From
 the repository's root, \`cargo run --release -- render scenes/gallery/NAME.lua\` writes
 \`NAME.png\` into the working directory; the scripts find their meshes and textures from their
-own folder, so they also render from inside it. \`tests/gallery.rs\` renders every one at a
-quarter of its size and checks what it shows.
+own folder, so they also render from inside it. \`tests/command_line/gallery.rs\` renders every
+one at a quarter of its size and checks what it shows.
 
 The thumbnails are the scripts' own size and default settings. Regenerate them and this page
 with \`bash tools/gallery.sh\`. Times are wall-clock seconds of one render on the machine that

@@ -645,7 +645,7 @@ pub(super) fn prefetch_line(p: *const u8) {
 /// Returns `1/x`, or `±1/ε` for `|x| <= ε`, so slab distances stay finite (obvhs's rule), with
 /// `ε` relative to `size`, the direction's largest component: a ray moved into the object space
 /// of an instance scaled by 1e5 is not renormalised, and an absolute `ε` there shortened a slab
-/// to less than the distance to a triangle inside it (`tests/stability_spawn.rs`).
+/// to less than the distance to a triangle inside it (`tests/geometry/spawned_rays.rs`).
 fn safe_inverse(x: f32, size: f32) -> f32 {
     let eps = (f32::EPSILON * size).max(f32::MIN_POSITIVE);
     if x.abs() <= eps {

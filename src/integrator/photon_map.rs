@@ -29,8 +29,8 @@
 //!     rays but only ~10^6 photons, so estimating at the photons is far cheaper, and the
 //!     gathered values are averaged over 64 rays, which hides the piecewise-constant lookup
 //!     (on `room2.lua`: render 32.6 s -> 8.2 s, mean pixel value within 1.3%; pbrt's closed
-//!     sphere stays within 2.5% in both modes, `tests/photon.rs`). `GiSettings::precompute`
-//!     (`--gather-lookup estimate`) turns it off.
+//!     sphere stays within 2.5% in both modes, `tests/photons/closed_forms.rs`).
+//!     `GiSettings::precompute` (`--gather-lookup estimate`) turns it off.
 //!
 //!     And by default most points do not gather at all: they interpolate the records of an
 //!     irradiance cache made before the camera pass ([`super::irradiance_cache`]; the final

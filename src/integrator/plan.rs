@@ -34,7 +34,7 @@
 //! the scene cannot have is planned on and says why it will do nothing (a caustic map without a
 //! specular surface stays empty; the general shading kernel finds no texture). Forcing is how
 //! the plan is checked: a scene without an effect renders bit for bit the same with the effect
-//! forced on (tests/plan.rs), so what the plan skips was not needed.
+//! forced on (tests/light_transport/effect_plan.rs), so what the plan skips was not needed.
 //!
 //! Each decision is data ([`Decision`]: the effect, on or off, and a typed [`Why`]) rendered as
 //! text by `Display`, so tests and tools read the plan without parsing sentences.

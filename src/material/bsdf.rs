@@ -122,7 +122,7 @@ impl<'a> Bsdf<'a> {
     /// [`Bsdf::new`] compiled for the effects a scene's plan keeps ([`crate::scene::Features`]):
     /// the texture lookup only with `TEX`, the bump map only with `BUMP`, Perlin noise only with
     /// `NOISE`. A kernel without an effect gives the same BSDF as the general one wherever no
-    /// material has the effect (tests/plan.rs renders both, bit for bit).
+    /// material has the effect (tests/light_transport/effect_plan.rs renders both, bit for bit).
     pub fn kernel<const TEX: bool, const BUMP: bool, const NOISE: bool>(
         material: &'a Material,
         surf: &SurfaceHit,

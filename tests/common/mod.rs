@@ -305,22 +305,7 @@ impl GltfFile {
 
     /// Returns the GLB bytes of the file.
     pub fn glb(&self, rest: &str) -> Vec<u8> {
-        let mut json = self.json(None, rest).into_bytes();
-        json.resize(json.len().next_multiple_of(4), b' ');
-        let mut bin = self.bin.clone();
-        bin.resize(bin.len().next_multiple_of(4), 0);
-        let total = 12 + 8 + json.len() + 8 + bin.len();
-        let mut out = Vec::with_capacity(total);
-        out.extend(b"glTF");
-        out.extend(2u32.to_le_bytes());
-        out.extend((total as u32).to_le_bytes());
-        out.extend((json.len() as u32).to_le_bytes());
-        out.extend(b"JSON");
-        out.extend(json);
-        out.extend((bin.len() as u32).to_le_bytes());
-        out.extend(b"BIN\0");
-        out.extend(bin);
-        out
+        glb(&self.json(None, rest), &self.bin)
     }
 
     /// Writes `name.glb` into `dir`; returns its path.
@@ -329,6 +314,76 @@ impl GltfFile {
         std::fs::write(&path, self.glb(rest)).unwrap();
         path
     }
+}
+
+/// Returns a GLB container of the glTF `json` and the `bin` chunk, each padded to 4 bytes.
+pub fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut json = json.as_bytes().to_vec();
+    json.resize(json.len().next_multiple_of(4), b' ');
+    let mut bin = bin.to_vec();
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend(b"glTF");
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+/// The fuzz properties' proptest settings: `PROPTEST_CASES` cases (`default_cases` without it),
+/// no failure files.
+pub fn proptest_config(default_cases: u32) -> proptest::test_runner::Config {
+    let cases = std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default_cases);
+    proptest::test_runner::Config {
+        cases,
+        failure_persistence: None,
+        ..proptest::test_runner::Config::default()
+    }
+}
+
+/// One edit of a byte string, for the fuzz properties' mutations: overwrite a byte, flip a bit,
+/// set a 32-bit word, insert, delete or truncate. Each property draws the kinds it wants.
+#[derive(Clone, Debug)]
+pub enum Edit {
+    Set(usize, u8),
+    Flip(usize, u8),
+    Word(usize, u32),
+    Insert(usize, u8),
+    Delete(usize),
+    Truncate(usize),
+}
+
+/// Returns `valid` with `edits` applied, each position taken modulo the length at its turn; an
+/// edit that needs more bytes than there are does nothing.
+pub fn mutate(valid: &[u8], edits: &[Edit]) -> Vec<u8> {
+    let mut b = valid.to_vec();
+    for e in edits {
+        let n = b.len().max(1);
+        match *e {
+            Edit::Set(i, v) if !b.is_empty() => b[i % n] = v,
+            Edit::Flip(i, bit) if !b.is_empty() => b[i % n] ^= 1 << bit,
+            Edit::Word(i, w) if b.len() >= 4 => {
+                let at = i % (b.len() - 3);
+                b[at..at + 4].copy_from_slice(&w.to_le_bytes());
+            }
+            Edit::Insert(i, v) => b.insert(i % (b.len() + 1), v),
+            Edit::Delete(i) if !b.is_empty() => {
+                b.remove(i % n);
+            }
+            Edit::Truncate(i) => b.truncate(i % (b.len() + 1)),
+            _ => {}
+        }
+    }
+    b
 }
 
 /// Asserts two meshes hold the same data (every field but `source`).

@@ -179,8 +179,8 @@ def main():
         "stops paying, the maps are the limit, and the progressive integrator, whose bias falls with "
         "passes, is the way further. Its own slope here is near -1/2 because at these pass counts "
         "the Monte Carlo terms still dominate; on a scene with no Monte Carlo term (the closed-form "
-        "mirror caustic of `tests/progressive.rs`) it falls at -0.31 against passes, the -1/3 "
-        "progressive photon mapping predicts.",
+        "mirror caustic of `tests/light_transport/progressive.rs`) it falls at -0.31 against "
+        "passes, the -1/3 progressive photon mapping predicts.",
         "",
     ]
     body = []

@@ -35,7 +35,7 @@
 //! collapses to one touching pile; both were warned about. Touching is a check here, not the
 //! test.
 //!
-//! Measured (`tests/legacy_detection.rs`): no warning on any modern scene that reaches
+//! Measured (`tests/lua/legacy_detection.rs`): no warning on any modern scene that reaches
 //! `gr.render` (14 of the corpus's 20 scripts, the 6 that run of `scenes/`, the guide's modern
 //! examples). Their copies with every node's calls reversed (which is how the two eras' copies
 //! of hier.lua and macho-cows.lua differ) are warned about where the order matters in 2 nodes

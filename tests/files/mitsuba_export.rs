@@ -1,0 +1,133 @@
+//! `caustic export-mitsuba`: the validation scenes export, the lighting model maps to Mitsuba's
+//! units, and everything outside the shared subset is refused with the object and line at fault.
+
+use crate::common;
+
+use crate::common::{caustic, out_dir};
+use std::path::Path;
+
+fn export(dir: &Path, src: &str) -> std::process::Output {
+    std::fs::write(dir.join("s.lua"), src).unwrap();
+    caustic()
+        .current_dir(dir)
+        .args(["export-mitsuba", "s.lua", "-o", "s.xml"])
+        .output()
+        .unwrap()
+}
+
+const BOX: &str = "white = gr.material({0.5, 0.5, 0.5}, {0, 0, 0}, 0)
+    root = gr.node('root')
+    b = gr.cube('b'); b:scale(2, 2, 2); b:translate(-1, -1, -1); b:set_material(white); root:add_child(b)
+";
+
+fn render_line(lights: &str) -> String {
+    format!(
+        "gr.render(root, 'x.png', 8, 8, {{0,0,0.5}}, {{0,0,-1}}, {{0,1,0}}, 60, {{0,0,0}}, {lights})"
+    )
+}
+
+#[test]
+fn every_validation_scene_exports() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = out_dir("export-validation");
+    let mut n = 0;
+    for entry in std::fs::read_dir(root.join("scenes/validate")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "lua") {
+            continue;
+        }
+        let xml = dir.join(path.file_stem().unwrap()).with_extension("xml");
+        common::run_ok(
+            caustic()
+                .current_dir(root)
+                .arg("export-mitsuba")
+                .arg(&path)
+                .arg("-o")
+                .arg(&xml),
+        );
+        let text = std::fs::read_to_string(&xml).unwrap();
+        assert!(
+            text.contains("<emitter type=\"area\">") && text.contains("twosided"),
+            "{text}"
+        );
+        n += 1;
+    }
+    assert!(n >= 5, "scenes/validate has {n} scenes");
+}
+
+#[test]
+fn lights_map_to_mitsuba_units() {
+    let dir = out_dir("export-units");
+    // rgb 1 over a 0.5 × 0.5 light: radiance π / 0.25; a point light: intensity π.
+    let src = format!(
+        "{BOX}{}",
+        render_line(
+            "{gr.area_light({0,0.9,0}, {1,1,1}, {0,0,1}, nil, nil, {0.5,0,0}, {0,0,0.5}), gr.light({0,0,0}, {1,2,3}, {0,0,1})}"
+        )
+    );
+    let out = export(&dir, &src);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let xml = std::fs::read_to_string(dir.join("s.xml")).unwrap();
+    let pi = std::f32::consts::PI;
+    assert!(
+        xml.contains(&format!(
+            "value=\"{}, {}, {}\"",
+            pi / 0.25,
+            pi / 0.25,
+            pi / 0.25
+        )),
+        "{xml}"
+    );
+    assert!(
+        xml.contains(&format!("value=\"{}, {}, {}\"", pi, 2.0 * pi, 3.0 * pi)),
+        "{xml}"
+    );
+}
+
+#[test]
+fn anything_outside_the_subset_is_refused_with_its_line() {
+    let dir = out_dir("export-refused");
+    let light = "{gr.light({0,0,0}, {1,1,1}, {0,0,1})}";
+    for (body, line, what) in [
+        (
+            "c = gr.cylinder('c'); c:set_material(white); root:add_child(c)\n",
+            4,
+            "cylinder",
+        ),
+        (
+            "p = gr.material({1,1,1}, {0.5,0.5,0.5}, 20)\nq = gr.sphere('q'); q:set_material(p); root:add_child(q)\n",
+            4,
+            "Phong",
+        ),
+        (
+            "h = gr.material({1,1,1}, {0,0,0}, 0, 0.5, 1.5)\nq = gr.sphere('q'); q:set_material(h); root:add_child(q)\n",
+            4,
+            "partly transparent",
+        ),
+        (
+            "e = gr.sphere('e'); e:scale(1, 2, 1); e:set_material(white); root:add_child(e)\n",
+            4,
+            "non-uniformly scaled",
+        ),
+    ] {
+        let out = export(&dir, &format!("{BOX}{body}{}", render_line(light)));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(&format!("s.lua:{line}:")) && err.contains(what),
+            "{body}: {err}"
+        );
+    }
+    let out = export(
+        &dir,
+        &format!(
+            "{BOX}{}",
+            render_line("{gr.light({0,0,0}, {1,1,1}, {1,0,0})}")
+        ),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("falloff"), "{err}");
+}

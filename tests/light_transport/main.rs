@@ -1,0 +1,23 @@
+//! Light transport: the images the integrators make, against closed forms and each other.
+//! Parts: `shading` (the first renderer's Phong light), `dielectric` (refraction), `materials`
+//! (textures and normal maps), `convergence` and `furnace` (light neither lost nor gained),
+//! `deep_paths` (Russian roulette past any fixed depth), `shadow_media` (no shadow rays from
+//! inside transparent solids), `weak_branches` (weak reflections shared by a pixel's samples),
+//! `progressive` (the progressive integrator), `effect_plan` (the effects decided before the
+//! passes), `pixel_sampling` (determinism, crops, tiles, adaptive sampling) and `final_scene`.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod convergence;
+mod deep_paths;
+mod dielectric;
+mod effect_plan;
+mod final_scene;
+mod furnace;
+mod materials;
+mod pixel_sampling;
+mod progressive;
+mod shading;
+mod shadow_media;
+mod weak_branches;

@@ -14,7 +14,8 @@
 //! the power codes ([`PhotonMap::validate`], `store::PowerCodec::validate`).
 
 use super::store::PowerCodec;
-use super::trace::LightCounts;
+use super::stream::PhotonStream;
+use super::trace::{LightCounts, TracedMap};
 use super::{PhotonMap, kdtree};
 use std::io::{Read, Write};
 
@@ -249,6 +250,125 @@ pub fn read_map<R: Read>(
         top_nodes: top as usize,
     };
     Ok(CountedMap { map, per_light })
+}
+
+/// Largest power (W) a photon of a part file may carry: a light's flux is far below it, and a
+/// map's power format holds its brightest photon up to it (`store::PowerCodec`).
+pub const MAX_PART_POWER: f32 = 18_446_744_073_709_551_616.0; // 2^64
+
+/// Bytes a traced photon takes in a part file: position (12), code word (4), power (12).
+const STAGED_BYTES: u64 = 28;
+
+/// Writes the traced photons of one map with each light's counts (a photon pass's part,
+/// `caustic photons --part`): light count (4), per light emitted, stored, first-hit-specular,
+/// met-surface (8 each) and the projection map's kept share (4); photon count (8); per photon
+/// position, code word and power (28 bytes, in the order traced).
+pub fn write_traced<W: Write>(w: &mut W, t: &TracedMap) -> std::io::Result<()> {
+    w.write_all(&(t.per_light.len() as u32).to_le_bytes())?;
+    for c in &t.per_light {
+        for v in [c.emitted, c.stored, c.first_hit_specular, c.met_surface] {
+            w.write_all(&v.to_le_bytes())?;
+        }
+        w.write_all(&c.kept_ppm.to_le_bytes())?;
+    }
+    w.write_all(&(t.photons.len() as u64).to_le_bytes())?;
+    let mut buf = Vec::with_capacity(STAGED_BYTES as usize * CHUNK);
+    let staged: Vec<&super::stream::Staged> = t.photons.iter().collect();
+    for part in staged.chunks(CHUNK) {
+        buf.clear();
+        for p in part {
+            buf.extend(p.pos.iter().flat_map(|x| x.to_le_bytes()));
+            buf.extend(p.code.to_le_bytes());
+            buf.extend(p.power.iter().flat_map(|x| x.to_le_bytes()));
+        }
+        w.write_all(&buf)?;
+    }
+    Ok(())
+}
+
+/// Reads what [`write_traced`] wrote from `r`, naming `what` in its errors; `size` is the
+/// file's size, which bounds the counts before anything is allocated. Every photon is checked
+/// before it is kept: a finite position, a valid code word, a power finite, not negative and
+/// at most [`MAX_PART_POWER`]; and the lights' stored counts must add up to the photons.
+pub fn read_traced<R: Read>(
+    r: &mut CrcReader<R>,
+    what: &str,
+    size: u64,
+) -> Result<TracedMap, String> {
+    let lights = r.u32(what)?;
+    if lights > MAX_LIGHTS || u64::from(lights) * 36 > size {
+        return Err(format!(
+            "{what}: {lights} lights, more than the file's {size} bytes hold"
+        ));
+    }
+    let mut per_light = Vec::with_capacity(lights as usize);
+    for _ in 0..lights {
+        let mut v = [0u64; 4];
+        for x in &mut v {
+            *x = r.u64(what)?;
+        }
+        let [emitted, stored, first_hit_specular, met_surface] = v;
+        let kept_ppm = r.u32(what)?;
+        per_light.push(LightCounts {
+            emitted,
+            stored,
+            first_hit_specular,
+            met_surface,
+            kept_ppm,
+        });
+    }
+    let n = r.u64(what)?;
+    if n.saturating_mul(STAGED_BYTES) > size {
+        return Err(format!(
+            "{what}: {n} photons, more than the file's {size} bytes hold"
+        ));
+    }
+    let stored = per_light
+        .iter()
+        .map(|c| c.stored)
+        .fold(0u64, u64::saturating_add);
+    if stored != n {
+        return Err(format!(
+            "{what}: its lights stored {stored} photons, but it holds {n}"
+        ));
+    }
+    let mut photons = PhotonStream::new();
+    let mut buf = vec![0u8; STAGED_BYTES as usize * CHUNK];
+    let mut staged = Vec::with_capacity(CHUNK);
+    let mut done = 0u64;
+    while done < n {
+        let k = (n - done).min(CHUNK as u64) as usize;
+        r.bytes(&mut buf[..STAGED_BYTES as usize * k], what)?;
+        staged.clear();
+        for (i, b) in buf[..STAGED_BYTES as usize * k]
+            .chunks_exact(28)
+            .enumerate()
+        {
+            let f = |j: usize| f32::from_le_bytes([b[j], b[j + 1], b[j + 2], b[j + 3]]);
+            let p = super::stream::Staged {
+                pos: [f(0), f(4), f(8)],
+                code: u32::from_le_bytes([b[12], b[13], b[14], b[15]]),
+                power: [f(16), f(20), f(24)],
+            };
+            let id = done + i as u64;
+            if !p.pos.iter().all(|x| x.is_finite()) {
+                return Err(format!("{what}: photon {id} at {:?} is not finite", p.pos));
+            }
+            if !super::store::code_is_valid(p.code) {
+                return Err(format!("{what}: photon {id} has code word {:#x}", p.code));
+            }
+            if !p.power.iter().all(|x| (0.0..=MAX_PART_POWER).contains(x)) {
+                return Err(format!(
+                    "{what}: photon {id}'s power {:?} is not in [0, {MAX_PART_POWER:e}]",
+                    p.power
+                ));
+            }
+            staged.push(p);
+        }
+        photons.extend_from_slice(&staged);
+        done += k as u64;
+    }
+    Ok(TracedMap { photons, per_light })
 }
 
 #[cfg(test)]

@@ -508,6 +508,45 @@ pub fn trace_map_with(
     seed: u64,
     progress: &dyn Progress,
 ) -> TracedMap {
+    trace_map_part(scene, budget, (kind, seed), Part::WHOLE, progress)
+}
+
+/// Most parts a photon pass is split into ([`Part`]).
+pub const MAX_PARTS: u32 = 4096;
+
+/// A share of a photon pass that one process traces (`caustic photons --part i/N`): of each
+/// light's `n` photons, those of index `n·i/N` up to `n·(i+1)/N`. Every photon's random stream
+/// is keyed by its index, so the parts' streams, each light's shares put back in part order,
+/// are the one stream a whole pass traces, photon for photon.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Part {
+    /// Which part, below `count`.
+    pub index: u32,
+    /// How many parts the pass is split into, 1 to [`MAX_PARTS`].
+    pub count: u32,
+}
+
+impl Part {
+    /// The whole pass as one part.
+    pub const WHOLE: Part = Part { index: 0, count: 1 };
+
+    /// Returns the photon indices of this part among a light's `n`.
+    pub fn range(self, n: u64) -> std::ops::Range<u64> {
+        let at = |i: u32| (u128::from(n) * u128::from(i) / u128::from(self.count)) as u64;
+        at(self.index)..at(self.index + 1)
+    }
+}
+
+/// Traces part `part` ([`Part`]) of the photons of `kind` for every light, `budget[l]` in all
+/// for light `l`, with `seed`; each light's counts are its part's (`emitted` the part's share),
+/// and the photons go in light order, each light's in index order.
+pub fn trace_map_part(
+    scene: &Scene,
+    budget: &[u64],
+    (kind, seed): (MapKind, u64),
+    part: Part,
+    progress: &dyn Progress,
+) -> TracedMap {
     let targets = if kind == MapKind::Caustic {
         specular_targets(scene)
     } else {
@@ -528,10 +567,13 @@ pub fn trace_map_with(
         MapKind::Global => "tracing global photons",
         MapKind::Caustic => "tracing caustic photons",
     };
-    progress.start(what, budget.iter().take(scene.lights.len()).sum());
+    let share = |l: usize| part.range(budget.get(l).copied().unwrap_or(0));
+    let total = (0..scene.lights.len()).map(|l| share(l).end - share(l).start);
+    progress.start(what, total.sum());
     for (l, light) in scene.lights.iter().enumerate() {
         let n = budget.get(l).copied().unwrap_or(0);
-        let chunks = n.div_ceil(CHUNK);
+        let mine = share(l);
+        let chunks = (mine.end - mine.start).div_ceil(CHUNK);
         let projection = projections[l].as_ref();
         // Every thread claims the next chunk in turn, and whoever finishes the chunk next in
         // order appends it and any finished after it: the stream takes the chunks in order,
@@ -541,7 +583,7 @@ pub fn trace_map_with(
             next: 0,
             waiting: BTreeMap::new(),
             counts: LightCounts {
-                emitted: n,
+                emitted: mine.end - mine.start,
                 kept_ppm: projection.map_or(0, |p| (p.fraction() * 1e6).round() as u32),
                 ..LightCounts::default()
             },
@@ -567,14 +609,15 @@ pub fn trace_map_with(
                 cones.clear();
                 // Asked to stop: the chunks left are not traced (the frame is dropped).
                 if !progress.should_stop() {
-                    for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                    let first = mine.start + c * CHUNK;
+                    for k in first..(first + CHUNK).min(mine.end) {
                         let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
                         let mut rng = Rng::new(seed, Pass::Photon, key);
                         let hit = trace_one(&pass, &mut cones, &mut rng, &mut photons);
                         on_specular += u64::from(hit == FirstHit::Specular);
                         met += u64::from(hit != FirstHit::Nothing);
                     }
-                    progress.advance(CHUNK.min(n - c * CHUNK));
+                    progress.advance(CHUNK.min(mine.end - first));
                 }
                 let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
                 done.finish(c, photons, (on_specular, met));
@@ -806,6 +849,25 @@ fn bounce(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The parts of a pass cover each light's photons once, in order: part `i`'s range ends
+    /// where part `i + 1`'s starts, the first starts at 0 and the last ends at `n`, for counts
+    /// from 0 to beyond `u64::MAX / MAX_PARTS` and splits from 1 to `MAX_PARTS`.
+    #[test]
+    fn the_parts_of_a_pass_cover_its_photons_once() {
+        for n in [0u64, 1, 5, 4096, 1_000_003, u64::MAX / 3, u64::MAX] {
+            for count in [1u32, 2, 3, 7, 64, MAX_PARTS] {
+                let mut next = 0;
+                for index in 0..count {
+                    let r = Part { index, count }.range(n);
+                    assert_eq!(r.start, next, "n {n}, part {index}/{count}");
+                    assert!(r.end >= r.start);
+                    next = r.end;
+                }
+                assert_eq!(next, n, "n {n}, {count} parts");
+            }
+        }
+    }
 
     /// A projection map keeps every direction that meets the scene (brute force over 200,000
     /// random directions, each tested against the boxes exactly), and little more: a lamp 3

@@ -20,12 +20,13 @@ use crate::camera::Camera;
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
 use crate::film::{Film, Window};
+use crate::integrator::maps_file::parts::SavedPart;
 use crate::integrator::maps_file::{self, FrameOf, SavedMaps};
 use crate::integrator::photon_map::{GiSettings, GiStats, Prepass};
 use crate::integrator::plan::plan_for;
 use crate::integrator::{GiMode, Integrator, Plan, Settings, View};
 use crate::lua::MAX_PIXELS;
-use crate::photon::trace::{MAX_PHOTONS, MapKind};
+use crate::photon::trace::{MAX_PHOTONS, MapKind, Part};
 use crate::progress::Progress;
 use crate::scene::{Scene, build_scene};
 
@@ -127,6 +128,33 @@ pub fn trace_maps(
 ) -> Result<(SavedMaps, GiStats)> {
     let f = prepare(desc, r, scale, None, settings)?;
     maps_file::save(f.of(desc, r), &f.settings.photons, progress)
+}
+
+/// Traces part `part` of the photon pass a render of `r` at `scale` with `settings` would run
+/// (`caustic photons --part`, [`maps_file::parts::trace`]).
+pub fn trace_part(
+    (desc, r): (&SceneDesc, &RenderDesc),
+    scale: f64,
+    settings: &Settings,
+    part: Part,
+    progress: &dyn Progress,
+) -> Result<SavedPart> {
+    let f = prepare(desc, r, scale, None, settings)?;
+    maps_file::parts::trace(f.of(desc, r), &f.settings.photons, part, progress)
+}
+
+/// Merges the parts of the photon pass a render of `r` at `scale` with `settings` would run
+/// into the maps that pass makes, with the rest of its prepass, to be saved (`caustic photons
+/// --merge`, [`maps_file::parts::merge`]).
+pub fn merge_parts(
+    (desc, r): (&SceneDesc, &RenderDesc),
+    scale: f64,
+    settings: &Settings,
+    parts: Vec<(std::path::PathBuf, SavedPart)>,
+    progress: &dyn Progress,
+) -> Result<(SavedMaps, GiStats)> {
+    let f = prepare(desc, r, scale, None, settings)?;
+    maps_file::parts::merge(f.of(desc, r), &f.settings.photons, parts, progress)
 }
 
 /// A frame ready for its passes: its window, its scene as the plan shades it, its settings

@@ -88,6 +88,14 @@ pub struct PhotonsArgs {
     /// --photon-maps FILE`, instead of drawing them.
     #[arg(long, value_name = "FILE")]
     pub save: Option<PathBuf>,
+    /// Trace only part I of N of the photon pass (I from 0 to N-1, N at most 4096) and save
+    /// its photons, as traced, to --save's FILE; --merge joins the N parts.
+    #[arg(long, value_name = "I/N", value_parser = parse_part, requires = "save", conflicts_with = "merge")]
+    pub part: Option<crate::photon::trace::Part>,
+    /// Join the parts --part saved (every part of one pass, each once) into the photon-map
+    /// file --save writes: byte for byte the file one caustic photons --save writes.
+    #[arg(long, value_name = "PART", num_args = 1.., requires = "save")]
+    pub merge: Vec<PathBuf>,
     /// Every `caustic render` flag, so that the maps traced are the ones a render with the
     /// same flags traces (photon counts, --photon-scale, --seed, --scale, --force, --disable,
     /// the scene's gr.settings); without --save, -o names the picture of the photons (default:
@@ -449,17 +457,43 @@ impl Cli {
     }
 }
 
-/// Returns `caustic photons`'s words without `--save FILE` (or `--save=FILE`).
+/// Parses `--part I/N`: `I` below `N`, `N` from 1 to [`crate::photon::trace::MAX_PARTS`].
+fn parse_part(s: &str) -> std::result::Result<crate::photon::trace::Part, String> {
+    use crate::photon::trace::{MAX_PARTS, Part};
+    let bad = || format!("expected I/N with 0 <= I < N <= {MAX_PARTS}, got {s}");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let (index, count) = (
+        i.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if !(1..=MAX_PARTS).contains(&count) || index >= count {
+        return Err(bad());
+    }
+    Ok(Part { index, count })
+}
+
+/// Returns `caustic photons`'s words without its own flags, which `caustic render` does not
+/// take: `--save FILE` and `--part I/N` (or `--save=FILE`, `--part=I/N`), and `--merge` with
+/// the words after it up to the next flag, as clap reads them.
 fn without_save(words: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
     let mut out = Vec::with_capacity(words.len());
-    let mut words = words.into_iter();
+    let mut words = words.into_iter().peekable();
     while let Some(w) = words.next() {
+        let text = w.to_string_lossy();
         if w == "--" {
             out.push(w);
             out.extend(words.by_ref());
-        } else if w == "--save" {
+        } else if w == "--save" || w == "--part" {
             words.next();
-        } else if !w.to_string_lossy().starts_with("--save=") {
+        } else if w == "--merge" {
+            while words
+                .next_if(|v| !v.to_string_lossy().starts_with('-'))
+                .is_some()
+            {}
+        } else if !["--save=", "--part=", "--merge="]
+            .iter()
+            .any(|f| text.starts_with(f))
+        {
             out.push(w);
         }
     }

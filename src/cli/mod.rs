@@ -435,6 +435,7 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
         a.output.clone(),
         args.save.clone(),
     );
+    let (part, merge) = (args.part, args.merge.clone());
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {
         counter.set(counter.get() + 1);
         let own = job_with_settings(&job, &argv, &scene, r)?;
@@ -448,8 +449,15 @@ fn photons_command(args: PhotonsArgs) -> Result<()> {
                     "this script renders more than one image, so --save cannot hold its maps",
                 ));
             }
+            let merged: Vec<&std::path::Path> = merge.iter().map(PathBuf::as_path).collect();
+            inputs.extend(merged);
             check_out(path, &inputs)?;
-            return save_maps(desc, r, job, path);
+            let what = match (part, merge.is_empty()) {
+                (Some(p), _) => Save::Part(p),
+                (None, false) => Save::Merge(merge.clone()),
+                (None, true) => Save::Whole,
+            };
+            return save_maps((desc, r), job, path, &what);
         }
         let out = match &output {
             Some(o) if counter.get() == 1 => o.clone(),
@@ -497,17 +505,39 @@ fn stored(counts: &[crate::photon::trace::LightCounts]) -> u64 {
     counts.iter().map(|c| c.stored).sum()
 }
 
-/// Traces the photon maps that `caustic render` with `job` would trace for `r` and writes them
-/// to `path` (`caustic photons --save`; the caller has checked `path`).
+/// What `caustic photons --save` saves.
+enum Save {
+    /// The maps of the whole pass.
+    Whole,
+    /// One part of the pass, as traced (`--part`).
+    Part(crate::photon::trace::Part),
+    /// The maps the parts saved in these files make (`--merge`).
+    Merge(Vec<PathBuf>),
+}
+
+/// Traces the photon maps that `caustic render` with `job` would trace for `r` (or the part,
+/// or merges the parts, that `what` says) and writes them to `path` (`caustic photons --save`;
+/// the caller has checked `path`).
 fn save_maps(
-    desc: &SceneDesc,
-    r: &RenderDesc,
+    (desc, r): (&SceneDesc, &RenderDesc),
     job: &RenderJob,
     path: &std::path::Path,
+    what: &Save,
 ) -> Result<()> {
     let start = Instant::now();
     let bar = Bar::new(job.progress, path);
-    let traced = frame::trace_maps(desc, r, job.scale, &job.settings, &bar);
+    let traced = match what {
+        Save::Whole => frame::trace_maps(desc, r, job.scale, &job.settings, &bar),
+        Save::Part(part) => {
+            let traced = frame::trace_part((desc, r), job.scale, &job.settings, *part, &bar);
+            bar.finish();
+            return write_part(path, traced?, start);
+        }
+        Save::Merge(files) => {
+            let parts = read_parts(files)?;
+            frame::merge_parts((desc, r), job.scale, &job.settings, parts, &bar)
+        }
+    };
     bar.finish();
     let (maps, stats) = traced?;
     if crate::interrupt::requested() {
@@ -530,6 +560,56 @@ fn save_maps(
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// Writes the photon-pass part `part` to `path` and says so (`caustic photons --part`).
+fn write_part(
+    path: &std::path::Path,
+    part: crate::integrator::maps_file::parts::SavedPart,
+    start: Instant,
+) -> Result<()> {
+    if crate::interrupt::requested() {
+        return Err(Error::Interrupted("the part was not written".into()));
+    }
+    crate::integrator::maps_file::parts::write(path, &part).map_err(|e| Error::File {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let caustic = part.caustic.as_ref().map_or(0, |c| c.len());
+    eprintln!(
+        "wrote {} (part {}/{}: {} global, {caustic} caustic photons) in {:.2} s",
+        path.display(),
+        part.part.index,
+        part.part.count,
+        part.global.len(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Reads the photon-pass parts `files` name (`caustic photons --merge`), or an error naming the
+/// file that is not one.
+fn read_parts(
+    files: &[PathBuf],
+) -> Result<Vec<(PathBuf, crate::integrator::maps_file::parts::SavedPart)>> {
+    let most = crate::photon::trace::MAX_PARTS as usize;
+    if files.len() > most {
+        return Err(Error::Usage(format!(
+            "--merge: {} parts, more than a pass is split into ({most})",
+            files.len()
+        )));
+    }
+    files
+        .iter()
+        .map(|f| {
+            let part =
+                crate::integrator::maps_file::parts::read(f).map_err(|message| Error::File {
+                    path: f.clone(),
+                    message,
+                })?;
+            Ok((f.clone(), part))
+        })
+        .collect()
 }
 
 fn export_command(args: ExportArgs) -> Result<()> {

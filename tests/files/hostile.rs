@@ -719,6 +719,62 @@ proptest! {
         // 16 MiB this bound first allowed: a constant, not a size read from the file).
         prop_assert!(most <= 4 * bytes.len() + (20 << 20), "{most} bytes allocated for {}", bytes.len());
     }
+
+    /// A photon-pass part (`caustic photons --part`) with edits and its checksum recomputed is
+    /// read or refused, never a panic, and reading it allocates a few times its size at most
+    /// plus the reader's buffers: counts read from the file are bounded by its size first.
+    #[test]
+    fn fuzz_photon_pass_parts_with_a_valid_checksum(edits in prop::collection::vec(map_edit(), 1..6)) {
+        static VALID: std::sync::OnceLock<(PathBuf, Vec<u8>)> = std::sync::OnceLock::new();
+        let (dir, valid) = VALID.get_or_init(|| {
+            let dir = out_dir("hostile_files_fuzz_parts");
+            caustic::integrator::maps_file::parts::write(&dir.join("part.bin"), &small_part(300)).unwrap();
+            let valid = std::fs::read(dir.join("part.bin")).unwrap();
+            (dir, valid)
+        });
+        let path = dir.join("forged.bin");
+        let bytes = forge(valid, &edits);
+        std::fs::write(&path, &bytes).unwrap();
+        let (read, most) = largest_allocation(|| caustic::integrator::maps_file::parts::read(&path));
+        if let Ok(part) = read {
+            prop_assert!(part.global.len() as u64 <= bytes.len() as u64 / 28);
+        }
+        // The photons as blocks of 1.75 MiB, the reader's buffers (1 MiB and 1.75 MiB).
+        prop_assert!(most <= 4 * bytes.len() + (8 << 20), "{most} bytes allocated for {}", bytes.len());
+    }
+}
+
+/// A part of a photon pass of `n` photons of one light, both maps, as `caustic photons --part`
+/// saves it.
+fn small_part(n: usize) -> caustic::integrator::maps_file::parts::SavedPart {
+    use caustic::integrator::maps_file::Fingerprint;
+    use caustic::photon::Photon;
+    use caustic::photon::stream::PhotonStream;
+    use caustic::photon::trace::{LightCounts, Part, TracedMap};
+    let photon = |i: usize| Photon {
+        position: Vec3A::new((i % 7) as f32, (i % 5) as f32 * 0.5, i as f32 * 1e-2),
+        power: Vec3A::new(1.0, 0.5, 0.25) * 1e-3,
+        dir: Vec3A::Y,
+        normal: Vec3A::Z,
+        direct: i.is_multiple_of(2),
+    };
+    let traced = |n: usize| TracedMap {
+        photons: PhotonStream::of(&(0..n).map(photon).collect::<Vec<_>>()),
+        per_light: vec![LightCounts {
+            emitted: n as u64,
+            stored: n as u64,
+            ..LightCounts::default()
+        }],
+    };
+    caustic::integrator::maps_file::parts::SavedPart {
+        fingerprint: Fingerprint {
+            scene: 7,
+            settings: "seed 0".into(),
+        },
+        part: Part { index: 1, count: 3 },
+        global: traced(n),
+        caustic: Some(traced(n / 2)),
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

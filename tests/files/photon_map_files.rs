@@ -192,3 +192,95 @@ fn a_map_file_for_other_photons_another_scene_or_damaged_is_refused() {
         "{e}"
     );
 }
+
+/// A photon pass split into parts (`caustic photons --part i/N`) and merged (`--merge`) writes
+/// the file one `caustic photons --save` writes, byte for byte, whatever the number of parts
+/// (one; three, given out of order; seven, more than the light's chunks of photons), and a
+/// render from the merged file is the render that traces its own maps.
+#[test]
+fn a_pass_split_into_parts_merges_into_the_file_one_process_writes() {
+    let dir = out_dir("photon-parts");
+    let scene = scene_in(&dir);
+    let scene = scene.to_str().unwrap();
+    run(&dir, &["photons", scene, "--save", "whole.bin"]);
+    let whole = std::fs::read(dir.join("whole.bin")).unwrap();
+    for n in [1u32, 3, 7] {
+        let mut names: Vec<String> = (0..n).map(|i| format!("part{i}of{n}.bin")).collect();
+        for (i, name) in names.iter().enumerate() {
+            let part = format!("{i}/{n}");
+            run(&dir, &["photons", scene, "--part", &part, "--save", name]);
+        }
+        names.reverse();
+        let mut args = vec!["photons", scene, "--merge"];
+        args.extend(names.iter().map(String::as_str));
+        args.extend(["--save", "merged.bin"]);
+        run(&dir, &args);
+        let merged = std::fs::read(dir.join("merged.bin")).unwrap();
+        assert!(merged == whole, "{n} parts merge into another file");
+    }
+    run(&dir, &["render", scene, "-o", "traced.exr"]);
+    let from = ["--photon-maps", "merged.bin", "-o", "merged.exr"];
+    run(&dir, &[&["render", scene][..], &from].concat());
+    let traced = std::fs::read(dir.join("traced.exr")).unwrap();
+    assert!(std::fs::read(dir.join("merged.exr")).unwrap() == traced);
+}
+
+/// A merge refuses, naming the part file: a part missing, a part given twice, a part traced
+/// with another seed, a part of another split, a maps file given as a part, and a part whose
+/// photon was forged (its power made NaN); a part index out of range is a usage error.
+#[test]
+fn a_merge_of_parts_that_are_not_one_pass_is_refused() {
+    let dir = out_dir("photon-parts-refused");
+    let scene = scene_in(&dir);
+    let scene = scene.to_str().unwrap();
+    for i in 0..3 {
+        let (part, name) = (format!("{i}/3"), format!("p{i}.bin"));
+        run(&dir, &["photons", scene, "--part", &part, "--save", &name]);
+    }
+    let other = ["--seed", "5", "--part", "0/3", "--save", "seed5.bin"];
+    run(&dir, &[&["photons", scene][..], &other].concat());
+    run(
+        &dir,
+        &["photons", scene, "--part", "0/2", "--save", "half.bin"],
+    );
+    run(&dir, &["photons", scene, "--save", "whole.bin"]);
+    // Four bytes in the middle of the photons made a NaN: a position, code word or power that
+    // cannot be, found whichever field they fall in (the checksum fails only after it).
+    let mut forged = std::fs::read(dir.join("p1.bin")).unwrap();
+    let at = forged.len() / 2;
+    forged[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    std::fs::write(dir.join("forged.bin"), forged).unwrap();
+    let merge = |parts: &[&str]| {
+        let mut args = vec!["photons", scene, "--merge"];
+        args.extend(parts);
+        args.extend(["--save", "out.bin"]);
+        fails(&dir, &args)
+    };
+    let e = merge(&["p0.bin", "p1.bin"]);
+    assert!(
+        e.contains("p0.bin") && e.contains("2 parts were given"),
+        "{e}"
+    );
+    let e = merge(&["p0.bin", "p1.bin", "p1.bin"]);
+    assert!(e.contains("p1.bin") && e.contains("given twice"), "{e}");
+    let e = merge(&["seed5.bin", "p1.bin", "p2.bin"]);
+    assert!(
+        e.contains("seed5.bin") && e.contains("other settings"),
+        "{e}"
+    );
+    let e = merge(&["half.bin", "p1.bin", "p2.bin"]);
+    assert!(e.contains("half.bin") && e.contains("part 0/2"), "{e}");
+    let e = merge(&["whole.bin"]);
+    assert!(
+        e.contains("whole.bin") && e.contains("not a caustic photon-pass part"),
+        "{e}"
+    );
+    let e = merge(&["p0.bin", "forged.bin", "p2.bin"]);
+    assert!(e.contains("forged.bin"), "{e}");
+    let e = fails(
+        &dir,
+        &["photons", scene, "--part", "3/3", "--save", "x.bin"],
+    );
+    assert!(e.contains("--part"), "{e}");
+    assert!(!dir.join("out.bin").exists());
+}

@@ -141,21 +141,14 @@ impl Fnv {
 pub fn write(path: &Path, maps: &SavedMaps) -> std::io::Result<()> {
     crate::files::write_replacing_io(path, |file| {
         let mut w = CrcWriter::new(BufWriter::with_capacity(1 << 20, file));
-        w.write_all(MAGIC)?;
-        w.write_all(&VERSION.to_le_bytes())?;
-        w.write_all(&maps.fingerprint.scene.to_le_bytes())?;
-        let text = maps.fingerprint.settings.as_bytes();
-        w.write_all(&(text.len() as u32).to_le_bytes())?;
-        w.write_all(text)?;
+        write_header(&mut w, &MAPS, &maps.fingerprint)?;
         let count = 1 + u8::from(maps.caustic.is_some());
         w.write_all(&[count])?;
         for m in std::iter::once(&maps.global).chain(&maps.caustic) {
             write_map(&mut w, m)?;
         }
         write_cache(&mut w, maps.cache.as_ref())?;
-        let crc = w.crc();
-        w.inner.write_all(&crc.to_le_bytes())?;
-        w.inner.flush()
+        write_checksum(&mut w)
     })
 }
 
@@ -263,23 +256,70 @@ fn check_record(r: &Record) -> Result<(), String> {
     Ok(())
 }
 
-/// Reads the maps saved at `path`; the error says what is wrong with the file (not what it
-/// was traced for: compare [`SavedMaps::fingerprint`] for that).
-pub fn read(path: &Path) -> Result<SavedMaps, String> {
+/// What kind of file a header opens: its magic and version, its name in messages, the
+/// command that writes it and what to do when its version is another.
+pub(super) struct Kind {
+    pub magic: &'static [u8; 8],
+    pub version: u32,
+    pub name: &'static str,
+    pub writer: &'static str,
+    pub again: &'static str,
+}
+
+/// The photon-map file's kind.
+const MAPS: Kind = Kind {
+    magic: MAGIC,
+    version: VERSION,
+    name: "photon-map file",
+    writer: "caustic photons --save",
+    again: "save the maps again",
+};
+
+/// Opens `path` as a regular file; returns a checksumming reader over it and its size.
+pub(super) fn open(path: &Path) -> Result<(CrcReader<BufReader<std::fs::File>>, u64), String> {
     crate::files::check_regular(path).map_err(|e| e.to_string())?;
     let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let size = file.metadata().map_err(|e| e.to_string())?.len();
-    let mut r = CrcReader::new(BufReader::with_capacity(1 << 20, file));
+    Ok((
+        CrcReader::new(BufReader::with_capacity(1 << 20, file)),
+        size,
+    ))
+}
+
+/// Writes the header of a file of `kind`: magic, version, the fingerprint (scene hash, then
+/// the settings text with its length first).
+pub(super) fn write_header<W: Write>(
+    w: &mut W,
+    kind: &Kind,
+    f: &Fingerprint,
+) -> std::io::Result<()> {
+    w.write_all(kind.magic)?;
+    w.write_all(&kind.version.to_le_bytes())?;
+    w.write_all(&f.scene.to_le_bytes())?;
+    let text = f.settings.as_bytes();
+    w.write_all(&(text.len() as u32).to_le_bytes())?;
+    w.write_all(text)
+}
+
+/// Reads the header [`write_header`] writes for `kind`, or says why the file is not one.
+pub(super) fn read_header<R: Read>(
+    r: &mut CrcReader<R>,
+    kind: &Kind,
+) -> Result<Fingerprint, String> {
     let mut magic = [0; 8];
     r.bytes(&mut magic, "the header")
-        .map_err(|_| "not a caustic photon-map file (too short)".to_string())?;
-    if &magic != MAGIC {
-        return Err("not a caustic photon-map file (caustic photons --save writes them)".into());
+        .map_err(|_| format!("not a caustic {} (too short)", kind.name))?;
+    if &magic != kind.magic {
+        return Err(format!(
+            "not a caustic {} ({} writes them)",
+            kind.name, kind.writer
+        ));
     }
     let version = r.u32("the header")?;
-    if version != VERSION {
+    if version != kind.version {
         return Err(format!(
-            "format version {version}; this caustic reads version {VERSION}: save the maps again"
+            "format version {version}; this caustic reads version {}: {}",
+            kind.version, kind.again
         ));
     }
     let scene = r.u64("the header")?;
@@ -293,6 +333,38 @@ pub fn read(path: &Path) -> Result<SavedMaps, String> {
     r.bytes(&mut text, "the settings text")?;
     let settings =
         String::from_utf8(text).map_err(|_| "the settings text is not UTF-8".to_string())?;
+    Ok(Fingerprint { scene, settings })
+}
+
+/// Writes the CRC-32 of everything `w` has written, and flushes.
+pub(super) fn write_checksum<W: Write>(w: &mut CrcWriter<W>) -> std::io::Result<()> {
+    let crc = w.crc();
+    w.inner.write_all(&crc.to_le_bytes())?;
+    w.inner.flush()
+}
+
+/// Reads the CRC-32 that ends a file and compares it with what `r` has read; refuses a file
+/// whose checksum differs or that goes on after it.
+pub(super) fn read_checksum<R: Read>(r: &mut CrcReader<R>) -> Result<(), String> {
+    let want = r.crc();
+    let mut b = [0; 4];
+    r.inner
+        .read_exact(&mut b)
+        .map_err(|_| "the file ends before its checksum".to_string())?;
+    if u32::from_le_bytes(b) != want {
+        return Err("the checksum does not match: the file is damaged".into());
+    }
+    if r.inner.read(&mut b).map_err(|e| e.to_string())? != 0 {
+        return Err("bytes follow the checksum".into());
+    }
+    Ok(())
+}
+
+/// Reads the maps saved at `path`; the error says what is wrong with the file (not what it
+/// was traced for: compare [`SavedMaps::fingerprint`] for that).
+pub fn read(path: &Path) -> Result<SavedMaps, String> {
+    let (mut r, size) = open(path)?;
+    let fingerprint = read_header(&mut r, &MAPS)?;
     let mut count = [0];
     r.bytes(&mut count, "the header")?;
     if !(1..=2).contains(&count[0]) {
@@ -313,17 +385,7 @@ pub fn read(path: &Path) -> Result<SavedMaps, String> {
         }
     }
     let cache = read_cache(&mut r, size)?;
-    let want = r.crc();
-    let mut b = [0; 4];
-    r.inner
-        .read_exact(&mut b)
-        .map_err(|_| "the file ends before its checksum".to_string())?;
-    if u32::from_le_bytes(b) != want {
-        return Err("the checksum does not match: the file is damaged".into());
-    }
-    if r.inner.read(&mut b).map_err(|e| e.to_string())? != 0 {
-        return Err("bytes follow the checksum".into());
-    }
+    read_checksum(&mut r)?;
     // A file whose checksum holds may still have been made by hand: a map that breaks the
     // tree's invariants would answer queries wrongly, so it is refused.
     for (m, what) in [
@@ -335,7 +397,7 @@ pub fn read(path: &Path) -> Result<SavedMaps, String> {
         }
     }
     Ok(SavedMaps {
-        fingerprint: Fingerprint { scene, settings },
+        fingerprint,
         global,
         caustic,
         cache,

@@ -50,6 +50,7 @@
 //! | 1 | irradiance cache: 0 (none) or 1, then its accuracy (f32), record count (8) and per record position, normal, irradiance, the three gradients and the radius (19 f32) |
 //! | 4 | CRC-32 (IEEE) of everything before it |
 mod format;
+pub mod parts;
 
 pub use format::{Fnv, MAX_RECORD_VALUE, MAX_TEXT, VERSION, read, write};
 
@@ -128,6 +129,11 @@ pub fn save(
     let fingerprint = fingerprint(frame, &gi)?;
     let camera = Camera::new(&frame.render.camera, frame.size.0, frame.size.1);
     let prepass = super::photon_map::prepass(frame.scene, &camera, &gi, None, progress);
+    Ok(saved(fingerprint, &gi, prepass))
+}
+
+/// Returns `prepass`, made with `gi`, as a file holds it (with `fingerprint`), and its counters.
+fn saved(fingerprint: Fingerprint, gi: &GiSettings, prepass: Prepass) -> (SavedMaps, GiStats) {
     let stats = prepass.stats.clone();
     let maps = SavedMaps {
         fingerprint,
@@ -143,7 +149,7 @@ pub fn save(
         }),
         cache: prepass.cache,
     };
-    Ok((maps, stats))
+    (maps, stats)
 }
 
 /// Reads the photon maps at `path` for `frame` with `photons` and returns them as the frame's

@@ -29,6 +29,8 @@ pub enum Command {
     Info(InfoArgs),
     /// Assemble tiles rendered with --crop into the full image.
     Stitch(StitchArgs),
+    /// Add up progressive passes rendered apart (--first-pass, --save-passes) into their mean.
+    Merge(MergeArgs),
     /// Trace a scene's photons and draw them from its camera (global: dots; caustic: crosses).
     Photons(PhotonsArgs),
     /// Write a scene as a Mitsuba 3 XML scene (spheres, cubes, meshes; diffuse, mirror and
@@ -196,6 +198,15 @@ pub struct RenderArgs {
     /// Progressive: write the running image to the output every K passes.
     #[arg(long, value_name = "K")]
     pub write_every: Option<u32>,
+    /// Progressive: run passes P to P + N - 1 of the render (N from --passes), with the seeds
+    /// and radii those passes have in one process running them all, so that passes run on
+    /// many machines merge (caustic merge) into the render of all of them [default: 0].
+    #[arg(long, value_name = "P")]
+    pub first_pass: Option<u32>,
+    /// Progressive: also write the passes' sums, with their pass range and the render's
+    /// fingerprint, to FILE, for caustic merge.
+    #[arg(long, value_name = "FILE")]
+    pub save_passes: Option<PathBuf>,
     /// Simulate EFFECT whatever the plan decides: photon-maps, caustics, final-gathering,
     /// refraction, soft-shadows, textures, normal-maps or noise (repeatable; `caustic info`
     /// and --stats print the plan and its reasons).
@@ -418,6 +429,20 @@ pub struct StitchArgs {
     /// The full image to write: .png from PNG tiles; .exr, .pfm or .hdr from EXR tiles.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// Pass files written by `caustic render --integrator progressive --save-passes`, of one
+    /// render, whose pass ranges follow one another from pass 0, in any order.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// The image of all the passes' mean (.exr, .pfm or .hdr keep the floats; .png clamps).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Also write the merged passes' sums to FILE, to merge with more passes later.
+    #[arg(long, value_name = "FILE")]
+    pub save_passes: Option<PathBuf>,
 }
 
 /// Parses `x0,y0,x1,y1`.

@@ -63,6 +63,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render_command(args),
         Command::Info(args) => info_command(args),
+        Command::Merge(args) => merge_command(args),
         Command::Stitch(args) => {
             let tiles: Vec<&std::path::Path> = args.tiles.iter().map(PathBuf::as_path).collect();
             check_out(&args.output, &tiles)?;
@@ -268,6 +269,7 @@ fn check_render_outputs(
     for path in [
         Some(out),
         job.aa_map.as_deref(),
+        job.save_passes.as_deref(),
         heat.as_deref(),
         Some(&partial),
     ] {
@@ -318,6 +320,13 @@ fn render_one(
         );
     }
     write_image(&frame.film, out, job.tonemap)?;
+    if let (Some(path), Some(p)) = (&job.save_passes, &frame.stats.progressive) {
+        let saved = crate::integrator::passes_file::SavedPasses {
+            fingerprint: passes_fingerprint(desc, r, job)?,
+            sums: p.sums.clone(),
+        };
+        write_passes(path, &saved)?;
+    }
     if let Some(map) = &job.aa_map {
         write_sample_map(&frame.film, map)?;
     }
@@ -350,6 +359,88 @@ fn render_one(
     if job.stats {
         report::print_stats(&frame, r, out, traversal.as_ref());
     }
+    Ok(())
+}
+
+/// Returns the fingerprint of a progressive render of `r` with `job`, as its pass files carry
+/// it: the scene's hash, and the settings that shape its passes, without the range of passes
+/// and the rules that stop them (which differ between the parts of one render).
+fn passes_fingerprint(
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    job: &RenderJob,
+) -> Result<crate::integrator::maps_file::Fingerprint> {
+    let mut s = job.settings.clone();
+    if let Some(p) = s.progressive.as_mut() {
+        (p.passes, p.first_pass, p.snapshot_every) = (0, 0, None);
+        (p.target_error, p.time_budget) = (None, None);
+    }
+    (s.timing, s.heatmap, s.maps_file) = (false, false, None);
+    Ok(crate::integrator::maps_file::Fingerprint {
+        scene: crate::integrator::maps_file::scene_hash(desc, r)?,
+        settings: format!(
+            "caustic {}; scale {}; {s:?}",
+            env!("CARGO_PKG_VERSION"),
+            job.scale
+        ),
+    })
+}
+
+/// Writes the pass file `saved` to `path`.
+fn write_passes(
+    path: &std::path::Path,
+    saved: &crate::integrator::passes_file::SavedPasses,
+) -> Result<()> {
+    crate::integrator::passes_file::write(path, saved).map_err(|e| Error::File {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
+}
+
+/// Runs `caustic merge`: adds up the pass files and writes their mean (and, with
+/// `--save-passes`, their sums), saying how many passes and the estimated error.
+fn merge_command(args: MergeArgs) -> Result<()> {
+    let inputs: Vec<&std::path::Path> = args.parts.iter().map(PathBuf::as_path).collect();
+    crate::io::image::output_format(&args.output)?;
+    check_out(&args.output, &inputs)?;
+    if let Some(p) = &args.save_passes {
+        check_out(p, &inputs)?;
+    }
+    if args.parts.len() > crate::integrator::progressive::MAX_PASSES as usize {
+        return Err(Error::Usage(
+            "caustic merge: more files than passes a render has".into(),
+        ));
+    }
+    let parts = args
+        .parts
+        .iter()
+        .map(|p| {
+            let saved = crate::integrator::passes_file::read(p).map_err(|message| Error::File {
+                path: p.clone(),
+                message,
+            })?;
+            Ok((p.clone(), saved))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let fingerprint = parts[0].1.fingerprint.clone();
+    let sums = crate::integrator::passes_file::merge(parts)?;
+    write_image(&sums.mean(), &args.output, Tonemap::Clamp)?;
+    if let Some(p) = &args.save_passes {
+        let saved = crate::integrator::passes_file::SavedPasses {
+            fingerprint,
+            sums: sums.clone(),
+        };
+        write_passes(p, &saved)?;
+    }
+    let error = sums
+        .estimated_error()
+        .map_or("none".to_string(), |e| format!("{e:.4}"));
+    eprintln!(
+        "wrote {} (the mean of passes 0 to {} from {} files); estimated relative RMSE {error}",
+        args.output.display(),
+        sums.passes - 1,
+        args.parts.len()
+    );
     Ok(())
 }
 

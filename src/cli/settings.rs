@@ -53,6 +53,8 @@ pub struct RenderJob {
     pub tonemap: Tonemap,
     /// Where to write the camera-ray count image.
     pub aa_map: Option<PathBuf>,
+    /// Where to write a progressive render's pass sums (`--save-passes`).
+    pub save_passes: Option<PathBuf>,
     /// What `--heatmap` shows.
     pub heatmap: Option<Measure>,
     /// Print counters and timings.
@@ -104,6 +106,7 @@ impl RenderJob {
             crop: a.crop,
             tonemap,
             aa_map: a.aa_map.clone(),
+            save_passes: a.save_passes.clone(),
             heatmap: a.heatmap.map(|h| match h {
                 HeatArg::Nodes => Measure::Nodes,
                 HeatArg::Triangles => Measure::Triangles,
@@ -231,6 +234,8 @@ fn progressive_settings(a: &RenderArgs) -> Result<Option<ProgressiveSettings>> {
             ("--target-error", a.target_error.is_some()),
             ("--time-budget", a.time_budget.is_some()),
             ("--write-every", a.write_every.is_some()),
+            ("--first-pass", a.first_pass.is_some()),
+            ("--save-passes", a.save_passes.is_some()),
         ];
         if let Some((flag, _)) = given.iter().find(|g| g.1) {
             return usage(format!("{flag} needs --integrator progressive"));
@@ -281,6 +286,12 @@ fn progressive_settings(a: &RenderArgs) -> Result<Option<ProgressiveSettings>> {
     if a.write_every == Some(0) {
         return usage("--write-every must be at least 1".into());
     }
+    let first_pass = a.first_pass.unwrap_or(0);
+    if first_pass.saturating_add(passes) > MAX_PASSES {
+        return usage(format!(
+            "--first-pass {first_pass} with --passes {passes} runs passes beyond {MAX_PASSES}"
+        ));
+    }
     Ok(Some(ProgressiveSettings {
         passes,
         alpha: a.alpha,
@@ -288,5 +299,6 @@ fn progressive_settings(a: &RenderArgs) -> Result<Option<ProgressiveSettings>> {
         target_error: a.target_error,
         time_budget: a.time_budget.map(std::time::Duration::from_secs_f64),
         snapshot_every: a.write_every,
+        first_pass,
     }))
 }

@@ -94,6 +94,11 @@ pub struct ProgressiveSettings {
     pub time_budget: Option<Duration>,
     /// Report the running image to [`Progress::snapshot`] every this many passes.
     pub snapshot_every: Option<u32>,
+    /// The index of the first pass to run (`--first-pass`): a render farm runs passes `P` to
+    /// `P + passes - 1` in one process and others elsewhere, and `caustic merge` adds them up
+    /// ([`super::passes_file`]). Each pass's streams and radius are those pass `i` has in one
+    /// process running them all.
+    pub first_pass: u32,
 }
 
 impl Default for ProgressiveSettings {
@@ -105,6 +110,7 @@ impl Default for ProgressiveSettings {
             target_error: None,
             time_budget: None,
             snapshot_every: None,
+            first_pass: 0,
         }
     }
 }
@@ -135,6 +141,8 @@ pub struct ProgressiveStats {
     pub first_radii: (f32, f32),
     pub last_radii: (f32, f32),
     pub time: Duration,
+    /// The sums the film is the mean of, for a pass file ([`super::passes_file`]).
+    pub sums: Accumulator,
 }
 
 /// Renders `view` progressively: passes of photon tracing, map building and a camera pass with
@@ -149,16 +157,19 @@ pub fn render(
     let View { scene, window, .. } = view;
     let prog = settings.progressive.clone().unwrap_or_default();
     let start = Instant::now();
-    let mut acc = Accumulator::new(window);
+    let mut acc = Accumulator::starting_at(window, prog.first_pass);
     let (mut render_stats, mut photon_stats) = (RenderStats::default(), GiStats::default());
     let (mut first_radii, mut radii) = ((0.0, 0.0), (0.0, 0.0));
+    if prog.first_pass > 0 {
+        (first_radii, radii) = radii_at(scene, settings, &plan, &prog);
+    }
     progress.start("progressive passes", prog.passes as u64);
     // A pass's phases report nothing (progress counts passes) but stop when asked.
     let inner = StopOnly(progress);
     // The first pass's rows, when the render is stopped before it ends.
     let mut first_rows = None;
     let stop = loop {
-        let pass = acc.passes;
+        let pass = prog.first_pass + acc.passes;
         let gi_settings = GiSettings {
             seed: pass_seed(settings.photons.seed, pass),
             precompute: false,
@@ -203,7 +214,7 @@ pub fn render(
         if progress.should_stop() {
             break Stop::Interrupted;
         }
-        radii = shrink(radii, acc.passes, prog.alpha);
+        radii = shrink(radii, pass + 1, prog.alpha);
     };
     render_stats.time = start.elapsed();
     let progressive = ProgressiveStats {
@@ -213,6 +224,7 @@ pub fn render(
         first_radii,
         last_radii: radii,
         time: start.elapsed(),
+        sums: Accumulator::starting_at(window, prog.first_pass),
     };
     let interrupted = match (&first_rows, stop) {
         (Some(_), _) => Partial::of_rows(&render_stats, window.size().1),
@@ -229,7 +241,12 @@ pub fn render(
         progressive: Some(progressive),
         interrupted,
     };
-    (first_rows.unwrap_or_else(|| acc.mean()), stats)
+    let film = first_rows.unwrap_or_else(|| acc.mean());
+    let mut stats = stats;
+    if let Some(p) = stats.progressive.as_mut() {
+        p.sums = acc;
+    }
+    (film, stats)
 }
 
 /// Returns the seed of pass `pass`'s streams under `seed`.
@@ -314,6 +331,33 @@ fn should_stop(prog: &ProgressiveSettings, acc: &Accumulator, elapsed: Duration)
     None
 }
 
+/// Returns the radii of the first pass and of pass `prog.first_pass` of a render of `scene`
+/// with `settings` as `plan` says: the first pass's from its photon maps (traced again here,
+/// without a camera pass) unless `--radius` sets them, then shrunk pass by pass as one process
+/// running every pass shrinks them.
+fn radii_at(
+    scene: &Scene,
+    settings: &Settings,
+    plan: &Plan,
+    prog: &ProgressiveSettings,
+) -> ((f32, f32), (f32, f32)) {
+    let first = if prog.initial_radius.is_some() {
+        let extent = scene.extent().max(f32::MIN_POSITIVE);
+        let f = prog.initial_radius.unwrap_or(0.0);
+        (f * extent, 0.5 * f * extent)
+    } else {
+        let gi_settings = GiSettings {
+            seed: pass_seed(settings.photons.seed, 0),
+            precompute: false,
+            ..super::photon_map::planned(&settings.photons, plan)
+        };
+        let gi = Prepass::build(scene, &gi_settings);
+        first_pass_radii(scene, &gi, prog)
+    };
+    let radii = (1..=prog.first_pass).fold(first, |r, passes| shrink(r, passes, prog.alpha));
+    (first, radii)
+}
+
 /// Adds one pass's photon counters and times to the render's.
 fn add_photon_stats(total: &mut GiStats, pass: &GiStats) {
     let add = |t: &mut Vec<_>, p: &[crate::photon::trace::LightCounts]| {
@@ -335,23 +379,35 @@ fn add_photon_stats(total: &mut GiStats, pass: &GiStats) {
 }
 
 /// The running sums of a progressive render: all passes, and the even and the odd ones apart.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Accumulator {
-    window: Window,
+    pub window: Window,
+    /// The index of the first pass added (the parity of a pass's index decides its half).
+    pub first: u32,
     pub passes: u32,
-    sum: Vec<Vec3A>,
-    even: Vec<Vec3A>,
-    odd: Vec<Vec3A>,
-    samples: Vec<u32>,
+    /// Of those, the passes of even index.
+    pub even_passes: u32,
+    pub sum: Vec<Vec3A>,
+    pub even: Vec<Vec3A>,
+    pub odd: Vec<Vec3A>,
+    pub samples: Vec<u32>,
 }
 
 impl Accumulator {
     /// Returns empty sums for `window`.
     pub fn new(window: Window) -> Accumulator {
+        Accumulator::starting_at(window, 0)
+    }
+
+    /// Returns empty sums for `window` whose first pass will be pass `first`.
+    pub fn starting_at(window: Window, first: u32) -> Accumulator {
         let (w, h) = window.size();
         let n = w as usize * h as usize;
         Accumulator {
             window,
+            first,
             passes: 0,
+            even_passes: 0,
             sum: vec![Vec3A::ZERO; n],
             even: vec![Vec3A::ZERO; n],
             odd: vec![Vec3A::ZERO; n],
@@ -361,11 +417,9 @@ impl Accumulator {
 
     /// Adds one pass's film (of this window).
     pub fn add(&mut self, film: &Film) {
-        let half = if self.passes.is_multiple_of(2) {
-            &mut self.even
-        } else {
-            &mut self.odd
-        };
+        let even = (self.first + self.passes).is_multiple_of(2);
+        self.even_passes += u32::from(even);
+        let half = if even { &mut self.even } else { &mut self.odd };
         for (i, &p) in film.pixels.iter().enumerate() {
             self.sum[i] += p;
             half[i] += p;
@@ -374,6 +428,26 @@ impl Accumulator {
             *s = s.saturating_add(n);
         }
         self.passes += 1;
+    }
+
+    /// Adds the passes of `other` (of the same window), whatever their indices: their sums,
+    /// halves and samples.
+    pub fn merge(&mut self, other: &Accumulator) {
+        debug_assert_eq!(self.window, other.window);
+        for (a, b) in [
+            (&mut self.sum, &other.sum),
+            (&mut self.even, &other.even),
+            (&mut self.odd, &other.odd),
+        ] {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += *y;
+            }
+        }
+        for (s, &n) in self.samples.iter_mut().zip(&other.samples) {
+            *s = s.saturating_add(n);
+        }
+        self.passes += other.passes;
+        self.even_passes += other.even_passes;
     }
 
     /// Returns the mean of the passes so far as a film (black before the first).
@@ -395,9 +469,9 @@ impl Accumulator {
     /// over the mean's mean. `None` before two passes or when the image is black.
     pub fn estimated_error(&self) -> Option<f64> {
         let n = self.passes as f64;
-        let a = self.passes.div_ceil(2) as f64;
-        let b = (self.passes / 2) as f64;
-        if b == 0.0 || self.sum.is_empty() {
+        let a = self.even_passes as f64;
+        let b = (self.passes - self.even_passes) as f64;
+        if a == 0.0 || b == 0.0 || self.sum.is_empty() {
             return None;
         }
         let (mut d2, mut total) = (0.0f64, 0.0f64);

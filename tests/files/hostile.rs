@@ -742,6 +742,63 @@ proptest! {
         // The photons as blocks of 1.75 MiB, the reader's buffers (1 MiB and 1.75 MiB).
         prop_assert!(most <= 4 * bytes.len() + (8 << 20), "{most} bytes allocated for {}", bytes.len());
     }
+
+    /// A progressive pass file (`caustic render --save-passes`) with edits and its checksum
+    /// recomputed is read or refused, never a panic, and reading it allocates a few times its
+    /// size at most: the window's size is bounded by the file's first.
+    #[test]
+    fn fuzz_progressive_pass_files_with_a_valid_checksum(edits in prop::collection::vec(map_edit(), 1..6)) {
+        static VALID: std::sync::OnceLock<(PathBuf, Vec<u8>)> = std::sync::OnceLock::new();
+        let (dir, valid) = VALID.get_or_init(|| {
+            let dir = out_dir("hostile_files_fuzz_passes");
+            caustic::integrator::passes_file::write(&dir.join("a.pass"), &small_passes()).unwrap();
+            let valid = std::fs::read(dir.join("a.pass")).unwrap();
+            (dir, valid)
+        });
+        let path = dir.join("forged.pass");
+        let bytes = forge(valid, &edits);
+        std::fs::write(&path, &bytes).unwrap();
+        let (read, most) = largest_allocation(|| caustic::integrator::passes_file::read(&path));
+        if let Ok(p) = read {
+            prop_assert!(p.sums.sum.len() as u64 * 40 <= bytes.len() as u64);
+        }
+        prop_assert!(most <= 4 * bytes.len() + (2 << 20), "{most} bytes allocated for {}", bytes.len());
+    }
+}
+
+/// The sums of passes 3 to 6 of a 12x9 window of a 20x10 image, as `caustic render
+/// --save-passes` saves them.
+fn small_passes() -> caustic::integrator::passes_file::SavedPasses {
+    use caustic::film::{Film, Window};
+    use caustic::integrator::progressive::Accumulator;
+    let window = Window {
+        x0: 4,
+        y0: 1,
+        x1: 16,
+        y1: 10,
+        full_width: 20,
+        full_height: 10,
+    };
+    let mut sums = Accumulator::starting_at(window, 3);
+    for pass in 0..4 {
+        let pixels = (0..12 * 9)
+            .map(|i| Vec3A::splat((i + pass) as f32 * 0.01))
+            .collect();
+        sums.add(&Film {
+            width: 12,
+            height: 9,
+            pixels,
+            samples: vec![1; 12 * 9],
+            window,
+        });
+    }
+    caustic::integrator::passes_file::SavedPasses {
+        fingerprint: caustic::integrator::maps_file::Fingerprint {
+            scene: 3,
+            settings: "seed 0".into(),
+        },
+        sums,
+    }
 }
 
 /// A part of a photon pass of `n` photons of one light, both maps, as `caustic photons --part`

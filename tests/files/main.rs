@@ -1,6 +1,7 @@
 //! Files and output: what caustic reads and writes. Parts: `image_formats` and `mesh_formats`
 //! (formats in and out), `input_quirks` (what real tools write, and numeric ranges),
-//! `photon_map_files` (saved photon maps), `mitsuba_export`, `stitch_tiles` (crafted tiles),
+//! `photon_map_files` (saved photon maps, and a photon pass in parts), `progressive_parts`
+//! (progressive passes rendered apart and merged), `mitsuba_export`, `stitch_tiles` (crafted tiles),
 //! `filesystem` (symlinks, permissions, special files, a process killed while writing),
 //! `hostile` (files that cannot be turned against the user) and `loader_fuzz` (the loaders'
 //! byte mutations; `tools/fuzz.sh` runs its properties and `hostile`'s `fuzz_` ones).
@@ -22,4 +23,5 @@ mod loader_fuzz;
 mod mesh_formats;
 mod mitsuba_export;
 mod photon_map_files;
+mod progressive_parts;
 mod stitch_tiles;

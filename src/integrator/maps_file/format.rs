@@ -258,7 +258,7 @@ fn check_record(r: &Record) -> Result<(), String> {
 
 /// What kind of file a header opens: its magic and version, its name in messages, the
 /// command that writes it and what to do when its version is another.
-pub(super) struct Kind {
+pub(crate) struct Kind {
     pub magic: &'static [u8; 8],
     pub version: u32,
     pub name: &'static str,
@@ -276,7 +276,7 @@ const MAPS: Kind = Kind {
 };
 
 /// Opens `path` as a regular file; returns a checksumming reader over it and its size.
-pub(super) fn open(path: &Path) -> Result<(CrcReader<BufReader<std::fs::File>>, u64), String> {
+pub(crate) fn open(path: &Path) -> Result<(CrcReader<BufReader<std::fs::File>>, u64), String> {
     crate::files::check_regular(path).map_err(|e| e.to_string())?;
     let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let size = file.metadata().map_err(|e| e.to_string())?.len();
@@ -288,7 +288,7 @@ pub(super) fn open(path: &Path) -> Result<(CrcReader<BufReader<std::fs::File>>, 
 
 /// Writes the header of a file of `kind`: magic, version, the fingerprint (scene hash, then
 /// the settings text with its length first).
-pub(super) fn write_header<W: Write>(
+pub(crate) fn write_header<W: Write>(
     w: &mut W,
     kind: &Kind,
     f: &Fingerprint,
@@ -302,7 +302,7 @@ pub(super) fn write_header<W: Write>(
 }
 
 /// Reads the header [`write_header`] writes for `kind`, or says why the file is not one.
-pub(super) fn read_header<R: Read>(
+pub(crate) fn read_header<R: Read>(
     r: &mut CrcReader<R>,
     kind: &Kind,
 ) -> Result<Fingerprint, String> {
@@ -337,7 +337,7 @@ pub(super) fn read_header<R: Read>(
 }
 
 /// Writes the CRC-32 of everything `w` has written, and flushes.
-pub(super) fn write_checksum<W: Write>(w: &mut CrcWriter<W>) -> std::io::Result<()> {
+pub(crate) fn write_checksum<W: Write>(w: &mut CrcWriter<W>) -> std::io::Result<()> {
     let crc = w.crc();
     w.inner.write_all(&crc.to_le_bytes())?;
     w.inner.flush()
@@ -345,7 +345,7 @@ pub(super) fn write_checksum<W: Write>(w: &mut CrcWriter<W>) -> std::io::Result<
 
 /// Reads the CRC-32 that ends a file and compares it with what `r` has read; refuses a file
 /// whose checksum differs or that goes on after it.
-pub(super) fn read_checksum<R: Read>(r: &mut CrcReader<R>) -> Result<(), String> {
+pub(crate) fn read_checksum<R: Read>(r: &mut CrcReader<R>) -> Result<(), String> {
     let want = r.crc();
     let mut b = [0; 4];
     r.inner

@@ -49,7 +49,7 @@
 //! | per map | light count (4), then per light emitted, stored, first-hit-specular (8 each); photon count (8, at most `u32::MAX`); top nodes (8); power base exponent (4); positions (12 per photon); codes (4 per photon); powers (4 per photon) |
 //! | 1 | irradiance cache: 0 (none) or 1, then its accuracy (f32), record count (8) and per record position, normal, irradiance, the three gradients and the radius (19 f32) |
 //! | 4 | CRC-32 (IEEE) of everything before it |
-mod format;
+pub(crate) mod format;
 pub mod parts;
 
 pub use format::{Fnv, MAX_RECORD_VALUE, MAX_TEXT, VERSION, read, write};
@@ -205,10 +205,11 @@ fn settings_of(plan: &Plan, photons: &GiSettings, flag: &str) -> Result<GiSettin
     Ok(planned(photons, plan))
 }
 
-/// Returns the fingerprint of the maps that `gi` traces for `frame`, and of the irradiance
-/// cache it makes (see the module doc).
-fn fingerprint(frame: FrameOf, gi: &GiSettings) -> Result<Fingerprint> {
-    let (desc, r) = (frame.desc, frame.render);
+/// Returns the hash of the scene of the `gr.render` call `r` as the photons see it: the
+/// script's nodes, materials, lights and meshes with their script lines, the render's root,
+/// camera and lights, and the bytes of every mesh, texture and normal-map file they name (see
+/// the module doc). Progressive pass files carry it too ([`super::passes_file`]).
+pub fn scene_hash(desc: &SceneDesc, r: &RenderDesc) -> Result<u64> {
     let mut h = Fnv::default();
     let text = format!(
         "{:?}",
@@ -237,6 +238,13 @@ fn fingerprint(frame: FrameOf, gi: &GiSettings) -> Result<Fingerprint> {
             message: e.to_string(),
         })?;
     }
+    Ok(h.finish())
+}
+
+/// Returns the fingerprint of the maps that `gi` traces for `frame`, and of the irradiance
+/// cache it makes (see the module doc).
+fn fingerprint(frame: FrameOf, gi: &GiSettings) -> Result<Fingerprint> {
+    let scene = scene_hash(frame.desc, frame.render)?;
     let budget = |kind| format!("{:?}", gi.budget(&frame.scene.lights, kind));
     let caustic = if gi.caustics {
         budget(MapKind::Caustic)
@@ -245,7 +253,7 @@ fn fingerprint(frame: FrameOf, gi: &GiSettings) -> Result<Fingerprint> {
     };
     let (width, height) = frame.size;
     Ok(Fingerprint {
-        scene: h.finish(),
+        scene,
         settings: format!(
             "caustic {}; seed {}; global photons per light {}; caustic photons per light \
              {caustic}; image {width}x{height}; k {}; max radius {}; {:?}; {:?}; precomputed points {}; \

@@ -230,9 +230,9 @@ pub fn write_image_noted(
             });
         }
     }
-    if film.window != Window::full(film.width, film.height) {
-        text.push((WINDOW_KEY, window_record(&film.window)));
-    }
+    // Every PNG says where it lies in its image, a whole image too: one band covering the image
+    // is a tile `caustic stitch` takes (a render farm of one node).
+    text.push((WINDOW_KEY, window_record(&film.window)));
     let data = to_rgb8(film, tonemap);
     write_atomically(path, |file| {
         let mut out = BufWriter::new(file);
@@ -267,6 +267,17 @@ pub fn write_rgb8_png(path: &Path, width: u32, height: u32, data: &[u8]) -> Resu
     write_atomically(path, |file| {
         let mut out = BufWriter::new(file);
         encode_png(&mut out, width, height, 3, data, &[])?;
+        out.flush().map_err(|e| e.to_string())
+    })
+}
+
+/// Writes 8-bit RGB `data` of a whole `width × height` render (a stitched image) as PNG, with
+/// the window record every rendered PNG carries ([`WINDOW_KEY`]), replacing `path` atomically.
+pub(super) fn write_render_png(path: &Path, width: u32, height: u32, data: &[u8]) -> Result<()> {
+    let record = window_record(&Window::full(width, height));
+    write_atomically(path, |file| {
+        let mut out = BufWriter::new(file);
+        encode_png(&mut out, width, height, 3, data, &[(WINDOW_KEY, record)])?;
         out.flush().map_err(|e| e.to_string())
     })
 }

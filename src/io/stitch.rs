@@ -18,7 +18,7 @@
 
 use super::image::{
     Format, PARTIAL_KEY, WINDOW_KEY, output_format, parse_window_record, window_record,
-    write_image, write_rgb8_png,
+    write_image, write_render_png,
 };
 use crate::error::{Error, Result};
 use crate::film::{Film, MAX_PIXELS, Window};
@@ -219,7 +219,7 @@ pub fn stitch(tiles: &[PathBuf], out: &Path) -> Result<Stitched> {
         .into_iter()
         .flatten()
         .collect();
-        write_rgb8_png(out, fw, fh, &rgb)?;
+        write_render_png(out, fw, fh, &rgb)?;
     } else {
         let pixels = gather(&tiles, &owners, fw, |p| match p {
             Pixels::Float(v) => v,

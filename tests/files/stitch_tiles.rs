@@ -137,3 +137,37 @@ fn crafted_exr_tiles_are_refused_naming_the_tile() {
     assert_eq!((img.width, img.height), (8, 4));
     assert!(img.pixels.iter().all(|p| p.to_array() == [0.5; 3]));
 }
+
+/// One band covering the whole image (a farm of one node, `--crop 0,0,W,H`) is a tile `caustic
+/// stitch` takes, and stitches into the very file the render wrote; a render's PNG names its
+/// window even when it is the whole image (it had no record, and the stitch refused it).
+#[test]
+fn one_band_covering_the_image_stitches_into_itself() {
+    let dir = out_dir("stitch-one-band");
+    let scene = "
+        s = gr.sphere('s'); s:set_material(gr.material({0.7, 0.5, 0.3}, {0, 0, 0}, 0))
+        gr.render(s, 'x.png', 12, 10, {0, 0, 4}, {0, 0, -1}, {0, 1, 0}, 50, {0.2, 0.2, 0.2},
+                  {gr.light({2, 3, 4}, {1, 1, 1}, {1, 0, 0})})";
+    std::fs::write(dir.join("s.lua"), scene).unwrap();
+    let run = |args: &[&str]| {
+        crate::common::run_ok(crate::common::caustic().current_dir(&dir).args(args));
+    };
+    run(&[
+        "render",
+        "s.lua",
+        "-q",
+        "--crop",
+        "0,0,12,10",
+        "-o",
+        "band.png",
+    ]);
+    run(&["stitch", "band.png", "-o", "whole.png"]);
+    let (band, whole) = (dir.join("band.png"), dir.join("whole.png"));
+    assert!(std::fs::read(band).unwrap() == std::fs::read(whole).unwrap());
+    // A PNG that no render wrote (no window record) is still refused, naming the file.
+    let plain = tile(&dir, "plain.png", 4, 4, None);
+    let e = stitch(std::slice::from_ref(&plain), &dir.join("x.png"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("plain.png") && e.contains("--crop"), "{e}");
+}

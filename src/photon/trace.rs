@@ -33,8 +33,8 @@ use crate::scene::interaction::Needs;
 use glam::Vec3A;
 use std::collections::BTreeMap;
 use std::f32::consts::TAU;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Condvar, Mutex};
 
 /// Most surface interactions a photon path may have: a safety bound only. Paths end by Russian
 /// roulette on the lobe weights long before (a diffuse bounce survives with the albedo), and
@@ -597,6 +597,11 @@ pub fn trace_map_part(
             targets: &targets,
             projection,
         };
+        // A thread more than this many chunks ahead of the stream waits for it: a thread the
+        // system stops for a while (another program, a loaded machine) would otherwise let the
+        // others finish and hold chunk after chunk outside the stream, unbounded.
+        let ahead = 2 * rayon::current_num_threads() as u64 + 2;
+        let caught_up = Condvar::new();
         rayon::broadcast(|_| {
             // The cones a chunk's caustic photons aim through (see `trace_one`).
             let mut cones = Vec::new();
@@ -604,6 +609,14 @@ pub fn trace_map_part(
                 let c = next.fetch_add(1, Ordering::Relaxed);
                 if c >= chunks {
                     break;
+                }
+                {
+                    // The chunk the stream takes next is claimed by a thread that is not
+                    // waiting (it is fewer than `ahead` chunks ahead), so this wait ends.
+                    let mut d = done.lock().unwrap_or_else(|e| e.into_inner());
+                    while c >= d.next + ahead {
+                        d = caught_up.wait(d).unwrap_or_else(|e| e.into_inner());
+                    }
                 }
                 let (mut photons, mut on_specular, mut met) = (Vec::new(), 0, 0);
                 cones.clear();
@@ -621,6 +634,7 @@ pub fn trace_map_part(
                 }
                 let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
                 done.finish(c, photons, (on_specular, met));
+                caught_up.notify_all();
             }
         });
         let done = done.into_inner().unwrap_or_else(|e| e.into_inner());

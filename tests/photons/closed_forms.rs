@@ -763,3 +763,47 @@ fn global_photons_of_a_small_lamp_go_where_the_scene_is() {
         "stored flux {got}, closed form {want}"
     );
 }
+
+/// A tracing thread the system stops while it holds a chunk of photons does not let the others
+/// run ahead without bound: while the first chunk's report sleeps (half a second, the chunk not
+/// yet in the stream), the other thread finishes at most a few chunks (2 × threads + 2, whose
+/// photons wait outside the stream), not the rest of the light's 256 chunks, which take it well
+/// under that half second.
+#[test]
+fn tracing_threads_wait_for_a_stalled_chunk() {
+    use std::sync::atomic::{AtomicU64, Ordering::SeqCst};
+    struct Stall {
+        calls: AtomicU64,
+        during: AtomicU64,
+    }
+    impl caustic::progress::Progress for Stall {
+        fn start(&self, _: &str, _: u64) {}
+        fn advance(&self, _: u64) {
+            if self.calls.fetch_add(1, SeqCst) == 0 {
+                std::thread::sleep(std::time::Duration::from_millis(500));
+                self.during.store(self.calls.load(SeqCst) - 1, SeqCst);
+            }
+        }
+    }
+    let d = run_lua(
+        "s = gr.sphere('s'); s:set_material(gr.material({0.5, 0.5, 0.5}, {0, 0, 0}, 0))
+         gr.render(s, 'x.png', 8, 8, {0, 0, 5}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0},
+                   {gr.light({0, 0, 3}, {1, 1, 1}, {1, 0, 0})})",
+    )
+    .unwrap();
+    let scene = build_scene(&d, &d.renders[0]).unwrap();
+    let stall = Stall {
+        calls: AtomicU64::new(0),
+        during: AtomicU64::new(0),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let traced = pool.install(|| {
+        caustic::photon::trace::trace_map_with(&scene, &[256 * 4096], MapKind::Global, 1, &stall)
+    });
+    assert_eq!(traced.per_light[0].emitted, 256 * 4096);
+    let during = stall.during.load(SeqCst);
+    assert!(during <= 6, "{during} chunks finished while one stalled");
+}

@@ -562,7 +562,6 @@ pub fn trace_map_part(
         out.per_light = vec![LightCounts::default(); scene.lights.len()];
         return out;
     }
-    const CHUNK: u64 = 4096;
     let what = match kind {
         MapKind::Global => "tracing global photons",
         MapKind::Caustic => "tracing caustic photons",
@@ -571,79 +570,96 @@ pub fn trace_map_part(
     let total = (0..scene.lights.len()).map(|l| share(l).end - share(l).start);
     progress.start(what, total.sum());
     for (l, light) in scene.lights.iter().enumerate() {
-        let n = budget.get(l).copied().unwrap_or(0);
-        let mine = share(l);
-        let chunks = (mine.end - mine.start).div_ceil(CHUNK);
-        let projection = projections[l].as_ref();
-        // Every thread claims the next chunk in turn, and whoever finishes the chunk next in
-        // order appends it and any finished after it: the stream takes the chunks in order,
-        // and only the few chunks in flight wait outside it (see `crate::photon::stream`).
-        let next = AtomicU64::new(0);
-        let done = Mutex::new(InOrder {
-            next: 0,
-            waiting: BTreeMap::new(),
-            counts: LightCounts {
-                emitted: mine.end - mine.start,
-                kept_ppm: projection.map_or(0, |p| (p.fraction() * 1e6).round() as u32),
-                ..LightCounts::default()
-            },
-            stream: std::mem::take(&mut out.photons),
-        });
         let pass = LightPass {
             scene,
             light,
-            n,
+            n: budget.get(l).copied().unwrap_or(0),
             kind,
             targets: &targets,
-            projection,
+            projection: projections[l].as_ref(),
         };
-        // A thread more than this many chunks ahead of the stream waits for it: a thread the
-        // system stops for a while (another program, a loaded machine) would otherwise let the
-        // others finish and hold chunk after chunk outside the stream, unbounded.
-        let ahead = 2 * rayon::current_num_threads() as u64 + 2;
-        let caught_up = Condvar::new();
-        rayon::broadcast(|_| {
-            // The cones a chunk's caustic photons aim through (see `trace_one`).
-            let mut cones = Vec::new();
-            loop {
-                let c = next.fetch_add(1, Ordering::Relaxed);
-                if c >= chunks {
-                    break;
-                }
-                {
-                    // The chunk the stream takes next is claimed by a thread that is not
-                    // waiting (it is fewer than `ahead` chunks ahead), so this wait ends.
-                    let mut d = done.lock().unwrap_or_else(|e| e.into_inner());
-                    while c >= d.next + ahead {
-                        d = caught_up.wait(d).unwrap_or_else(|e| e.into_inner());
-                    }
-                }
-                let (mut photons, mut on_specular, mut met) = (Vec::new(), 0, 0);
-                cones.clear();
-                // Asked to stop: the chunks left are not traced (the frame is dropped).
-                if !progress.should_stop() {
-                    let first = mine.start + c * CHUNK;
-                    for k in first..(first + CHUNK).min(mine.end) {
-                        let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
-                        let mut rng = Rng::new(seed, Pass::Photon, key);
-                        let hit = trace_one(&pass, &mut cones, &mut rng, &mut photons);
-                        on_specular += u64::from(hit == FirstHit::Specular);
-                        met += u64::from(hit != FirstHit::Nothing);
-                    }
-                    progress.advance(CHUNK.min(mine.end - first));
-                }
-                let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
-                done.finish(c, photons, (on_specular, met));
-                caught_up.notify_all();
-            }
-        });
-        let done = done.into_inner().unwrap_or_else(|e| e.into_inner());
-        debug_assert!(done.waiting.is_empty() && done.next == chunks);
-        out.photons = done.stream;
-        let counts = done.counts;
+        let stream = std::mem::take(&mut out.photons);
+        let (stream, counts) = trace_light(&pass, (l, seed), share(l), stream, progress);
+        out.photons = stream;
         out.per_light.push(counts);
     }
     out
+}
+
+/// Photons a tracing thread claims at a time.
+const CHUNK: u64 = 4096;
+
+/// Traces the photons of indices `mine` of `pass`'s light (light `l`, streams keyed by `seed`)
+/// on every thread, appending them to `stream` in index order; returns the stream and the
+/// light's counts for them.
+fn trace_light(
+    pass: &LightPass,
+    (l, seed): (usize, u64),
+    mine: std::ops::Range<u64>,
+    stream: PhotonStream,
+    progress: &dyn Progress,
+) -> (PhotonStream, LightCounts) {
+    let kind = pass.kind;
+    let chunks = (mine.end - mine.start).div_ceil(CHUNK);
+    // Every thread claims the next chunk in turn, and whoever finishes the chunk next in
+    // order appends it and any finished after it: the stream takes the chunks in order,
+    // and only the few chunks in flight wait outside it (see `crate::photon::stream`).
+    let next = AtomicU64::new(0);
+    let done = Mutex::new(InOrder {
+        next: 0,
+        waiting: BTreeMap::new(),
+        counts: LightCounts {
+            emitted: mine.end - mine.start,
+            kept_ppm: pass
+                .projection
+                .map_or(0, |p| (p.fraction() * 1e6).round() as u32),
+            ..LightCounts::default()
+        },
+        stream,
+    });
+    // A thread more than this many chunks ahead of the stream waits for it: a thread the
+    // system stops for a while (another program, a loaded machine) would otherwise let the
+    // others finish and hold chunk after chunk outside the stream, unbounded.
+    let ahead = 2 * rayon::current_num_threads() as u64 + 2;
+    let caught_up = Condvar::new();
+    rayon::broadcast(|_| {
+        // The cones a chunk's caustic photons aim through (see `trace_one`).
+        let mut cones = Vec::new();
+        loop {
+            let c = next.fetch_add(1, Ordering::Relaxed);
+            if c >= chunks {
+                break;
+            }
+            {
+                // The chunk the stream takes next is claimed by a thread that is not
+                // waiting (it is fewer than `ahead` chunks ahead), so this wait ends.
+                let mut d = done.lock().unwrap_or_else(|e| e.into_inner());
+                while c >= d.next + ahead {
+                    d = caught_up.wait(d).unwrap_or_else(|e| e.into_inner());
+                }
+            }
+            let (mut photons, mut on_specular, mut met) = (Vec::new(), 0, 0);
+            cones.clear();
+            // Asked to stop: the chunks left are not traced (the frame is dropped).
+            if !progress.should_stop() {
+                let first = mine.start + c * CHUNK;
+                for k in first..(first + CHUNK).min(mine.end) {
+                    let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
+                    let mut rng = Rng::new(seed, Pass::Photon, key);
+                    let hit = trace_one(pass, &mut cones, &mut rng, &mut photons);
+                    on_specular += u64::from(hit == FirstHit::Specular);
+                    met += u64::from(hit != FirstHit::Nothing);
+                }
+                progress.advance(CHUNK.min(mine.end - first));
+            }
+            let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
+            done.finish(c, photons, (on_specular, met));
+            caught_up.notify_all();
+        }
+    });
+    let done = done.into_inner().unwrap_or_else(|e| e.into_inner());
+    debug_assert!(done.waiting.is_empty() && done.next == chunks);
+    (done.stream, done.counts)
 }
 
 /// The chunks of one light's photons, taken into the stream in chunk order as they finish.

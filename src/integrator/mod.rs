@@ -3,7 +3,8 @@
 //!
 //! - [`whitted`]: the course's ray tracer. Phases: camera pass.
 //! - [`photon_map`]: Jensen's photon mapping. Phases: the prepass (trace photons, build maps,
-//!   precompute irradiance, cache irradiance: [`irradiance_cache`]), camera pass. The prepass
+//!   precompute irradiance: [`precomputed`], cache irradiance: [`irradiance_cache`]), camera
+//!   pass. The prepass
 //!   can be saved to a file and read back by a tile of a farm ([`maps_file`]).
 //! - [`progressive`]: progressive photon mapping, the consistent reference. Phases, per pass:
 //!   trace photons, build maps, camera pass with shrinking radii; then the mean of the passes.
@@ -23,6 +24,7 @@ pub mod maps_file;
 pub mod passes_file;
 pub mod photon_map;
 pub mod plan;
+pub mod precomputed;
 pub mod progressive;
 pub mod whitted;
 

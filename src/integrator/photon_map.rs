@@ -46,6 +46,7 @@
 
 use super::eye::{DiffuseTerm, PathState, ShadingPoint};
 use super::irradiance_cache::{CacheSettings, CacheStats, Gather, IrradianceCache};
+pub use super::precomputed::{PRECOMPUTE_STRIDE, Precomputed, is_precompute_point};
 use super::{Plan, Settings, View, camera_pass};
 use crate::accel::counters::RayKind;
 use crate::camera::Camera;
@@ -64,7 +65,6 @@ use crate::stats::{RayCounts, RenderStats};
 use glam::Vec3A;
 use std::cell::RefCell;
 use std::f32::consts::FRAC_1_PI;
-use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 /// Deepest eye-path depth (specular bounces) at which final gathering is used; deeper points
@@ -92,19 +92,6 @@ pub const GLOBAL_PHOTONS: u64 = 200_000;
 /// specular objects, so they cost a fraction of global ones. See `docs/validation.md` for the
 /// measurement that set this count.
 pub const CAUSTIC_PHOTONS: u64 = 2_000_000;
-
-/// About one global photon in this many carries a precomputed irradiance estimate (see
-/// [`GiSettings::precompute`] and [`is_precompute_point`]).
-pub const PRECOMPUTE_STRIDE: usize = 4;
-
-/// Returns whether global photon `id` is a precomputation point: a pseudo-random choice of one
-/// in [`PRECOMPUTE_STRIDE`], independent of where the photon is (ids follow the kd-tree's
-/// spatial order, so a stride over ids would pick points that are spread like the photons
-/// near them, correlated with the estimate; see `Prepass::point_irradiance`).
-pub fn is_precompute_point(id: PhotonId) -> bool {
-    crate::sampling::mix64(u64::from(id.0) ^ 0x9e37_79b9_7f4a_7c15)
-        .is_multiple_of(PRECOMPUTE_STRIDE as u64)
-}
 
 /// Smallest cosine between a precomputed point's normal and the surface's for the point to be used.
 const PRECOMPUTED_MIN_COS: f32 = 0.9;
@@ -330,64 +317,6 @@ fn trace_and_build(
         per_light: traced.per_light,
     };
     (map, trace_time, start.elapsed())
-}
-
-/// Irradiance at the precomputation points ([`is_precompute_point`]: about one global photon in
-/// [`PRECOMPUTE_STRIDE`]), each estimated the first time a gather ray reads it and kept (or
-/// all up front for an image with at least as many pixels, [`Prepass::precompute_for`]).
-///
-/// Why lazily: a frame's gather rays land near a fraction of the points (on `room2.lua` at
-/// 128², 10^6 global photons: 1.6 M points, most of them on surfaces no gather ray from the
-/// visible points reaches), and estimating all of them up front took most of a preview's time.
-/// An estimate depends only on its point (the others' `k` nearest), so estimating on demand
-/// gives every point the value an up-front pass would, whichever thread asks first or how many
-/// ask at once; the image is the same for any thread count.
-#[derive(Debug)]
-pub struct Precomputed {
-    /// The points: the chosen global photons, as a map of their own (positions and normals).
-    pub points: PhotonMap,
-    /// Each point's irradiance as f32 bits; red is [`NOT_YET`] until the point is estimated.
-    values: Vec<[AtomicU32; 3]>,
-}
-
-/// The red channel of a point not yet estimated: a NaN pattern that no estimate produces
-/// (estimates are finite sums of finite powers).
-const NOT_YET: u32 = u32::MAX;
-
-impl Precomputed {
-    /// Returns the points of `global`'s precomputation points, none estimated yet.
-    fn new(global: &PhotonMap) -> Precomputed {
-        let points = global.thinned(is_precompute_point);
-        let values = (0..points.len())
-            .map(|_| [NOT_YET, 0, 0].map(AtomicU32::new))
-            .collect();
-        Precomputed { points, values }
-    }
-
-    /// Returns point `id`'s irradiance, computing it with `estimate` if no thread has yet.
-    fn value(&self, id: PhotonId, estimate: impl FnOnce() -> Vec3A) -> Vec3A {
-        let v = &self.values[id.0 as usize];
-        let r = v[0].load(Ordering::Acquire);
-        if r != NOT_YET {
-            let (g, b) = (v[1].load(Ordering::Relaxed), v[2].load(Ordering::Relaxed));
-            return Vec3A::new(f32::from_bits(r), f32::from_bits(g), f32::from_bits(b));
-        }
-        let e = estimate();
-        // Green and blue first, red last with release: a thread that sees red sees the others.
-        // Two threads estimating the same point at once store the same bits.
-        v[1].store(e.y.to_bits(), Ordering::Relaxed);
-        v[2].store(e.z.to_bits(), Ordering::Relaxed);
-        v[0].store(e.x.to_bits(), Ordering::Release);
-        e
-    }
-
-    /// Returns how many points have been estimated.
-    pub fn evaluated(&self) -> usize {
-        self.values
-            .iter()
-            .filter(|v| v[0].load(Ordering::Relaxed) != NOT_YET)
-            .count()
-    }
 }
 
 impl Prepass {

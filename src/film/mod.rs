@@ -57,6 +57,33 @@ impl Window {
         (self.x1 - self.x0, self.y1 - self.y0)
     }
 
+    /// Returns the window as `[x0, y0, x1, y1, full_width, full_height]`, the order its records
+    /// in files keep (a PNG tile's text, a progressive pass file).
+    pub fn to_array(&self) -> [u32; 6] {
+        [
+            self.x0,
+            self.y0,
+            self.x1,
+            self.y1,
+            self.full_width,
+            self.full_height,
+        ]
+    }
+
+    /// Returns the window [`Window::to_array`] gave `v` for (not checked: see
+    /// [`Window::is_valid`]).
+    pub fn from_array(v: [u32; 6]) -> Window {
+        let [x0, y0, x1, y1, full_width, full_height] = v;
+        Window {
+            x0,
+            y0,
+            x1,
+            y1,
+            full_width,
+            full_height,
+        }
+    }
+
     /// Returns true when the window is non-empty and inside the full image.
     pub fn is_valid(&self) -> bool {
         self.x0 < self.x1

@@ -79,10 +79,7 @@ pub fn to_rgb8(film: &Film, tonemap: Tonemap) -> Vec<u8> {
 
 /// Returns the text of a PNG tile's [`WINDOW_KEY`] record: `x0 y0 x1 y1 full_width full_height`.
 pub(super) fn window_record(w: &Window) -> String {
-    format!(
-        "{} {} {} {} {} {}",
-        w.x0, w.y0, w.x1, w.y1, w.full_width, w.full_height
-    )
+    w.to_array().map(|v| v.to_string()).join(" ")
 }
 
 /// Returns the window a [`WINDOW_KEY`] record's text names ([`window_record`]), or `None`
@@ -92,17 +89,7 @@ pub(super) fn parse_window_record(text: &str) -> Option<Window> {
         .split_whitespace()
         .filter_map(|s| s.parse().ok())
         .collect();
-    match v[..] {
-        [x0, y0, x1, y1, full_width, full_height] => Some(Window {
-            x0,
-            y0,
-            x1,
-            y1,
-            full_width,
-            full_height,
-        }),
-        _ => None,
-    }
+    <[u32; 6]>::try_from(v).ok().map(Window::from_array)
 }
 
 /// Writes through `write` to a temporary file beside `path`'s target, created exclusively and

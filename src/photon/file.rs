@@ -273,17 +273,16 @@ pub fn write_traced<W: Write>(w: &mut W, t: &TracedMap) -> std::io::Result<()> {
     }
     w.write_all(&(t.photons.len() as u64).to_le_bytes())?;
     let mut buf = Vec::with_capacity(STAGED_BYTES as usize * CHUNK);
-    let staged: Vec<&super::stream::Staged> = t.photons.iter().collect();
-    for part in staged.chunks(CHUNK) {
-        buf.clear();
-        for p in part {
-            buf.extend(p.pos.iter().flat_map(|x| x.to_le_bytes()));
-            buf.extend(p.code.to_le_bytes());
-            buf.extend(p.power.iter().flat_map(|x| x.to_le_bytes()));
+    for p in t.photons.iter() {
+        buf.extend(p.pos.iter().flat_map(|x| x.to_le_bytes()));
+        buf.extend(p.code.to_le_bytes());
+        buf.extend(p.power.iter().flat_map(|x| x.to_le_bytes()));
+        if buf.len() >= STAGED_BYTES as usize * CHUNK {
+            w.write_all(&buf)?;
+            buf.clear();
         }
-        w.write_all(&buf)?;
     }
-    Ok(())
+    w.write_all(&buf)
 }
 
 /// Reads what [`write_traced`] wrote from `r`, naming `what` in its errors; `size` is the

@@ -201,8 +201,8 @@ fn join(
             message: format!("the {kind:?} map: {message}").to_lowercase(),
         })?;
     }
-    // Each part's photons start at its light's offset: the stored counts of the lights before.
-    let mut offsets = vec![0usize; maps.len()];
+    // Each part's photons in order, light after light: a light's are the next `stored` of them.
+    let mut rest: Vec<_> = maps.iter().map(|(_, t)| t.photons.iter()).collect();
     let mut photons = PhotonStream::new();
     let mut per_light = Vec::with_capacity(lights);
     let mut buf: Vec<Staged> = Vec::new();
@@ -211,12 +211,11 @@ fn join(
             kept_ppm: maps.first().map_or(0, |m| m.1.per_light[l].kept_ppm),
             ..LightCounts::default()
         };
-        for (i, (_, t)) in maps.iter().enumerate() {
+        for ((_, t), part) in maps.iter().zip(&mut rest) {
             let c = &t.per_light[l];
             buf.clear();
-            buf.extend(t.photons.iter().skip(offsets[i]).take(c.stored as usize));
+            buf.extend(part.by_ref().take(c.stored as usize));
             photons.extend_from_slice(&buf);
-            offsets[i] += c.stored as usize;
             sum.emitted += c.emitted;
             sum.stored += c.stored;
             sum.first_hit_specular += c.first_hit_specular;

@@ -170,12 +170,7 @@ pub fn render(
     let mut first_rows = None;
     let stop = loop {
         let pass = prog.first_pass + acc.passes;
-        let gi_settings = GiSettings {
-            seed: pass_seed(settings.photons.seed, pass),
-            precompute: false,
-            ..super::photon_map::planned(&settings.photons, &plan)
-        };
-        let gi = Prepass::build_with(scene, &gi_settings, &inner);
+        let gi = Prepass::build_with(scene, &pass_photons(settings, &plan, pass), &inner);
         if pass == 0 {
             first_radii = first_pass_radii(scene, &gi, &prog);
             radii = first_radii;
@@ -249,6 +244,24 @@ pub fn render(
     (film, stats)
 }
 
+/// Returns the photon settings of pass `pass` of a render with `settings` as `plan` says: the
+/// plan's maps, the pass's own seed, no precomputation points (estimates take every photon
+/// within the pass's radii).
+fn pass_photons(settings: &Settings, plan: &Plan, pass: u32) -> GiSettings {
+    GiSettings {
+        seed: pass_seed(settings.photons.seed, pass),
+        precompute: false,
+        ..super::photon_map::planned(&settings.photons, plan)
+    }
+}
+
+/// Returns the radii `--radius` sets (the global map's that fraction of the scene's diagonal,
+/// the caustic map's half of it), or `None` without it.
+fn given_radii(scene: &Scene, prog: &ProgressiveSettings) -> Option<(f32, f32)> {
+    let extent = scene.extent().max(f32::MIN_POSITIVE);
+    prog.initial_radius.map(|f| (f * extent, 0.5 * f * extent))
+}
+
 /// Returns the seed of pass `pass`'s streams under `seed`.
 pub fn pass_seed(seed: u64, pass: u32) -> u64 {
     crate::sampling::mix64(seed ^ crate::sampling::mix64(0x7072_6f67_0000_0000 | pass as u64))
@@ -274,9 +287,8 @@ pub fn shrink((global, caustic): (f32, f32), passes: u32, alpha: f32) -> (f32, f
 /// Returns the first pass's radii: the settings' fraction of the scene's diagonal, or each map's
 /// [`initial_radius`] (no larger than the photon mapper's largest search radius).
 fn first_pass_radii(scene: &Scene, gi: &Prepass, prog: &ProgressiveSettings) -> (f32, f32) {
-    let extent = scene.extent().max(f32::MIN_POSITIVE);
-    if let Some(f) = prog.initial_radius {
-        return (f * extent, 0.5 * f * extent);
+    if let Some(radii) = given_radii(scene, prog) {
+        return radii;
     }
     let (max_global, max_caustic) = gi.radii();
     let k = gi.settings.k;
@@ -341,19 +353,10 @@ fn radii_at(
     plan: &Plan,
     prog: &ProgressiveSettings,
 ) -> ((f32, f32), (f32, f32)) {
-    let first = if prog.initial_radius.is_some() {
-        let extent = scene.extent().max(f32::MIN_POSITIVE);
-        let f = prog.initial_radius.unwrap_or(0.0);
-        (f * extent, 0.5 * f * extent)
-    } else {
-        let gi_settings = GiSettings {
-            seed: pass_seed(settings.photons.seed, 0),
-            precompute: false,
-            ..super::photon_map::planned(&settings.photons, plan)
-        };
-        let gi = Prepass::build(scene, &gi_settings);
+    let first = given_radii(scene, prog).unwrap_or_else(|| {
+        let gi = Prepass::build(scene, &pass_photons(settings, plan, 0));
         first_pass_radii(scene, &gi, prog)
-    };
+    });
     let radii = (1..=prog.first_pass).fold(first, |r, passes| shrink(r, passes, prog.alpha));
     (first, radii)
 }

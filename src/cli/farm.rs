@@ -68,26 +68,11 @@ pub(super) fn merge_command(args: MergeArgs) -> Result<()> {
             "caustic merge: more files than passes a render has".into(),
         ));
     }
-    let parts = args
-        .parts
-        .iter()
-        .map(|p| {
-            let saved = crate::integrator::passes_file::read(p).map_err(|message| Error::File {
-                path: p.clone(),
-                message,
-            })?;
-            Ok((p.clone(), saved))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let fingerprint = parts[0].1.fingerprint.clone();
-    let sums = crate::integrator::passes_file::merge(parts)?;
+    let merged = crate::integrator::passes_file::merge(&args.parts)?;
+    let sums = &merged.sums;
     write_image(&sums.mean(), &args.output, Tonemap::Clamp)?;
     if let Some(p) = &args.save_passes {
-        let saved = crate::integrator::passes_file::SavedPasses {
-            fingerprint,
-            sums: sums.clone(),
-        };
-        write_passes(p, &saved)?;
+        write_passes(p, &merged)?;
     }
     let error = sums
         .estimated_error()

@@ -20,7 +20,8 @@
 //! its window. The merge refuses parts of different fingerprints or windows, and pass ranges
 //! that do not follow one another from pass 0 (a gap or an overlap), naming the file. A part
 //! whose sums are not finite or are negative, or whose sizes its file cannot hold, is refused
-//! when read.
+//! when read. The merge reads the headers first, then one file's sums at a time in pass
+//! order: it holds two windows of sums whatever the number of files.
 //!
 //! # Layout (little-endian)
 //! magic `CAUSTPS\0` (8), format version (4), scene hash (8), settings text (4 + n); the window
@@ -64,15 +65,7 @@ pub fn write(path: &Path, passes: &SavedPasses) -> std::io::Result<()> {
         let mut w = CrcWriter::new(BufWriter::with_capacity(1 << 20, file));
         write_header(&mut w, &PASSES, &passes.fingerprint)?;
         let a = &passes.sums;
-        let win = a.window;
-        for v in [
-            win.x0,
-            win.y0,
-            win.x1,
-            win.y1,
-            win.full_width,
-            win.full_height,
-        ] {
+        for v in a.window.to_array() {
             w.write_all(&v.to_le_bytes())?;
         }
         for v in [a.first, a.passes, a.even_passes] {
@@ -94,42 +87,37 @@ pub fn write(path: &Path, passes: &SavedPasses) -> std::io::Result<()> {
     })
 }
 
-/// Reads the passes saved at `path`; the error says what is wrong with the file.
-pub fn read(path: &Path) -> std::result::Result<SavedPasses, String> {
-    let (mut r, size) = open(path)?;
-    let fingerprint = read_header(&mut r, &PASSES)?;
+/// What a pass file says before its sums.
+struct Head {
+    fingerprint: Fingerprint,
+    window: Window,
+    first: u32,
+    passes: u32,
+    even_passes: u32,
+}
+
+/// Reads a pass file's header from `r` (of a file of `size` bytes), refusing a window or a
+/// range of passes that cannot be, or a window larger than the file holds.
+fn read_head<R: std::io::Read>(
+    r: &mut crate::photon::file::CrcReader<R>,
+    size: u64,
+) -> std::result::Result<Head, String> {
+    let fingerprint = read_header(r, &PASSES)?;
     let mut v = [0u32; 9];
     for x in &mut v {
         *x = r.u32("the header")?;
     }
-    let [
-        x0,
-        y0,
-        x1,
-        y1,
-        full_width,
-        full_height,
-        first,
-        passes,
-        even_passes,
-    ] = v;
-    let window = Window {
-        x0,
-        y0,
-        x1,
-        y1,
-        full_width,
-        full_height,
-    };
-    let pixels = u64::from(full_width) * u64::from(full_height);
+    let window = Window::from_array([v[0], v[1], v[2], v[3], v[4], v[5]]);
+    let [first, passes, even_passes] = [v[6], v[7], v[8]];
+    let pixels = u64::from(window.full_width) * u64::from(window.full_height);
     if !window.is_valid() || pixels > MAX_PIXELS {
         return Err(format!(
-            "the window {x0},{y0},{x1},{y1} of a {full_width}x{full_height} image cannot be"
+            "the window {:?} (x0, y0, x1, y1 of a width x height image) cannot be",
+            window.to_array()
         ));
     }
     let (w, h) = window.size();
-    let n = u64::from(w) * u64::from(h);
-    if n.saturating_mul(PIXEL_BYTES) > size {
+    if (u64::from(w) * u64::from(h)).saturating_mul(PIXEL_BYTES) > size {
         return Err(format!(
             "a {w}x{h} window, more than the file's {size} bytes hold"
         ));
@@ -143,10 +131,30 @@ pub fn read(path: &Path) -> std::result::Result<SavedPasses, String> {
             u64::from(first) + u64::from(passes)
         ));
     }
-    let mut sums = Accumulator::starting_at(window, first);
-    (sums.passes, sums.even_passes) = (passes, even_passes);
+    Ok(Head {
+        fingerprint,
+        window,
+        first,
+        passes,
+        even_passes,
+    })
+}
+
+/// Returns the first pass the file at `path` holds, from its header alone (the merge orders
+/// the files by it before reading any sums).
+fn first_pass(path: &Path) -> std::result::Result<u32, String> {
+    let (mut r, size) = open(path)?;
+    Ok(read_head(&mut r, size)?.first)
+}
+
+/// Reads the passes saved at `path`; the error says what is wrong with the file.
+pub fn read(path: &Path) -> std::result::Result<SavedPasses, String> {
+    let (mut r, size) = open(path)?;
+    let head = read_head(&mut r, size)?;
+    let mut sums = Accumulator::starting_at(head.window, head.first);
+    (sums.passes, sums.even_passes) = (head.passes, head.even_passes);
     let mut px = [0u8; PIXEL_BYTES as usize];
-    for i in 0..n as usize {
+    for i in 0..sums.sum.len() {
         r.bytes(&mut px, "the sums")?;
         let f = |j: usize| f32::from_le_bytes([px[j], px[j + 1], px[j + 2], px[j + 3]]);
         let v = |k: usize| Vec3A::new(f(12 * k), f(12 * k + 4), f(12 * k + 8));
@@ -163,51 +171,72 @@ pub fn read(path: &Path) -> std::result::Result<SavedPasses, String> {
         sums.samples[i] = u32::from_le_bytes([px[36], px[37], px[38], px[39]]);
     }
     read_checksum(&mut r)?;
-    Ok(SavedPasses { fingerprint, sums })
+    Ok(SavedPasses {
+        fingerprint: head.fingerprint,
+        sums,
+    })
 }
 
-/// Adds up `parts` (each with the file it came from) into the sums of all their passes, or an
-/// error naming the file whose fingerprint or window is not the first part's, or whose passes
-/// do not follow the previous part's (the parts, sorted by first pass, must run from pass 0
-/// without a gap or an overlap).
-pub fn merge(mut parts: Vec<(PathBuf, SavedPasses)>) -> Result<Accumulator> {
-    parts.sort_by_key(|p| p.1.sums.first);
-    let Some((_, first)) = parts.first() else {
-        return Err(Error::Usage("caustic merge: no pass files given".into()));
+/// Adds up the pass files `paths` into the sums of all their passes, reading one file at a
+/// time in the order of their first pass (so at most two windows of sums are held, and the
+/// sum does not depend on the order given); returns them with the first file's fingerprint,
+/// or an error naming the file that cannot be read, whose fingerprint or window is not the
+/// first file's, or whose passes do not follow the previous file's (they must run from pass
+/// 0 without a gap or an overlap).
+pub fn merge(paths: &[PathBuf]) -> Result<SavedPasses> {
+    let bad = |path: &PathBuf, message: String| Error::File {
+        path: path.clone(),
+        message,
     };
-    let (fingerprint, window) = (first.fingerprint.clone(), first.sums.window);
-    let mut total = Accumulator::starting_at(window, 0);
-    for (path, p) in &parts {
-        let bad = |message: String| Error::File {
-            path: path.clone(),
-            message,
+    let mut order = paths
+        .iter()
+        .map(|p| first_pass(p).map(|f| (f, p)).map_err(|m| bad(p, m)))
+        .collect::<Result<Vec<_>>>()?;
+    order.sort_by_key(|o| o.0);
+    let mut merged: Option<SavedPasses> = None;
+    for (_, path) in order {
+        let p = read(path).map_err(|m| bad(path, m))?;
+        let Some(total) = merged.as_mut() else {
+            if p.sums.first != 0 {
+                let message = format!(
+                    "these are passes {} to {}, but pass 0 comes next: passes are missing",
+                    p.sums.first,
+                    p.sums.first + p.sums.passes - 1
+                );
+                return Err(bad(path, message));
+            }
+            merged = Some(p);
+            continue;
         };
-        if p.fingerprint != fingerprint {
+        if p.fingerprint != total.fingerprint {
             return Err(bad(
+                path,
                 "these passes are of another render (another scene or other settings than the \
                  first part's)"
                     .into(),
             ));
         }
-        if p.sums.window != window {
-            return Err(bad(
-                "these passes cover another window than the first part's".into(),
-            ));
+        if p.sums.window != total.sums.window {
+            let message = "these passes cover another window than the first part's".into();
+            return Err(bad(path, message));
         }
-        let next = total.first + total.passes;
+        let next = total.sums.first + total.sums.passes;
         if p.sums.first != next {
             let what = if p.sums.first > next {
                 "missing"
             } else {
                 "given twice"
             };
-            return Err(bad(format!(
-                "these are passes {} to {}, but pass {next} comes next: passes are {what}",
-                p.sums.first,
-                p.sums.first + p.sums.passes - 1
-            )));
+            return Err(bad(
+                path,
+                format!(
+                    "these are passes {} to {}, but pass {next} comes next: passes are {what}",
+                    p.sums.first,
+                    p.sums.first + p.sums.passes - 1
+                ),
+            ));
         }
-        total.merge(&p.sums);
+        total.sums.merge(&p.sums);
     }
-    Ok(total)
+    merged.ok_or_else(|| Error::Usage("caustic merge: no pass files given".into()))
 }

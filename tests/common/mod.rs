@@ -570,3 +570,16 @@ pub fn legacy_copy(modern: &str) -> String {
     }
     out
 }
+
+/// A glass ball on a floor under a point light, 64x48: both photon maps, a caustic, and an
+/// irradiance cache (the photon-map and farm files' tests render it).
+pub const GLASS_BALL: &str = "
+    white = gr.material({0.7, 0.7, 0.7}, {0, 0, 0}, 0)
+    glass = gr.material({0, 0, 0}, {0.1, 0.1, 0.1}, 50, 1.0, 1.5)
+    root = gr.node('root')
+    floor = gr.cube('floor'); floor:set_material(white); floor:scale(6, 0.5, 6); floor:translate(-3, -0.5, -5)
+    root:add_child(floor)
+    ball = gr.nh_sphere('ball', {0, 1, -2.5}, 1); ball:set_material(glass); root:add_child(ball)
+    gr.render(root, 'ball.png', 64, 48, {0, 2, 3}, {0, -0.3, -1}, {0, 1, 0}, 50, {0.1, 0.1, 0.1},
+              {gr.light({0, 5, -2}, {1, 1, 1}, {1, 0, 0}, nil, 20000)})
+";

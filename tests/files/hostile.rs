@@ -7,7 +7,7 @@
 //! allocation by the file's size.
 #![cfg(target_os = "linux")]
 
-use crate::common::{Edit, caustic, mutate, out_dir, proptest_config};
+use crate::common::{Edit, GLASS_BALL, caustic, mutate, out_dir, proptest_config};
 use glam::Vec3A;
 use proptest::prelude::*;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -373,18 +373,6 @@ fn outputs_in_missing_folders_are_refused_before_the_work() {
 // ---------------------------------------------------------------------------------------------
 // Photon-map files.
 
-/// A glass ball on a floor under a point light: both maps and an irradiance cache.
-const BALL: &str = "
-    white = gr.material({0.7, 0.7, 0.7}, {0, 0, 0}, 0)
-    glass = gr.material({0, 0, 0}, {0.1, 0.1, 0.1}, 50, 1.0, 1.5)
-    root = gr.node('root')
-    floor = gr.cube('floor'); floor:set_material(white); floor:scale(6, 0.5, 6); floor:translate(-3, -0.5, -5)
-    root:add_child(floor)
-    ball = gr.nh_sphere('ball', {0, 1, -2.5}, 1); ball:set_material(glass); root:add_child(ball)
-    gr.render(root, 'ball.png', 64, 48, {0, 2, 3}, {0, -0.3, -1}, {0, 1, 0}, 50, {0.1, 0.1, 0.1},
-              {gr.light({0, 5, -2}, {1, 1, 1}, {1, 0, 0}, nil, 20000)})
-";
-
 /// The photon flags the save and every render share (the fingerprint holds them).
 const PHOTON_FLAGS: [&str; 10] = [
     "--photons",
@@ -539,7 +527,7 @@ const FORGERIES: [Forgery; 11] = [
 #[test]
 fn forged_photon_map_fields_are_refused_though_the_checksum_holds() {
     let dir = out_dir("hostile_files_maps");
-    put(&dir, "ball.lua", BALL);
+    put(&dir, "ball.lua", GLASS_BALL);
     let saved = run_in(
         &dir,
         &[

@@ -3,20 +3,8 @@
 //! process running every pass, to the rounding of the sums, with the same error estimate; parts
 //! of another render, with a gap or an overlap, or forged, are refused naming the file.
 
-use crate::common::{caustic, out_dir, run_ok};
+use crate::common::{GLASS_BALL, caustic, out_dir, run_ok};
 use std::path::Path;
-
-/// A glass ball on a floor under a point light: both maps, a caustic.
-const SCENE: &str = "
-    white = gr.material({0.7, 0.7, 0.7}, {0, 0, 0}, 0)
-    glass = gr.material({0, 0, 0}, {0.1, 0.1, 0.1}, 50, 1.0, 1.5)
-    root = gr.node('root')
-    floor = gr.cube('floor'); floor:set_material(white); floor:scale(6, 0.5, 6); floor:translate(-3, -0.5, -5)
-    root:add_child(floor)
-    ball = gr.nh_sphere('ball', {0, 1, -2.5}, 1); ball:set_material(glass); root:add_child(ball)
-    gr.render(root, 'ball.exr', 40, 30, {0, 2, 3}, {0, -0.3, -1}, {0, 1, 0}, 50, {0.1, 0.1, 0.1},
-              {gr.light({0, 5, -2}, {1, 1, 1}, {1, 0, 0}, nil, 20000)})
-";
 
 /// The flags every render below shares: progressive, small passes.
 const FLAGS: [&str; 7] = [
@@ -70,7 +58,7 @@ fn estimate(stderr: &str) -> f64 {
 #[test]
 fn passes_rendered_apart_merge_into_the_render_of_all_of_them() {
     let dir = out_dir("progressive-parts");
-    std::fs::write(dir.join("ball.lua"), SCENE).unwrap();
+    std::fs::write(dir.join("ball.lua"), GLASS_BALL).unwrap();
     let one = render(&dir, "one", 0, 10, &["--stats"]);
     render(&dir, "a", 0, 3, &[]);
     render(&dir, "b", 3, 1, &[]);
@@ -101,7 +89,7 @@ fn passes_rendered_apart_merge_into_the_render_of_all_of_them() {
 #[test]
 fn passes_that_are_not_one_render_are_refused() {
     let dir = out_dir("progressive-parts-refused");
-    std::fs::write(dir.join("ball.lua"), SCENE).unwrap();
+    std::fs::write(dir.join("ball.lua"), GLASS_BALL).unwrap();
     render(&dir, "a", 0, 2, &[]);
     render(&dir, "b", 2, 2, &[]);
     render(&dir, "c", 3, 2, &[]);

@@ -463,13 +463,17 @@ fn run_from_the_home_folder_a_scene_writes_only_in_it_not_below_it() {
     std::fs::write(pictures.join("wedding.png"), "keep me").unwrap();
     let scenes = out_dir("sandbox-home-scenes");
     std::fs::write(scenes.join("s.lua"), tiny_scene("Pictures/wedding.png")).unwrap();
-    let out = caustic()
-        .current_dir(&home)
-        .env("HOME", &home)
-        .args(["render", "-q"])
-        .arg(scenes.join("s.lua"))
-        .output()
-        .unwrap();
+    // Renders `script` of the scenes' folder from the home folder, with HOME set to it.
+    let render = |script: &str| {
+        caustic()
+            .current_dir(&home)
+            .env("HOME", &home)
+            .args(["render", "-q"])
+            .arg(scenes.join(script))
+            .output()
+            .unwrap()
+    };
+    let out = render("s.lua");
     assert!(
         !out.status.success(),
         "{}",
@@ -480,13 +484,7 @@ fn run_from_the_home_folder_a_scene_writes_only_in_it_not_below_it() {
         "keep me"
     );
     std::fs::write(scenes.join("t.lua"), tiny_scene("here.png")).unwrap();
-    let out = caustic()
-        .current_dir(&home)
-        .env("HOME", &home)
-        .args(["render", "-q"])
-        .arg(scenes.join("t.lua"))
-        .output()
-        .unwrap();
+    let out = render("t.lua");
     assert!(
         out.status.success(),
         "{}",

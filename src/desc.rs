@@ -111,8 +111,11 @@ pub struct MaterialDesc {
     pub shininess: f32,
     /// Transparency in [0, 1]; above 0 the surface refracts.
     pub transparency: f32,
-    /// Refractive index of the material's interior (meaningful when `transparency > 0`).
+    /// Refractive index of the material's interior (meaningful when `transparency > 0`):
+    /// absolute from 1 up, relative to the containing medium below 1.
     pub ior: f32,
+    /// Absorption coefficient per channel per unit length of the interior (`gr.absorption`).
+    pub absorption: Vec3,
     /// Scale of the Perlin-noise normal perturbation; 0 means none.
     pub perlin_scale: f32,
     /// Texture image replacing `kd`, resolved to a readable path.

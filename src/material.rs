@@ -9,6 +9,9 @@
 //! - `t`, `ior`: with weight `t` the surface is a clear dielectric interface into a solid of index
 //!   `ior` (Fresnel reflection and refraction, [`fresnel`], with media tracked by [`medium`]);
 //!   the opaque behaviour above has weight `1 − t`;
+//! - `gr.absorption(material, colour, distance)`: the solid's interior keeps `colour` of the
+//!   light that crosses `distance` of it (Beer–Lambert, glTF's `KHR_materials_volume`):
+//!   [`Material::absorption`] `σ = −ln(colour)/distance`;
 //! - `s`: Perlin-noise bending of the shading normal ([`perlin`]);
 //! - `bump`: an RGB tangent-space normal map or a grey height map ([`texture::BumpMap`]).
 
@@ -39,7 +42,12 @@ pub struct Material {
     pub ks: Vec3A,
     pub shininess: f32,
     pub transparency: f32,
+    /// Index of refraction of the interior: absolute from 1 up, relative to the containing
+    /// medium below 1 ([`medium`]).
     pub ior: f32,
+    /// Absorption coefficient `σ` per channel, per unit of world length, of the interior of a
+    /// transparent solid (Beer–Lambert, [`crate::scene::media`]); zero for clear.
+    pub absorption: Vec3A,
     /// Scale of the Perlin-noise normal perturbation; 0 for none.
     pub perlin_scale: f32,
     /// Colour map replacing `kd`.
@@ -61,6 +69,7 @@ impl Material {
             shininess: d.shininess,
             transparency: d.transparency,
             ior: d.ior,
+            absorption: d.absorption.into(),
             perlin_scale: d.perlin_scale,
             texture,
             bump,
@@ -75,6 +84,7 @@ impl Material {
             shininess: m.shininess,
             transparency: m.transparency,
             ior: m.ior,
+            absorption: m.absorption.into(),
             perlin_scale: 0.0,
             texture,
             bump: None,
@@ -89,6 +99,7 @@ impl Material {
             shininess: 0.0,
             transparency: 0.0,
             ior: 1.0,
+            absorption: Vec3A::ZERO,
             perlin_scale: 0.0,
             texture: None,
             bump: None,
@@ -154,6 +165,19 @@ impl Material {
     }
 }
 
+/// Returns the absorption coefficient of a volume that keeps `colour` of the light over
+/// `distance`: `−ln(colour)/distance` per channel, the colour held to `[MIN_ATTENUATION, 1]`
+/// (a black channel absorbs everything within a millionth of the distance, not infinitely).
+pub fn absorption(colour: [f32; 3], distance: f32) -> glam::Vec3 {
+    if distance == f32::INFINITY {
+        return glam::Vec3::ZERO;
+    }
+    glam::Vec3::from_array(colour.map(|c| -c.clamp(MIN_ATTENUATION, 1.0).ln() / distance))
+}
+
+/// Least fraction of light an absorbing volume keeps over its attenuation distance.
+pub const MIN_ATTENUATION: f32 = 1e-6;
+
 /// Smallest cosine allowed between a shading normal and the geometric normal.
 const MIN_SHADING_COS: f32 = 0.05;
 
@@ -193,5 +217,17 @@ mod tests {
             let n = m.shading_normal(Vec3A::Z, Vec3A::Z, p, Vec2::ZERO, Vec3A::X);
             assert!(n.dot(Vec3A::Z) > 0.0);
         }
+    }
+
+    #[test]
+    fn absorption_keeps_the_colour_over_the_distance() {
+        let s = absorption([0.5, 0.25, 1.0], 2.0);
+        let kept = (-s * 2.0).exp();
+        assert!(
+            (kept - glam::Vec3::new(0.5, 0.25, 1.0)).abs().max_element() < 1e-6,
+            "{kept}"
+        );
+        assert_eq!(absorption([0.5; 3], f32::INFINITY), glam::Vec3::ZERO);
+        assert!(absorption([0.0; 3], 1e-6).is_finite());
     }
 }

@@ -427,6 +427,37 @@ pub fn describe(name: &str, desc: &SceneDesc) -> Result<String> {
             list(&placed.by_kind),
             placed.triangles
         );
+        let scene = crate::scene::build_scene(desc, r)?;
+        let _ = writeln!(s, "    camera medium: {}", camera_medium(desc, &scene));
     }
     Ok(s)
+}
+
+/// Returns what `caustic info` says of the medium the camera is in: air, or the solids that hold
+/// it (outermost first), the index and absorption of the one whose medium it is, and the solids
+/// whose probes could not agree.
+fn camera_medium(desc: &SceneDesc, scene: &crate::scene::Scene) -> String {
+    let media = &scene.eye_media;
+    let name = |i: &u32| format!("'{}'", desc.node(scene.instances[*i as usize].node).name);
+    let mut out = if media.inside.is_empty() {
+        "air".to_owned()
+    } else {
+        let held: Vec<String> = media.inside.iter().map(name).collect();
+        let mut line = format!("inside {}; index {}", held.join(" in "), media.stack.ior());
+        if let Some(m) = media.stack.winner() {
+            let a = scene.materials[m as usize].absorption;
+            if a != glam::Vec3A::ZERO {
+                line += &format!(", absorbing ({}, {}, {}) per unit", a.x, a.y, a.z);
+            }
+        }
+        line
+    };
+    if !media.doubtful.is_empty() {
+        let unsure: Vec<String> = media.doubtful.iter().map(name).collect();
+        out += &format!(
+            " (the eye is on the surface of {}, or it is not closed: whether it is inside is a guess)",
+            unsure.join(", ")
+        );
+    }
+    out
 }

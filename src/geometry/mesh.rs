@@ -45,6 +45,9 @@ pub struct MeshMaterial {
     pub transparency: f32,
     /// Index of refraction (OBJ `Ni`, glTF `KHR_materials_ior`, default 1.5 for glTF).
     pub ior: f32,
+    /// Absorption coefficient per channel per unit length of the interior (glTF
+    /// `KHR_materials_volume`: `−ln(attenuationColor)/attenuationDistance`); zero for clear.
+    pub absorption: Vec3,
     /// Texture replacing `kd` (OBJ `map_Kd`, glTF base colour texture), resolved to a path.
     pub texture: Option<PathBuf>,
 }

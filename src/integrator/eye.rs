@@ -89,18 +89,18 @@ pub struct PathState {
 }
 
 impl PathState {
-    /// Returns the state of a camera ray (in air).
-    pub fn camera() -> PathState {
-        PathState::camera_sample(Share::All)
+    /// Returns the state of a camera ray of `scene` (in the camera's media).
+    pub fn camera(scene: &Scene) -> PathState {
+        PathState::camera_sample(scene, Share::All)
     }
 
-    /// Returns the state of a camera ray (in air) of a sample that shares weak branches by
-    /// `share`.
-    pub fn camera_sample(share: Share) -> PathState {
+    /// Returns the state of a camera ray of `scene` (in the camera's media,
+    /// [`Scene::eye_media`]) of a sample that shares weak branches by `share`.
+    pub fn camera_sample(scene: &Scene, share: Share) -> PathState {
         PathState {
             depth: 0,
             weight: 1.0,
-            media: MediumStack::air(),
+            media: scene.eye_media.stack,
             sees_emitters: true,
             share,
         }
@@ -165,9 +165,9 @@ pub fn background(camera: &Camera, dir: Vec3A) -> Vec3A {
     bottom + (top - bottom) * s
 }
 
-/// Returns the radiance of the nearest area or sphere light that `ray` meets before `tmax`, if
-/// any ([`crate::light::Light::seen_by`]).
-pub fn emitter_seen(scene: &Scene, ray: &Ray, tmax: f32) -> Option<Vec3A> {
+/// Returns the distance along `ray` (in units of its direction) and the radiance of the nearest
+/// area or sphere light that `ray` meets before `tmax`, if any ([`crate::light::Light::seen_by`]).
+pub fn emitter_seen(scene: &Scene, ray: &Ray, tmax: f32) -> Option<(f32, Vec3A)> {
     let mut best: Option<(f32, Vec3A)> = None;
     for light in &scene.lights {
         let limit = best.map_or(tmax, |b| b.0);
@@ -175,7 +175,7 @@ pub fn emitter_seen(scene: &Scene, ray: &Ray, tmax: f32) -> Option<Vec3A> {
             best = Some(seen);
         }
     }
-    best.map(|b| b.1)
+    best
 }
 
 /// What a diffuse surface receives besides direct light: the integrator's part of the eye path.
@@ -202,7 +202,12 @@ pub struct Tracer<'a> {
 
 impl Radiance for Tracer<'_> {
     fn radiance(&self, ray: &Ray, share: Share, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
-        self.radiance(ray, PathState::camera_sample(share), rng, counts)
+        self.radiance(
+            ray,
+            PathState::camera_sample(self.scene, share),
+            rng,
+            counts,
+        )
     }
 }
 
@@ -215,7 +220,7 @@ impl Tracer<'_> {
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Vec3A {
-        let (mut ray, mut state, mut scale) = (*ray, state, 1.0);
+        let (mut ray, mut state, mut scale) = (*ray, state, Vec3A::ONE);
         // A weak branch of the sample that shades it: what it sees before a surface counts once
         // over the pixel's samples, as in those that do not shade it (see `Share`).
         let seen_scale = match state.share {
@@ -227,15 +232,19 @@ impl Tracer<'_> {
         loop {
             counters::kind(RayKind::Camera);
             let hit = self.scene.intersect(&ray);
+            // What the medium the ray crosses keeps of the light over `t` (Beer–Lambert).
+            let kept = |t: f32| self.scene.transmittance(&state.media, t * ray.dir.length());
             if state.sees_emitters {
                 let tmax = hit.map_or(ray.tmax, |h| h.t);
-                if let Some(radiance) = emitter_seen(self.scene, &ray, tmax) {
-                    return seen_scale * scale * radiance;
+                if let Some((t, radiance)) = emitter_seen(self.scene, &ray, tmax) {
+                    return seen_scale * scale * kept(t) * radiance;
                 }
             }
             let Some(hit) = hit else {
-                return seen_scale * scale * background(self.camera, ray.dir);
+                let kept = kept(f32::INFINITY);
+                return seen_scale * scale * kept * background(self.camera, ray.dir);
             };
+            scale *= kept(hit.t);
             let skip = state.share == Share::Emitters;
             // Only a transparent surface can be a false interface to see through.
             let mat = &self.scene.materials[hit.material as usize];
@@ -290,9 +299,17 @@ impl Tracer<'_> {
         }
     }
 
-    /// Returns the direct light from every light at the surface of `bsdf` (at `p`) towards its
-    /// `wo`, by shadow rays.
-    pub fn direct(&self, p: Vec3A, bsdf: &Bsdf, rng: &mut Rng, counts: &mut RayCounts) -> Vec3A {
+    /// Returns the direct light from every light at the surface of `bsdf` (at `p`, in `media`)
+    /// towards its `wo`, by shadow rays. A shadow ray meets no surface, so it crosses only the
+    /// point's own medium, which absorbs along it.
+    pub fn direct(
+        &self,
+        p: Vec3A,
+        bsdf: &Bsdf,
+        media: &MediumStack,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
         let (n, ng) = (bsdf.n, bsdf.ng);
         let mut colour = Vec3A::ZERO;
         if self.light_samples == 0 {
@@ -328,7 +345,8 @@ impl Tracer<'_> {
                 if self.scene.occluded(&shadow) {
                     continue;
                 }
-                sum += ls.intensity * light.attenuation(d) * bsdf.phong(wi);
+                let kept = self.scene.transmittance(media, d);
+                sum += kept * ls.intensity * light.attenuation(d) * bsdf.phong(wi);
             }
             colour += sum / samples.len() as f32;
         }
@@ -344,7 +362,7 @@ impl Tracer<'_> {
         // A partly transparent surface is that boundary itself, not inside it: it keeps its rays.
         let inside = !state.media.is_air() && mat.transparency <= 0.0;
         let mut colour = if !inside || !self.scene.lights_clear_of_media {
-            self.direct(p, bsdf, rng, counts)
+            self.direct(p, bsdf, &state.media, rng, counts)
         } else {
             Vec3A::ZERO
         };

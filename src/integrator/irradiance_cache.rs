@@ -460,7 +460,7 @@ impl IrradianceCache {
                     let mut rng = Rng::new(seed, Pass::Cache, index);
                     let mut counts = RayCounts::default();
                     let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-                    tracer.radiance(&ray, PathState::camera(), &mut rng, &mut counts);
+                    tracer.radiance(&ray, PathState::camera(tracer.scene), &mut rng, &mut counts);
                     progress.advance(1);
                     (probe.out.into_inner().unwrap_or_default(), counts)
                 })

@@ -451,6 +451,11 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
     let [r, g, b, _] = pbr.base_color_factor();
     let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
     let ior = m.ior().unwrap_or(1.5);
+    // KHR_materials_volume: what light keeps after `attenuationDistance` (infinite by default:
+    // clear) inside the volume.
+    let (attenuation, distance) = m.volume().map_or(([1.0; 3], f32::INFINITY), |v| {
+        (v.attenuation_color(), v.attenuation_distance())
+    });
     let factors = [
         r,
         g,
@@ -459,6 +464,9 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
         pbr.roughness_factor(),
         transmission,
         ior,
+        attenuation[0],
+        attenuation[1],
+        attenuation[2],
     ];
     let name = match (m.name(), m.index()) {
         (Some(name), _) => name.to_owned(),
@@ -467,6 +475,11 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
     };
     if factors.iter().any(|f| !f.is_finite()) {
         return Err(format!("{name} has a non-finite factor"));
+    }
+    if distance.is_nan() || distance <= 0.0 {
+        return Err(format!(
+            "{name} has attenuationDistance {distance}; KHR_materials_volume needs a positive distance"
+        ));
     }
     let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
     let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
@@ -486,6 +499,7 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
         shininess: (2.0 / alpha2.max(1e-12) - 2.0).clamp(0.0, MAX_SHININESS),
         transparency: transmission.clamp(0.0, 1.0),
         ior: ior.max(1.0),
+        absorption: crate::material::absorption(attenuation, distance),
         texture,
     })
 }

@@ -74,6 +74,7 @@ const GR: &[(&str, Call, GrFn)] = &[
         gr_csg(l, s, a, CsgOp::Difference)
     }),
     ("material", Call::Function, gr_material),
+    ("absorption", Call::Function, gr_absorption),
     ("light", Call::Function, gr_light),
     ("area_light", Call::Function, gr_area_light),
     ("sphere_light", Call::Function, gr_sphere_light),
@@ -325,12 +326,48 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         shininess: shininess as f32,
         transparency: transparency as f32,
         ior: if ior > 0.0 { ior as f32 } else { 1.0 },
+        absorption: glam::Vec3::ZERO,
         perlin_scale: perlin_scale as f32,
         texture,
         bump,
         loc: a.loc.clone(),
     });
     Ok(Value::UserData(lua.create_userdata(MaterialRef(id))?))
+}
+
+/// `gr.absorption(material, colour, distance)`: the interior of a transparent solid of
+/// `material` keeps `colour` (each channel in `(0, 1]`) of the light that crosses `distance`
+/// of it (Beer–Lambert, as glTF's `KHR_materials_volume` and Mitsuba's homogeneous medium say
+/// it); `{1, 1, 1}` is clear.
+fn gr_absorption(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let material = a.material(1)?;
+    let colour = a.colour(2)?;
+    if colour.min_element() <= 0.0 || colour.max_element() > 1.0 {
+        return Err(a.bad(
+            2,
+            format!(
+                "the colour kept must be in (0, 1] per channel, got {{{}, {}, {}}}",
+                colour.x, colour.y, colour.z
+            ),
+        ));
+    }
+    let distance = a.length(3, "distance")?;
+    if distance < crate::range::MIN_LIGHT_SIZE {
+        let min = crate::range::MIN_LIGHT_SIZE;
+        return Err(a.bad(
+            3,
+            format!("distance must be at least {min}, got {distance}"),
+        ));
+    }
+    let m = &mut s.desc.materials[material.0 as usize];
+    m.absorption = crate::material::absorption(colour.to_array(), distance as f32);
+    if m.transparency <= 0.0 {
+        s.warn(
+            &a.loc,
+            "gr.absorption on an opaque material (t = 0): nothing enters it to be absorbed".into(),
+        );
+    }
+    Ok(Value::Nil)
 }
 
 fn gr_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {

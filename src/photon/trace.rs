@@ -577,6 +577,7 @@ pub fn trace_map_part(
             kind,
             targets: &targets,
             projection: projections[l].as_ref(),
+            media: scene.light_media.get(l).copied().unwrap_or_default(),
         };
         let stream = std::mem::take(&mut out.photons);
         let (stream, counts) = trace_light(&pass, (l, seed), share(l), stream, progress);
@@ -709,6 +710,8 @@ struct LightPass<'a> {
     targets: &'a [Target],
     /// The light's projection map, for global photons of a point light that has one.
     projection: Option<&'a ProjectionMap>,
+    /// The media the light is in, where its photons start ([`Scene::light_media`]).
+    media: MediumStack,
 }
 
 /// Traces one photon of `pass`, appending what it stores to `out`; returns what it met first.
@@ -812,7 +815,7 @@ fn bounce(
     let LightPass {
         scene, light, kind, ..
     } = *pass;
-    let mut media = MediumStack::air();
+    let mut media = pass.media;
     let mut first = true;
     let mut diffuse_bounced = false;
     let mut specular_bounced = false;
@@ -826,6 +829,10 @@ fn bounce(
         if first {
             power *= light.falloff_ratio(hit.t * ray.dir.length());
             first = false;
+        }
+        power *= scene.transmittance(&media, hit.t * ray.dir.length());
+        if power.max_element() <= 0.0 {
+            return met;
         }
         let it = scene.interaction(&ray, &hit, Needs::Full, None);
         let (surf, bsdf) = (&it.surf, &it.bsdf);

@@ -125,6 +125,8 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         stats,
         transparent: Vec::new(),
         lights_clear_of_media: false,
+        eye_media: Default::default(),
+        light_media: Vec::new(),
         features: super::types::Features::GENERAL,
         account,
     };
@@ -147,7 +149,69 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
             .iter()
             .all(|(_, t)| (b.max.cmplt(t.min) | b.min.cmpgt(t.max)).any())
     });
+    scene.eye_media = scene.media_at(render.camera.eye.into());
+    for &i in &scene.eye_media.doubtful {
+        let node = desc.node(scene.instances[i as usize].node);
+        let inside = scene.eye_media.inside.contains(&i);
+        eprintln!(
+            "{}: warning: the camera lies on the surface of node '{}' ({}), or the node is not closed; taking it to be {} it",
+            render.loc,
+            node.name,
+            node.loc,
+            if inside { "inside" } else { "outside" }
+        );
+    }
+    scene.light_media = scene
+        .lights
+        .iter()
+        .map(|light| {
+            let b = light_bounds(light);
+            scene.media_at((b.min + b.max) * 0.5).stack
+        })
+        .collect();
+    warn_hidden_solids(desc, &scene);
     Ok(scene)
+}
+
+/// Most transparent instances [`warn_hidden_solids`] looks at (each looks for the others that
+/// hold it).
+const MAX_HIDDEN_CHECK: usize = 4096;
+
+/// Warns, at the node's script line, about a transparent solid of absolute index placed inside
+/// a denser one (an air bubble of `ior = 1` in water): where solids overlap the denser medium
+/// wins ([`crate::material::medium`]), so the inner one would vanish without a word. An index
+/// below 1, relative to the container, is what makes such a solid.
+fn warn_hidden_solids(desc: &SceneDesc, scene: &Scene) {
+    if scene.transparent.len() > MAX_HIDDEN_CHECK {
+        return;
+    }
+    for &(a, bounds) in &scene.transparent {
+        let inst = &scene.instances[a as usize];
+        let ior = scene.materials[inst.material as usize].ior;
+        if inst.mesh_materials || ior < 1.0 {
+            continue;
+        }
+        let media = scene.media_at((bounds.min + bounds.max) * 0.5);
+        let holder = media.inside.iter().find(|&&b| {
+            let outer = scene.transparent.iter().find(|t| t.0 == b).map(|t| t.1);
+            b != a
+                && outer.is_some_and(|o| (o.min.cmple(bounds.min) & o.max.cmpge(bounds.max)).all())
+        });
+        let Some(&b) = holder else { continue };
+        let outer = &scene.instances[b as usize];
+        let outer_ior = scene.materials[outer.material as usize].ior;
+        if outer_ior > ior {
+            let (node, around) = (desc.node(inst.node), desc.node(outer.node));
+            eprintln!(
+                "{}: warning: node '{}' (ior {ior}) lies inside node '{}' (ior {outer_ior}): where transparent solids overlap the denser one wins, so '{}' is invisible there; for air in it give ior = {:.4} (an ior below 1 is relative to the solid around)",
+                node.loc,
+                node.name,
+                around.name,
+                node.name,
+                ior / outer_ior
+            );
+        }
+    }
 }
 
 /// Most instances whose centres share one cell of a 1024³ grid over the scene that the top-level

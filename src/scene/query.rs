@@ -111,7 +111,7 @@ impl Scene {
 
     /// Returns whether `r` crosses the surface of instance `i` at `h` against its outward normal
     /// (for a mesh, the triangle's winding, as the BSDF's front side is).
-    fn enters(&self, i: usize, r: &Ray, h: &Hit) -> bool {
+    pub(super) fn enters(&self, i: usize, r: &Ray, h: &Hit) -> bool {
         let inst = &self.instances[i];
         let normal = match inst.shape {
             Shape::Mesh(m) => {
@@ -125,7 +125,7 @@ impl Scene {
         inst.object_from_world.transform_vector3a(r.dir).dot(normal) < 0.0
     }
 
-    fn hit_instance(&self, i: usize, r: &Ray) -> Option<Hit> {
+    pub(super) fn hit_instance(&self, i: usize, r: &Ray) -> Option<Hit> {
         let inst = &self.instances[i];
         let local = object_ray(inst, r);
         let analytic = |iv: Option<Interval>| {

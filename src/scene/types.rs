@@ -94,6 +94,11 @@ pub struct Scene {
     /// the solid's boundary, which blocks it (the light through it is the caustic map's), so
     /// the eye path casts none ([`Scene::lights_clear_of_media`]).
     pub lights_clear_of_media: bool,
+    /// The media the camera is in (under water, inside a glass ball): where camera rays start
+    /// ([`Scene::media_at`]).
+    pub eye_media: crate::scene::media::Media,
+    /// The media each light is in, by light index: where its photons start.
+    pub light_media: Vec<crate::material::medium::MediumStack>,
     /// What of its materials and lights the passes simulate: the effect plan's choice, applied
     /// by [`Scene::apply`] before any pass runs; [`Features::GENERAL`] until then.
     pub features: Features,

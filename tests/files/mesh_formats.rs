@@ -178,6 +178,7 @@ fn materials_map_metal_roughness_transmission_ior_and_texture() {
         shininess: 10_000.0,
         transparency: 0.0,
         ior: 1.5,
+        absorption: glam::Vec3::ZERO,
         texture: None,
     };
     assert_eq!(*metal, expected);
@@ -188,6 +189,40 @@ fn materials_map_metal_roughness_transmission_ior_and_texture() {
         (Vec3::ONE, Vec3::ZERO, 0.0)
     );
     assert_eq!((default.transparency, default.ior), (0.0, 1.5));
+}
+
+/// `KHR_materials_volume` (issue 35): the attenuation colour kept after the attenuation distance
+/// becomes the absorption coefficient `σ = −ln(colour)/distance` per channel (Beer–Lambert); a
+/// channel kept whole absorbs nothing, a missing distance (infinite) leaves the volume clear, and
+/// a distance of zero or below is an error naming the material.
+#[test]
+fn gltf_volume_attenuation_becomes_absorption() {
+    let dir = out_dir("gltf-volume");
+    let file = |name: &str, volume: &str| {
+        let mut f = GltfFile::default();
+        f.floats("VEC3", &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+        let rest = format!(
+            r#""extensionsUsed":["KHR_materials_transmission","KHR_materials_volume"],
+            "nodes":[{{"mesh":0}}],
+            "materials":[{{"name":"sea","extensions":{{"KHR_materials_transmission":{{"transmissionFactor":1}},
+              "KHR_materials_volume":{{{volume}}}}}}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"material":0}}]}}]"#
+        );
+        f.write_embedded(&dir, name, &rest)
+    };
+    let sea = file(
+        "sea",
+        r#""thicknessFactor":0.1,"attenuationColor":[0.5,0.8,1],"attenuationDistance":2"#,
+    );
+    let mesh = load_gltf(&sea).unwrap();
+    let a = mesh.materials[0].absorption;
+    let want = vec3(-(0.5f32.ln()) / 2.0, -(0.8f32.ln()) / 2.0, 0.0);
+    assert!((a - want).abs().max_element() < 1e-6, "{a} against {want}");
+    let clear = file("clear", r#""attenuationColor":[0.5,0.8,1]"#);
+    assert_eq!(load_gltf(&clear).unwrap().materials[0].absorption, Vec3::ZERO);
+    let bad = file("bad", r#""attenuationColor":[0.5,0.8,1],"attenuationDistance":0"#);
+    let e = load_gltf(&bad).unwrap_err().to_string();
+    assert!(e.contains("sea") && e.contains("attenuationDistance"), "{e}");
 }
 
 /// Returns the error message parsing `bytes` as `path` gives; panics on success.
@@ -369,6 +404,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         shininess: 20.0,
         transparency: 0.0,
         ior: 1.5,
+        absorption: glam::Vec3::ZERO,
         texture: Some(dir.join("tex/red.png")),
     };
     let glass = MeshMaterial {
@@ -378,6 +414,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         shininess: 0.0,
         transparency: 0.9,
         ior: 1.33,
+        absorption: glam::Vec3::ZERO,
         texture: None,
     };
     let grey = MeshMaterial {
@@ -387,6 +424,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         shininess: 0.0,
         transparency: 0.0,
         ior: 1.0,
+        absorption: glam::Vec3::ZERO,
         texture: None,
     };
     assert_eq!(mesh.materials, [red, glass, grey]);

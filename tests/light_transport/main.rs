@@ -16,6 +16,7 @@ mod effect_plan;
 mod final_scene;
 mod furnace;
 mod materials;
+mod media;
 mod pixel_sampling;
 mod progressive;
 mod shading;

@@ -177,6 +177,7 @@ pub(super) fn mesh_material(m: &tobj::Material) -> MeshMaterial {
         shininess: m.shininess.unwrap_or(0.0).max(0.0),
         transparency: transparency.clamp(0.0, 1.0),
         ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(1.0),
+        absorption: Vec3::ZERO,
         texture: m.diffuse_texture.as_ref().map(PathBuf::from),
     }
 }
@@ -190,6 +191,7 @@ pub(super) fn default_material() -> MeshMaterial {
         shininess: 0.0,
         transparency: 0.0,
         ior: 1.0,
+        absorption: Vec3::ZERO,
         texture: None,
     }
 }

@@ -35,6 +35,15 @@ pub struct Lobes {
     pub dielectric: f32,
 }
 
+impl Lobes {
+    /// Returns the largest channel of the lobes' sum, `(kd + ks)·(1 − t) + t`: the share of the
+    /// light arriving that the surface sends on in its brightest channel, above 1
+    /// ([`crate::range::MAX_ALBEDO`]) for a surface that reflects more than it receives.
+    pub fn total(&self) -> f32 {
+        (self.diffuse + self.mirror + Vec3A::splat(self.dielectric)).max_element()
+    }
+}
+
 /// A material ready for shading.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -172,7 +181,11 @@ pub fn absorption(colour: [f32; 3], distance: f32) -> glam::Vec3 {
     if distance == f32::INFINITY {
         return glam::Vec3::ZERO;
     }
-    glam::Vec3::from_array(colour.map(|c| -c.clamp(MIN_ATTENUATION, 1.0).ln() / distance))
+    // `ln(1)` is 0, and `−0 / d` is −0: a channel kept whole must read as a plain 0.
+    glam::Vec3::from_array(colour.map(|c| {
+        let c = c.clamp(MIN_ATTENUATION, 1.0);
+        if c == 1.0 { 0.0 } else { -c.ln() / distance }
+    }))
 }
 
 /// Least fraction of light an absorbing volume keeps over its attenuation distance.

@@ -14,9 +14,20 @@
 //! | photons one light emits for one map (`num_photons`, its share of `--photons`, times `--photon-scale`) | `≤ 1e9` ([`MAX_PHOTONS`]) | 10^9 stored photons would need 20 GB |
 //!
 //! A reflectance above 1 amplifies light at every bounce: a path between two facing mirrors of
-//! `ks = 1.5` grows as `1.5ⁿ` and no finite bound above 1 keeps every path finite. Such values are
-//! accepted (the course's scenes use them for bright highlights), and a sample that still
-//! overflows is dropped and counted (`--stats`: "NaN or infinite samples dropped"), never
+//! `ks = 1.5` grows as `1.5ⁿ`, and photons in a closed room of `kd = 1.5` too. Such values are
+//! accepted (the course's scenes use `kd + ks` a little above 1 for bright highlights), with a
+//! warning at the script line where a material's total `(kd + ks)·(1 − t) + t` exceeds 1 in some
+//! channel ([`excess_albedo`]), and the long paths are bounded where they would grow:
+//! - a photon chooses its lobe as before, but at such a surface it is weighted as if the lobes
+//!   were scaled to sum 1 ([`crate::material::bsdf`]): its power never grows at a bounce, and a
+//!   `kd = 1.5` room carries light as a white one does;
+//! - an eye path splits deterministically over the plan's specular depth with `ks` as given (the
+//!   course's mirror weights); beyond it, Russian roulette follows a mirror of `ks` above 1 at
+//!   `ks` over its largest channel ([`crate::integrator::eye`]), so a closed mirror box adds
+//!   the same weight at each of its thousand bounces instead of `1.5¹⁰²⁴`.
+//!
+//! A sample that still overflows (`ks = 10` over the 66 split bounces a deep nest of glass
+//! shells may get) is dropped and counted (`--stats`: "NaN or infinite samples dropped"), never
 //! written to the image.
 
 use std::fmt::{Display, LowerExp};
@@ -35,6 +46,9 @@ pub const MAX_FALLOFF: f64 = 1e6;
 pub const MAX_POWER: f64 = 1e30;
 /// Smallest sphere-light radius, and smallest square root of an area light's area.
 pub const MIN_LIGHT_SIZE: f64 = 1e-6;
+/// Largest total reflectance `(kd + ks)·(1 − t) + t` that counts as 1: a surface that reflects
+/// all it receives can sum to a hair above 1 in `f32` (`0.7 + 0.3`).
+pub const MAX_ALBEDO: f32 = 1.0 + 1e-6;
 /// Most photons one light may emit for one map: 10^9 stored photons would need 20 GB, most of
 /// a workstation's memory. Script counts, `--photons` and `--photon-scale` are checked against
 /// it.
@@ -72,6 +86,29 @@ pub fn within<T: Copy + Into<f64> + Display + LowerExp>(
     }
 }
 
+/// Returns the message for a material of diffuse and mirror reflectances `kd`, `ks` and
+/// transparency `t` that reflects more light than it receives (its total
+/// `(kd + ks)·(1 − t) + t` above [`MAX_ALBEDO`] in some channel), if it does.
+pub fn excess_albedo(kd: [f32; 3], ks: [f32; 3], t: f32) -> Option<String> {
+    let total = |c: usize| (kd[c] + ks[c]) * (1.0 - t) + t;
+    let c = (1..3).fold(0, |best, c| if total(c) > total(best) { c } else { best });
+    if total(c) <= MAX_ALBEDO {
+        return None;
+    }
+    let what = if t > 0.0 {
+        "(kd + ks)·(1 − t) + t"
+    } else {
+        "kd + ks"
+    };
+    // Six decimals show what was written (`1.7`, not the `f32` sum 1.7000000476837158).
+    let shown = (f64::from(total(c)) * 1e6).round() / 1e6;
+    Some(format!(
+        "{what} reaches {shown} ({}), above 1: the surface reflects more light than it \
+         receives; photon paths keep their power instead of growing",
+        ["red", "green", "blue"][c]
+    ))
+}
+
 /// Returns a bound as people write it: `10`, `1e8`, `1e-6`.
 pub fn show(x: f64) -> String {
     show_value(x)
@@ -104,5 +141,30 @@ mod tests {
             within(&[0.5f32, 11.0], "kd", 10.0).unwrap_err(),
             "kd 11 is outside [0, 10]"
         );
+    }
+
+    /// A material warns when `kd + ks` (weighted by `1 − t`, plus `t`) passes 1 in a channel,
+    /// naming the largest total and its channel; sums of exactly 1 in decimal, which round to a
+    /// hair above 1 in `f32`, do not.
+    #[test]
+    fn materials_that_reflect_more_than_they_receive_are_named() {
+        let warned = excess_albedo([1.2, 0.5, 0.5], [0.5, 0.5, 0.5], 0.0).unwrap();
+        assert!(
+            warned.starts_with("kd + ks reaches 1.7 (red), above 1"),
+            "{warned}"
+        );
+        let warned = excess_albedo([0.5, 0.5, 1.0], [0.5, 0.5, 0.5], 0.5).unwrap();
+        assert!(
+            warned.starts_with("(kd + ks)·(1 − t) + t reaches 1.25 (blue), above 1"),
+            "{warned}"
+        );
+        for (kd, ks, t) in [
+            ([0.6, 0.2, 0.1], [0.3, 0.3, 0.3], 0.0),
+            ([0.7, 0.7, 0.7], [0.3, 0.3, 0.3], 0.0),
+            ([0.1, 0.2, 0.6], [0.9, 0.8, 0.4], 0.3),
+            ([5.0, 5.0, 5.0], [5.0, 5.0, 5.0], 1.0),
+        ] {
+            assert_eq!(excess_albedo(kd, ks, t), None, "{kd:?} {ks:?} {t}");
+        }
     }
 }

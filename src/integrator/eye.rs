@@ -22,6 +22,9 @@
 //! a path goes on by Russian roulette (pbrt-v4's path tracer): one lobe, chosen in proportion
 //! to its weight, which survives with probability `q = min(1, weight)` and is then divided by
 //! `q`, so the estimate stays unbiased (nested glass shells, a ray bouncing between mirrors).
+//! There a mirror brighter than white (`ks` above 1 in a channel) is followed at `ks` over its
+//! largest channel, so no bounce of the roulette adds weight (`crate::range`'s note): the
+//! deterministic splitting keeps the course's `ks`.
 //! [`MAX_PATH_DEPTH`] is a hard safety cap; paths stopped there are counted
 //! ([`RayCounts::depth_capped`]) and reported by `--stats`.
 //!
@@ -379,11 +382,19 @@ impl Tracer<'_> {
                 }
             }
         }
-        let weight = mat.ks.max_element();
         if !mat.is_reflective() {
             return colour;
         }
-        let (q, gain, share) = if state.splits(self.scene.features.specular_depth) {
+        let splits = state.splits(self.scene.features.specular_depth);
+        // Beyond the splitting depth a mirror brighter than white (ks above 1) is followed at
+        // ks over its largest channel: a closed box of such mirrors keeps the path's weight
+        // over its thousand bounces instead of multiplying it by ks at each.
+        let ks = match mat.ks.max_element() {
+            largest if !splits && largest > 1.0 => mat.ks / largest,
+            _ => mat.ks,
+        };
+        let weight = ks.max_element();
+        let (q, gain, share) = if splits {
             let (gain, share) = state.branch(weight);
             (
                 (state.weight * weight > MIN_WEIGHT).then_some(1.0),
@@ -400,7 +411,7 @@ impl Tracer<'_> {
             let mut child = state.child(weight / q, state.media).shared(share);
             // A Phong highlight already reflects the lights; the mirror image would count them twice.
             child.sees_emitters &= mat.shininess <= 0.0;
-            colour += gain * mat.ks / q * self.radiance(&ray, child, rng, counts);
+            colour += gain * ks / q * self.radiance(&ray, child, rng, counts);
         }
         colour
     }

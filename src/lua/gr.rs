@@ -319,6 +319,12 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         size_of::<MaterialDesc>() + paths[0] + paths[1],
         "a material",
     )?;
+    let excess = crate::range::excess_albedo(kd.to_array(), ks.to_array(), transparency as f32);
+    if let Some(m) = excess
+        && s.warned_albedo.insert(a.loc.to_string())
+    {
+        s.warn(&a.loc, format!("gr.material: {m}"));
+    }
     let id = MaterialId(s.desc.materials.len() as u32);
     s.desc.materials.push(MaterialDesc {
         kd,

@@ -160,6 +160,7 @@ pub fn run_source_with(
             ..SceneDesc::default()
         },
         warned_images: HashSet::new(),
+        warned_albedo: HashSet::new(),
         script_dir: script_dir.to_path_buf(),
         folders: Rc::clone(&folders),
         hook,
@@ -269,6 +270,9 @@ struct State {
     mesh_cache: HashMap<PathBuf, MeshId>,
     /// Missing images already warned about (`--missing-textures=warn`).
     warned_images: HashSet<String>,
+    /// Script lines whose material was warned about for reflecting more than it receives (a
+    /// loop making a thousand materials on one line warns once).
+    warned_albedo: HashSet<String>,
     /// How transforms compose.
     dialect: Dialect,
     /// The legacy signs seen so far; `None` under an explicit `--dialect`.

@@ -25,10 +25,26 @@
 //! Eye rays split deterministically (they weight every lobe, as the course's ray tracer does);
 //! photons choose one lobe by Russian roulette on the lobe weights ([`Bsdf::sample`]), with their
 //! power divided by the choice's probability, so each estimate stays unbiased.
+//!
+//! A photon takes each lobe with probability its largest channel (the three divided by their
+//! sum `S` where it exceeds 1); what is left is absorption ([`Choice`]).
+//! - At a surface that reflects at most what it receives (its total `(kd + ks)·(1 − t) + t`,
+//!   [`Lobes::total`], at most 1 in every channel) the chosen lobe is divided by its
+//!   probability: unbiased, and no channel gains on average.
+//! - At a surface that reflects more (`kd = 1.5`, warned about at the script line), unbiased
+//!   photons would gain power at every bounce: `1.5ⁿ` over the up to
+//!   [`MAX_BOUNCES`](crate::photon::trace::MAX_BOUNCES) of a closed room, until they overflow.
+//!   There the lobes are scaled to sum 1 for the weight as well as for the choice, so the weight
+//!   is the lobe over its largest channel, at most 1 in every channel: a photon's power never
+//!   grows at the bounce, and a `kd = 1.5` room carries the photons of a `kd = 1` one. The sum
+//!   `S` equals the total when the lobes peak in the same channel (grey highlights); where they
+//!   peak in different ones (a red diffuse lobe, a blue mirror) `S` is larger and the scaled
+//!   surface reflects less than 1 in every channel.
 
 use super::medium::{Crossing, MediumStack};
 use super::{Lobes, Material, fresnel};
 use crate::geometry::hit::SurfaceHit;
+use crate::range::MAX_ALBEDO;
 use crate::sampling::Rng;
 use crate::sampling::cosine_around;
 use glam::Vec3A;
@@ -236,16 +252,17 @@ impl<'a> Bsdf<'a> {
     /// path is absorbed or its sampled direction falls below the surface.
     pub fn sample(&self, crossing: Option<&Crossing>, rng: &mut Rng) -> Option<Sample> {
         let lobes = self.lobes();
-        let (pd, pm, pt) = (
-            lobes.diffuse.max_element(),
-            lobes.mirror.max_element(),
-            lobes.dielectric,
+        let choice = Choice::new(
+            [
+                lobes.diffuse.max_element(),
+                lobes.mirror.max_element(),
+                lobes.dielectric,
+            ],
+            lobes.total(),
         );
-        let scale = (pd + pm + pt).max(1.0);
-        let p = [pd / scale, pm / scale, pt / scale];
         let xi = rng.next_f32();
-        if xi < p[0] {
-            let weight = lobes.diffuse / p[0];
+        if xi < choice.p[0] {
+            let weight = lobes.diffuse / choice.divisor[0];
             let dir = self.sample_diffuse((rng.next_f32(), rng.next_f32()))?;
             Some(Sample {
                 dir,
@@ -255,7 +272,7 @@ impl<'a> Bsdf<'a> {
                 radiance_scale: 1.0,
             })
         } else {
-            self.specular(&lobes, xi, p, crossing, rng)
+            self.specular(&lobes, xi, &choice, crossing, rng)
         }
     }
 
@@ -264,26 +281,33 @@ impl<'a> Bsdf<'a> {
     /// specular surface whose diffuse lobe it has already evaluated.
     pub fn sample_specular(&self, crossing: Option<&Crossing>, rng: &mut Rng) -> Option<Sample> {
         let lobes = self.lobes();
-        let (pm, pt) = (lobes.mirror.max_element(), lobes.dielectric);
-        let scale = (pm + pt).max(1.0);
+        let specular = Lobes {
+            diffuse: Vec3A::ZERO,
+            ..lobes
+        };
+        let choice = Choice::new(
+            [0.0, lobes.mirror.max_element(), lobes.dielectric],
+            specular.total(),
+        );
         let xi = rng.next_f32();
-        self.specular(&lobes, xi, [0.0, pm / scale, pt / scale], crossing, rng)
+        self.specular(&lobes, xi, &choice, crossing, rng)
     }
 
-    /// The specular choices of [`Bsdf::sample`]: `xi` against the lobe probabilities `p`
-    /// (diffuse, mirror, dielectric).
+    /// The specular choices of [`Bsdf::sample`]: `xi` against the lobe probabilities of
+    /// `choice`.
     fn specular(
         &self,
         lobes: &Lobes,
         xi: f32,
-        p: [f32; 3],
+        choice: &Choice,
         crossing: Option<&Crossing>,
         rng: &mut Rng,
     ) -> Option<Sample> {
+        let p = choice.p;
         if xi < p[0] + p[1] {
             Some(Sample {
                 dir: self.reflected(),
-                weight: lobes.mirror / p[1],
+                weight: lobes.mirror / choice.divisor[1],
                 lobe: Lobe::Mirror,
                 media: None,
                 radiance_scale: 1.0,
@@ -302,7 +326,7 @@ impl<'a> Bsdf<'a> {
             // times F or 1 − F: t / p[2] (1 unless the lobes' weights were scaled down).
             Some(Sample {
                 dir,
-                weight: Vec3A::splat(lobes.dielectric / p[2]),
+                weight: Vec3A::splat(lobes.dielectric / choice.divisor[2]),
                 lobe: Lobe::Dielectric,
                 media,
                 radiance_scale,
@@ -310,6 +334,34 @@ impl<'a> Bsdf<'a> {
         } else {
             None
         }
+    }
+}
+
+/// How a path picks one lobe ([`Bsdf::sample`]): each lobe's probability, and what its weight is
+/// divided by once chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Choice {
+    /// Probabilities of the diffuse, mirror and dielectric lobes; what is left is absorption.
+    p: [f32; 3],
+    /// What each lobe's weight is divided by: its probability (an unbiased estimate), or, at a
+    /// surface that reflects more than it receives, its largest channel (a weight of at most 1).
+    divisor: [f32; 3],
+}
+
+impl Choice {
+    /// Returns the choice among lobes whose largest channels are `largest` (diffuse, mirror,
+    /// dielectric) and whose sum's largest channel is `total` ([`Lobes::total`]).
+    ///
+    /// The probabilities are the largest channels, divided by their sum `S` where it exceeds 1.
+    /// Where `total` exceeds 1 ([`MAX_ALBEDO`]) the lobes are divided by `S` too: a lobe's
+    /// weight over its probability is then the lobe over its largest channel, at most 1 in
+    /// every channel, so the path's power never grows at the bounce (`S ≥ total`, and
+    /// `S = total` when the lobes peak in the same channel, as grey highlights do).
+    fn new(largest: [f32; 3], total: f32) -> Choice {
+        let scale = (largest[0] + largest[1] + largest[2]).max(1.0);
+        let p = largest.map(|x| x / scale);
+        let divisor = if total > MAX_ALBEDO { largest } else { p };
+        Choice { p, divisor }
     }
 }
 
@@ -397,6 +449,141 @@ mod tests {
         assert!(close(d, lobes.diffuse), "{}", d / n as f32);
         assert!(close(mirror, lobes.mirror), "{}", mirror / n as f32);
         assert!((t / n as f64 - 0.3).abs() < 0.01);
+    }
+
+    /// Returns a random material: `kd` and `ks` each channel in `[0, 2)` (zero a quarter of the
+    /// time, so single lobes come up), transparency 0 a third of the time, else in `[0, 1)`;
+    /// with `fit`, `kd` and `ks` divided so that `kd + ks` is at most 1 in every channel.
+    fn random_material(rng: &mut Rng, fit: bool) -> Material {
+        let colour = |rng: &mut Rng| {
+            if rng.next_f32() < 0.25 {
+                Vec3A::ZERO
+            } else {
+                2.0 * Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
+            }
+        };
+        let mut m = Material::fallback();
+        (m.kd, m.ks) = (colour(rng), colour(rng));
+        if fit {
+            let largest = (m.kd + m.ks).max_element().max(1.0);
+            (m.kd, m.ks) = (m.kd / largest, m.ks / largest);
+        }
+        m.transparency = if rng.next_f32() < 1.0 / 3.0 {
+            0.0
+        } else {
+            rng.next_f32()
+        };
+        m.ior = 1.5;
+        m
+    }
+
+    /// The photon sampling before surfaces reflecting more than they receive were scaled: the
+    /// lobe `xi` chooses and its weight, lobe over probability; `specular` leaves the diffuse
+    /// lobe out, as [`Bsdf::sample_specular`] does.
+    fn previous(b: &Bsdf, xi: f32, specular: bool) -> Option<(Lobe, Vec3A)> {
+        let lobes = b.lobes();
+        let pd = if specular {
+            0.0
+        } else {
+            lobes.diffuse.max_element()
+        };
+        let (pm, pt) = (lobes.mirror.max_element(), lobes.dielectric);
+        let scale = (pd + pm + pt).max(1.0);
+        let p = [pd / scale, pm / scale, pt / scale];
+        if xi < p[0] {
+            Some((Lobe::Diffuse, lobes.diffuse / p[0]))
+        } else if xi < p[0] + p[1] {
+            Some((Lobe::Mirror, lobes.mirror / p[1]))
+        } else if xi < p[0] + p[1] + p[2] {
+            Some((Lobe::Dielectric, Vec3A::splat(lobes.dielectric / p[2])))
+        } else {
+            None
+        }
+    }
+
+    /// Materials that reflect at most what they receive (total at most 1; a tenth of them with
+    /// a lobe sum `S` above 1, where the lobes peak in different channels) sample photons bit
+    /// for bit as before: the same lobe and the same weight for every draw, 400 materials × 500
+    /// draws each of [`Bsdf::sample`] and [`Bsdf::sample_specular`].
+    #[test]
+    fn photon_sampling_is_unchanged_where_a_surface_reflects_at_most_what_it_receives() {
+        let mut rng = Rng::new(11, Pass::Photon, 0);
+        let wo = Vec3A::new(0.2, 0.1, 1.0).normalize();
+        let mut peaks_apart = 0;
+        for _ in 0..400 {
+            let m = random_material(&mut rng, true);
+            let b = Bsdf::new(&m, &flat(3), wo, true);
+            let lobes = b.lobes();
+            assert!(lobes.total() <= MAX_ALBEDO, "{m:?}");
+            let sum = lobes.diffuse.max_element() + lobes.mirror.max_element() + lobes.dielectric;
+            peaks_apart += usize::from(sum > 1.0);
+            let crossing = b.crossing(&MediumStack::air());
+            for draw in 0..1000 {
+                let specular = draw % 2 == 1;
+                let want = previous(&b, rng.clone().next_f32(), specular);
+                let got = if specular {
+                    b.sample_specular(crossing.as_ref(), &mut rng)
+                } else {
+                    b.sample(crossing.as_ref(), &mut rng)
+                };
+                assert_eq!(got.map(|s| (s.lobe, s.weight)), want, "{m:?}");
+            }
+        }
+        assert!(
+            peaks_apart >= 40,
+            "only {peaks_apart} materials with S above 1"
+        );
+    }
+
+    /// Materials that reflect more than they receive (total above 1) never make a photon gain
+    /// power: over 400 random materials × 1000 draws of [`Bsdf::sample`] and
+    /// [`Bsdf::sample_specular`] every weight is at most 1 in every channel (the unscaled
+    /// weights reached 3.3 here), and the mean weight per channel is the lobes' sum over `S`
+    /// (the lobes scaled to sum 1) within 0.05 (each weight is at most 1, so the standard error
+    /// of 1000 draws is under 0.016).
+    #[test]
+    fn photon_weights_never_exceed_one_where_a_surface_reflects_more_than_it_receives() {
+        let mut rng = Rng::new(12, Pass::Photon, 0);
+        let wo = Vec3A::new(0.2, 0.1, 1.0).normalize();
+        let mut tested = 0;
+        while tested < 400 {
+            let m = random_material(&mut rng, false);
+            let b = Bsdf::new(&m, &flat(3), wo, true);
+            let lobes = b.lobes();
+            if lobes.total() <= 1.001 {
+                continue;
+            }
+            tested += 1;
+            let crossing = b.crossing(&MediumStack::air());
+            for specular in [false, true] {
+                let diffuse = if specular { Vec3A::ZERO } else { lobes.diffuse };
+                let sum = diffuse.max_element() + lobes.mirror.max_element() + lobes.dielectric;
+                let scaled = (diffuse + lobes.mirror + Vec3A::splat(lobes.dielectric)) / sum;
+                let (n, mut mean) = (1000, Vec3A::ZERO);
+                for _ in 0..n {
+                    let s = if specular {
+                        b.sample_specular(crossing.as_ref(), &mut rng)
+                    } else {
+                        b.sample(crossing.as_ref(), &mut rng)
+                    };
+                    if let Some(s) = s {
+                        assert!(s.weight.max_element() <= 1.0, "{m:?}: weight {}", s.weight);
+                        mean += s.weight / n as f32;
+                    }
+                }
+                // A specular total of at most 1 is sampled as before: unbiased, unscaled.
+                let total = (lobes.mirror + Vec3A::splat(lobes.dielectric)).max_element();
+                let want = if specular && total <= 1.0 {
+                    lobes.mirror + Vec3A::splat(lobes.dielectric)
+                } else {
+                    scaled
+                };
+                assert!(
+                    (mean - want).abs().max_element() < 0.05,
+                    "{m:?}, specular {specular}: mean weight {mean}, want {want}"
+                );
+            }
+        }
     }
 
     /// Two transparent solids touching are crossed as one interface: glass (material 1) resting

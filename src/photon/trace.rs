@@ -8,7 +8,9 @@
 //!   part. At each hit a photon takes one of the material's
 //!   behaviours ([`crate::material::Material::lobes`]) with probability equal to its weight
 //!   (Russian roulette on albedo), or is absorbed; its power is divided by that probability, so
-//!   it stays an unbiased estimate.
+//!   it stays an unbiased estimate. At a surface that reflects more than it receives (`kd`
+//!   above 1) the lobes are scaled to sum 1, and the photon keeps its power rather than
+//!   gaining ([`crate::material::bsdf`]).
 //! - **Caustic photons** are aimed at the scene's specular objects (mirrors and dielectrics): each
 //!   is sent into a cone around one of their bounding spheres, chosen in proportion to the cones'
 //!   solid angles, and weighted by the inverse of the resulting direction density (a projection map

@@ -101,19 +101,27 @@ fn huge_view_vectors_are_normalised_in_double_precision() {
     assert_eq!(got, want);
 }
 
-/// Radiance past the largest `f32` (a colour of 3e38 lit by a light of 3e38) never reaches the
-/// image: all 25 pixels are finite, and each sample on the sphere that overflowed (5 of 25) is
-/// counted as dropped, black, and printed by `--stats` (they were written as Inf).
+/// Radiance past the largest `f32` never reaches the image: all 25 pixels are finite, and each
+/// sample that overflowed is counted as dropped, black, and printed by `--stats` (they were
+/// written as Inf).
 #[test]
 fn infinite_radiance_is_dropped_and_counted() {
-    // Inside a mirror sphere of the largest reflectance (10, see caustic::range): every bounce
-    // multiplies the path by 10, so every camera sample overflows.
-    let src = scene(
-        "gr.material({0.5, 0.5, 0.5}, {10, 10, 10}, 0)",
-        "gr.sphere('s'); s:scale(10, 10, 10)",
-        VIEW,
-    );
-    let frame = render(&src);
+    // Inside a mirror sphere of the largest reflectance (10, see caustic::range), with 32 nested
+    // glass shells behind the camera raising the plan's splitting depth to its cap
+    // (2·32 + 2 = 66): the split bounces multiply a path by 10 each, 10^66 in all. (Past the
+    // splitting depth a mirror above 1 no longer multiplies: caustic::range's note.)
+    let src = "m = gr.material({0.5, 0.5, 0.5}, {10, 10, 10}, 0)
+root = gr.node('root')
+s = gr.sphere('s'); s:scale(10, 10, 10); s:set_material(m); root:add_child(s)
+glass = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)
+for i = 1, 32 do
+  local g = gr.sphere('g' .. i); g:scale(1 - 0.02 * i, 1 - 0.02 * i, 1 - 0.02 * i)
+  g:translate(0, 0, 8); g:set_material(glass); root:add_child(g)
+end
+gr.render(root, 'p.png', 5, 5, {0, 0, 5}, {0, 0, -1}, {0, 1, 0}, 50, {0.1, 0.1, 0.1},
+          {gr.light({0, 0, 5}, {1, 1, 1}, {1, 0, 0})})
+";
+    let frame = render(src);
     let pixels = &frame.film.pixels;
     assert!(pixels.iter().all(|p| p.is_finite()), "{pixels:?}");
     let dropped = frame.stats.render.nonfinite_samples;
@@ -125,7 +133,7 @@ fn infinite_radiance_is_dropped_and_counted() {
 
     let dir = out_dir("stability_precision_stats");
     let script = dir.join("p.lua");
-    std::fs::write(&script, &src).unwrap();
+    std::fs::write(&script, src).unwrap();
     let out = run_ok(
         caustic()
             .args(["render", "-q", "--gi", "off", "--spp", "1", "--stats", "-o"])

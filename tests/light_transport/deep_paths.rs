@@ -115,22 +115,7 @@ fn dielectric_shells_transmit_the_closed_form() {
 /// `MAX_PATH_DEPTH` = 1024 bounces, so this also checks the recursion fits the worker's stack).
 #[test]
 fn facing_perfect_mirrors_stop_at_the_hard_cap() {
-    let src = "mirror = gr.material({0,0,0}, {1,1,1}, 0)\n\
-               root = gr.node('root')\n\
-               a = gr.cube('a'); a:scale(4000, 4000, 0.1); a:translate(-2000, -2000, -1.1); a:set_material(mirror); root:add_child(a)\n\
-               b = gr.cube('b'); b:scale(4000, 4000, 0.1); b:translate(-2000, -2000, 1); b:set_material(mirror); root:add_child(b)\n\
-               gr.render(root, 'm.png', 3, 3, {0,0,0}, {0,0,-1}, {0,1,0}, 10, {0,0,0},\n\
-                         {gr.light({0,0,0.5}, {1,1,1}, {1,0,0})})\n";
-    let desc = common::run_lua(src).unwrap();
-    let frame = caustic::frame::render_desc(
-        &desc,
-        &desc.renders[0],
-        1.0,
-        None,
-        &whitted(),
-        &caustic::progress::NoProgress,
-    )
-    .unwrap();
+    let frame = facing_mirrors(0.0, 1.0, 0.5);
     let pixels = &frame.film.pixels;
     assert!(pixels.iter().all(|p| p.is_finite()), "{pixels:?}");
     assert_eq!(
@@ -167,5 +152,66 @@ fn capped_paths_are_reported_on_the_command_line() {
         err.contains("warning: 9 eye paths stopped at the 1024-bounce cap")
             && err.contains("m.png"),
         "{err}"
+    );
+}
+
+/// Renders two facing mirrors 2.1 apart, 4000 wide, of diffuse reflectance `kd` and mirror
+/// reflectance `ks`, with the camera between them looking at one and a point light at
+/// `z = light_z` on the axis, by the first renderer (no ambient light, no photons).
+fn facing_mirrors(kd: f32, ks: f32, light_z: f32) -> caustic::frame::Frame {
+    let src = format!(
+        "mirror = gr.material({{{kd},{kd},{kd}}}, {{{ks},{ks},{ks}}}, 0)\n\
+         root = gr.node('root')\n\
+         a = gr.cube('a'); a:scale(4000, 4000, 0.1); a:translate(-2000, -2000, -1.1); a:set_material(mirror); root:add_child(a)\n\
+         b = gr.cube('b'); b:scale(4000, 4000, 0.1); b:translate(-2000, -2000, 1); b:set_material(mirror); root:add_child(b)\n\
+         gr.render(root, 'm.png', 3, 3, {{0,0,0}}, {{0,0,-1}}, {{0,1,0}}, 10, {{0,0,0}},\n\
+                   {{gr.light({{0,0,{light_z}}}, {{1,1,1}}, {{1,0,0}})}})\n"
+    );
+    let desc = common::run_lua(&src).unwrap();
+    caustic::frame::render_desc(
+        &desc,
+        &desc.renders[0],
+        1.0,
+        None,
+        &whitted(),
+        &caustic::progress::NoProgress,
+    )
+    .unwrap()
+}
+
+/// Returns the centre pixel and the dropped samples of the facing mirrors
+/// ([`facing_mirrors`]) of diffuse reflectance 0.1 and mirror reflectance `ks`, the light 0.5
+/// above the lower mirror.
+fn facing_mirrors_centre(ks: f32) -> (Vec3A, u64) {
+    let frame = facing_mirrors(0.1, ks, -0.5);
+    (frame.film.get(1, 1), frame.stats.render.nonfinite_samples)
+}
+
+/// Mirrors brighter than white between each other stay finite: the centre ray of the facing
+/// mirrors meets them `MAX_PATH_DEPTH + 1` times on the axis, each hit adding the direct light
+/// `kd·I = 0.1`. Split deterministically for the first `MAX_DEPTH` bounces, the path carries
+/// `ksⁿ`; beyond, Russian roulette follows a mirror of ks above 1 at ks over its largest
+/// channel (weight 1), so with ks = 1.5 the pixel is
+/// `0.1·(Σ_{n=0}^{D} 1.5ⁿ + (MAX_PATH_DEPTH − D)·1.5^D)` (D = `MAX_DEPTH`), and with ks = 1 it
+/// is `0.1·(MAX_PATH_DEPTH + 1)`, both within 1e-4 (f32 sums of a thousand terms). Unscaled,
+/// ks = 1.5 grew as 1.5¹⁰²⁴ and the sample was dropped as infinite.
+#[test]
+fn facing_mirrors_brighter_than_white_stay_finite() {
+    let (white, dropped) = facing_mirrors_centre(1.0);
+    let want = 0.1 * (MAX_PATH_DEPTH + 1) as f64;
+    assert_eq!(dropped, 0);
+    assert!(
+        (white.x as f64 / want - 1.0).abs() < 1e-4 && white.x == white.y,
+        "ks = 1: centre {white}, closed form {want}"
+    );
+    let (bright, dropped) = facing_mirrors_centre(1.5);
+    let d = MAX_DEPTH as i32;
+    let split: f64 = (0..=d).map(|n| 1.5f64.powi(n)).sum();
+    let want = 0.1 * (split + (MAX_PATH_DEPTH as f64 - d as f64) * 1.5f64.powi(d));
+    println!("ks = 1.5: centre {bright}, closed form {want}, {dropped} dropped");
+    assert_eq!(dropped, 0, "ks = 1.5: samples dropped as infinite");
+    assert!(
+        (bright.x as f64 / want - 1.0).abs() < 1e-4,
+        "ks = 1.5: centre {bright}, closed form {want}"
     );
 }

@@ -418,7 +418,7 @@ fn unknown_gr_functions_list_the_functions_that_exist() {
         lua_error("\ns = gr.spere('s')"),
         "test.lua:2: unknown function gr.spere (caustic has gr.node, gr.joint, gr.sphere, gr.cube, \
          gr.cylinder, gr.cone, gr.nh_sphere, gr.nh_box, gr.mesh, gr.water_mesh, gr.union, \
-         gr.intersection, gr.difference, gr.material, gr.light, gr.area_light, gr.sphere_light, \
+         gr.intersection, gr.difference, gr.material, gr.absorption, gr.light, gr.area_light, gr.sphere_light, \
          gr.settings, gr.render)"
     );
     assert_eq!(
@@ -554,4 +554,42 @@ fn dash_d_on_the_command_line_sets_globals_and_names_itself_in_errors() {
     let out = info(&["-D", "table=1"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("-D table=1"), "{err}");
+}
+
+/// A material that reflects more than it receives (`(kd + ks)·(1 − t) + t` above 1 in a channel)
+/// is warned about once at its script line, naming the total and the channel (issue 35); one
+/// that sums to exactly 1 and one of transparency 1 are not; `gr.absorption` checks its colour
+/// and distance and warns on an opaque material.
+#[test]
+fn materials_brighter_than_white_and_absorption_are_checked_at_the_line() {
+    let desc = common::run_lua(
+        "ok = gr.material({0.7, 0.7, 0.7}, {0.3, 0.3, 0.3}, 10)
+glass = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)
+for i = 1, 3 do bright = gr.material({1.2, 0.5, 0.5}, {0.5, 0.5, 0.5}, 10) end
+gr.absorption(ok, {0.5, 0.5, 0.5}, 1)",
+    )
+    .unwrap();
+    assert_eq!(desc.warnings.len(), 2, "{:?}", desc.warnings);
+    assert!(
+        desc.warnings[0].contains("test.lua:3: warning: gr.material: kd + ks reaches 1.7 (red)"),
+        "{:?}",
+        desc.warnings
+    );
+    assert!(
+        desc.warnings[1].contains("test.lua:4:") && desc.warnings[1].contains("opaque"),
+        "{:?}",
+        desc.warnings
+    );
+    for (args, want) in [
+        ("{0, 0.5, 0.5}, 1", "(0, 1]"),
+        ("{0.5, 1.5, 0.5}, 1", "(0, 1]"),
+        ("{0.5, 0.5, 0.5}, 0", "distance must be positive"),
+        ("{0.5, 0.5, 0.5}, 1e-9", "distance must be at least"),
+        ("{0.5, 0.5, 0.5}, -1", "distance"),
+    ] {
+        let e = common::lua_error(&format!(
+            "glass = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 1.5)\ngr.absorption(glass, {args})"
+        ));
+        assert!(e.contains("test.lua:2") && e.contains(want), "{args}: {e}");
+    }
 }

@@ -92,7 +92,7 @@ fn the_legacy_desk_renders_the_modern_desks_image_value_for_value() {
         changed > modern.len() / 10,
         "the legacy copy read the modern way changed only {changed} values"
     );
-    assert!(!quiet.contains("warning") && !quiet_too.contains("warning"));
+    assert!(!quiet.contains("--dialect") && !quiet_too.contains("--dialect"));
     assert!(warned.contains("--dialect legacy"), "{warned}");
 }
 
@@ -288,7 +288,8 @@ fn legacy_copies_of_the_a4_scenes_render_the_originals_images() {
             "{name}: the legacy copy renders another image"
         );
         assert!(modern != wrong, "{name}: the order changed nothing");
-        assert!(!quiet.contains("warning"), "{name}: {quiet}");
+        // Other warnings (a material brighter than white) are not the dialect's.
+        assert!(!quiet.contains("--dialect"), "{name}: {quiet}");
         assert!(warned.contains("--dialect legacy"), "{name}: {warned}");
     }
 }

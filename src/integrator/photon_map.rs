@@ -24,8 +24,14 @@
 //!     no more of them than the image's pixels ([`Prepass::precompute_for`]), else each the first
 //!     time a gather ray reads it ([`Precomputed`]), and a gather ray takes the value of the nearest
 //!     such point whose normal is within 25° of the surface's (one 1-nearest query instead of a
-//!     50-nearest estimate). Where no such point lies within the search radius (a thin wall's
-//!     back, say) it falls back to the estimate. Why: a frame has tens of millions of gather
+//!     50-nearest estimate). The point must also be one the query point can see along the
+//!     surface, as Christensen's and pbrt's estimators require: it passes the side test
+//!     (`on_one_surface`: not across a wall from the query point, which a normal test alone
+//!     cannot tell when both faces of a thin wall face the same way, as a box's inside floor and
+//!     the floor outside it do), and the query point lies within the radius the point's own
+//!     estimate gathered over (a point estimated from a dense patch inside a sealed box stands
+//!     for that patch only). Where no point passes it falls back to the estimate, whose photons
+//!     pass the normal and disc tests (issue 35: a light sealed in a box lit its outside). Why: a frame has tens of millions of gather
 //!     rays but only ~10^6 photons, so estimating at the photons is far cheaper, and the
 //!     gathered values are averaged over 64 rays, which hides the piecewise-constant lookup
 //!     (on `room2.lua`: render 32.6 s -> 8.2 s, mean pixel value within 1.3%; pbrt's closed
@@ -41,12 +47,13 @@
 //!     Fast and blotchy: the original project's method.
 //!
 //! Estimates use the `k` nearest photons within a maximum radius, reject photons whose stored
-//! normal disagrees with the surface's (light leaking round corners and through thin walls), and
-//! weight them with a [`Filter`] that integrates to one.
+//! normal disagrees with the surface's (light leaking round corners and through thin walls) or
+//! that lie off the surface's side (`on_one_surface`: a parallel face across a wall, whose
+//! normal agrees), and weight them with a [`Filter`] that integrates to one.
 
 use super::eye::{DiffuseTerm, PathState, ShadingPoint};
 use super::irradiance_cache::{CacheSettings, CacheStats, Gather, IrradianceCache};
-pub use super::precomputed::{PRECOMPUTE_STRIDE, Precomputed, is_precompute_point};
+pub use super::precomputed::{PRECOMPUTE_STRIDE, PointEstimate, Precomputed, is_precompute_point};
 use super::{Plan, Settings, View, camera_pass};
 use crate::accel::counters::RayKind;
 use crate::camera::Camera;
@@ -95,6 +102,33 @@ pub const CAUSTIC_PHOTONS: u64 = 2_000_000;
 
 /// Smallest cosine between a precomputed point's normal and the surface's for the point to be used.
 const PRECOMPUTED_MIN_COS: f32 = 0.9;
+
+/// How far, as a share of their distance, the chord between two points may lean off the plane
+/// perpendicular to their mean normal beyond what the angle between their normals allows, for
+/// them still to count as one surface ([`on_one_surface`]): 0.05 (2.9°), for float rounding
+/// and surfaces that curve both ways between the two points (a bumpy mesh).
+const ONE_SURFACE_SLACK: f32 = 0.05;
+
+/// Returns whether two points `offset` apart, of unit geometric normals `n_a` and `n_b` (facing
+/// the same way: the callers' normal tests), may lie on one surface: whether the offset's part
+/// along their mean normal is at most `sin(θ/2) + ONE_SURFACE_SLACK` of its length, `θ` the
+/// angle between the normals. The side test of the photon estimates and the precomputed
+/// lookups, with the normal test the "can the point see it along the surface" test of
+/// Christensen's and pbrt's estimators without a ray.
+///
+/// Why that bound: on a circular arc the chord between two points is perpendicular to their
+/// mean normal, and across a crease of angle `θ` it leans at most `θ/2` off the plane
+/// perpendicular to it (at most when one point is on the crease), so points of one smooth or
+/// faceted surface pass. A point on a parallel surface across a wall of thickness `t` (a sealed
+/// box's inside floor seen from the floor outside it: both normals up, so the normal test cannot
+/// tell) leans `t` over the distance and fails unless it is `t / 0.05` = 20 `t` away.
+fn on_one_surface(offset: Vec3A, n_a: Vec3A, n_b: Vec3A) -> bool {
+    let cos = n_a.dot(n_b).clamp(-1.0, 1.0);
+    let lean = (0.5 * (1.0 - cos)).sqrt() + ONE_SURFACE_SLACK;
+    // (offset · m)² with m = (n_a + n_b)/|n_a + n_b| and |n_a + n_b|² = 2 + 2 cos.
+    let along = offset.dot(n_a + n_b);
+    along * along <= (2.0 + 2.0 * cos) * lean * lean * offset.length_squared()
+}
 
 /// How the indirect diffuse term is computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -410,12 +444,12 @@ impl Prepass {
     /// If `point` is not below the number of points.
     pub fn precomputed_irradiance(&self, point: PhotonId) -> Option<Vec3A> {
         let pre = self.precomputed.as_ref()?;
-        Some(self.point_irradiance(pre, point))
+        Some(self.point_irradiance(pre, point).irradiance)
     }
 
     /// Returns the irradiance at precomputation point `point` of `pre` (at `p`, normal `n`):
     /// its estimate from the global photons that are *not* precomputation points, scaled for the
-    /// thinning.
+    /// thinning, with the squared radius of the disc it gathered them over.
     ///
     /// Why the others only: a final-gather ray reads the point nearest to where it lands, and
     /// the nearest of a set of points is most often one with a large empty cell around it, that
@@ -427,7 +461,7 @@ impl Prepass {
     /// samples of the same density: which point a ray reads says nothing about that point's
     /// estimate, and the others' estimate, scaled by `STRIDE/(STRIDE−1)` for the thinning, is
     /// unbiased.
-    fn point_irradiance(&self, pre: &Precomputed, point: PhotonId) -> Vec3A {
+    fn point_irradiance(&self, pre: &Precomputed, point: PhotonId) -> PointEstimate {
         pre.value(point, || {
             let ph = pre.points.get(point);
             let others = |id: PhotonId| !is_precompute_point(id);
@@ -435,7 +469,11 @@ impl Prepass {
             FOUND.with_borrow_mut(|found| {
                 let (map, k, r2) = (&self.global, self.settings.k, self.global_r2);
                 let d2 = map.knn_where(ph.position, k, r2, others, found);
-                self.kernel_sum(map, found, d2, ph.normal, false) * thinning
+                PointEstimate {
+                    irradiance: self.kernel_sum(map, found, d2, (ph.position, ph.normal), false)
+                        * thinning,
+                    r2: d2,
+                }
             })
         })
     }
@@ -465,18 +503,18 @@ impl Prepass {
             };
             counts.lookups += 1;
             counts.photons_used += found.len() as u64;
-            self.kernel_sum(map, found, r2, n, indirect_only)
+            self.kernel_sum(map, found, r2, (p, n), indirect_only)
         })
     }
 
     /// Returns the kernel-weighted power of the `found` photons of `map` within radius² `r2`,
-    /// as seen by a surface with normal `n`.
+    /// as seen by a surface at `at` = (point, unit geometric normal).
     fn kernel_sum(
         &self,
         map: &PhotonMap,
         found: &[(f32, PhotonId)],
         r2: f32,
-        n: Vec3A,
+        (p, n): (Vec3A, Vec3A),
         indirect_only: bool,
     ) -> Vec3A {
         if found.is_empty() || r2 <= 0.0 {
@@ -485,8 +523,13 @@ impl Prepass {
         let mut e = Vec3A::ZERO;
         for &(d2, id) in found {
             let ph = map.get(id);
-            // Photons from another surface (round a corner, behind a thin wall) do not count.
-            if ph.normal.dot(n) < 0.7 || ph.dir.dot(n) <= 0.0 || (indirect_only && ph.direct) {
+            // Photons from another surface (round a corner, behind a thin wall: the normal and
+            // side tests) do not count.
+            if ph.normal.dot(n) < 0.7
+                || ph.dir.dot(n) <= 0.0
+                || (indirect_only && ph.direct)
+                || !on_one_surface(ph.position - p, n, ph.normal)
+            {
                 continue;
             }
             e += ph.power * self.settings.filter.weight(d2, r2);
@@ -623,19 +666,26 @@ impl Prepass {
         self.irradiance(MapKind::Caustic, p, n, false, counts)
     }
 
-    /// Returns the irradiance a final-gather ray finds at `p` (normal `n`): the precomputed value
-    /// of the nearest precomputed point on a surface facing the same way, or else (no
-    /// precomputation, or no such point near) the global map's estimate.
+    /// Returns the irradiance a final-gather ray finds at `p` (unit geometric normal `n`): the
+    /// precomputed value of the nearest precomputation point that may lie on the same surface
+    /// (its normal within [`PRECOMPUTED_MIN_COS`] of `n` and [`on_one_surface`] with `p`), when
+    /// `p` lies within the disc that point's estimate gathered over; else (no precomputation,
+    /// no such point) the global map's estimate at `p`. The module doc says why.
     pub fn gathered_irradiance(&self, p: Vec3A, n: Vec3A, counts: &mut RayCounts) -> Vec3A {
         if let Some(pre) = &self.precomputed {
             counts.lookups += 1;
             let points = &pre.points;
             let found = points.nearest_where(p, self.global_r2, &mut |id| {
-                points.normal(id).dot(n) >= PRECOMPUTED_MIN_COS
+                let n_point = points.normal(id);
+                n_point.dot(n) >= PRECOMPUTED_MIN_COS
+                    && on_one_surface(points.position(id) - p, n, n_point)
             });
-            if let Some((_, id)) = found {
-                counts.photons_used += 1;
-                return self.point_irradiance(pre, id);
+            if let Some((d2, id)) = found {
+                let point = self.point_irradiance(pre, id);
+                if d2 <= point.r2 {
+                    counts.photons_used += 1;
+                    return point.irradiance;
+                }
             }
         }
         self.irradiance(MapKind::Global, p, n, false, counts)

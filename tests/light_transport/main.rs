@@ -1,10 +1,12 @@
 //! Light transport: the images the integrators make, against closed forms and each other.
 //! Parts: `shading` (the first renderer's Phong light), `dielectric` (refraction), `materials`
 //! (textures and normal maps), `convergence` and `furnace` (light neither lost nor gained),
-//! `deep_paths` (Russian roulette past any fixed depth), `shadow_media` (no shadow rays from
-//! inside transparent solids), `weak_branches` (weak reflections shared by a pixel's samples),
-//! `progressive` (the progressive integrator), `effect_plan` (the effects decided before the
-//! passes), `pixel_sampling` (determinism, crops, tiles, adaptive sampling) and `final_scene`.
+//! `media` (the camera inside solids, relative indices, absorption), `leaks` (no light through
+//! closed walls), `deep_paths` (Russian roulette past any fixed depth), `shadow_media` (no
+//! shadow rays from inside transparent solids), `weak_branches` (weak reflections shared by a
+//! pixel's samples), `progressive` (the progressive integrator), `effect_plan` (the effects
+//! decided before the passes), `pixel_sampling` (determinism, crops, tiles, adaptive sampling)
+//! and `final_scene`.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -15,6 +17,7 @@ mod dielectric;
 mod effect_plan;
 mod final_scene;
 mod furnace;
+mod leaks;
 mod materials;
 mod media;
 mod pixel_sampling;

@@ -149,6 +149,14 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
             .iter()
             .all(|(_, t)| (b.max.cmplt(t.min) | b.min.cmpgt(t.max)).any())
     });
+    find_media(desc, render, &mut scene);
+    Ok(scene)
+}
+
+/// Finds the media the camera and each light are in ([`Scene::media_at`]), warning at the
+/// render's line when the eye lies on a solid's surface, and about solids hidden inside denser
+/// ones ([`warn_hidden_solids`]).
+fn find_media(desc: &SceneDesc, render: &RenderDesc, scene: &mut Scene) {
     scene.eye_media = scene.media_at(render.camera.eye.into());
     for &i in &scene.eye_media.doubtful {
         let node = desc.node(scene.instances[i as usize].node);
@@ -169,8 +177,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
             scene.media_at((b.min + b.max) * 0.5).stack
         })
         .collect();
-    warn_hidden_solids(desc, &scene);
-    Ok(scene)
+    warn_hidden_solids(desc, scene);
 }
 
 /// Most transparent instances [`warn_hidden_solids`] looks at (each looks for the others that

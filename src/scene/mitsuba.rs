@@ -9,7 +9,11 @@
 //!   diffuse `kd` (`ks = 0`, `t = 0`) → `diffuse`; a mirror (`kd = 0`, `t = 0`, no Phong
 //!   highlight: `p = 0`) → `conductor` with `material = none` and `specular_reflectance = ks`;
 //!   a clear dielectric (`t = 1`) → `dielectric` with `int_ior = ior` and `ext_ior` the index of
-//!   the densest dielectric whose box holds it (glass in water), else 1.
+//!   the densest dielectric whose box holds it (glass in water), else 1; an index below 1 is
+//!   relative to that one (an air bubble in water, `ior = 0.75`: `int_ior = 0.75·1.33`);
+//! - absorption ([`Material::absorption`], `gr.absorption`) → a `homogeneous` medium of
+//!   `sigma_t = σ` (written as `σ / max σ` at `scale = max σ`) and albedo 0, the dielectric's `interior` (and the `exterior` of the solids
+//!   inside it), and the camera's medium when the eye is in it; the integrator is then `volpath`.
 //! - Lights (physical falloff `{0, 0, 1}` only): point → `point` with intensity `π·rgb`; area →
 //!   an emitting `rectangle` of radiance `π·rgb/A` on the side of `u × v`, black behind; sphere
 //!   → an emitting `sphere` of radiance `rgb/R²` (see [`crate::light`] for why those are the
@@ -72,11 +76,8 @@ pub fn export(
         "  <!-- exported by caustic export-mitsuba from {} -->",
         r.loc
     );
-    let _ = writeln!(
-        s,
-        "  <integrator type=\"path\"><integer name=\"max_depth\" value=\"-1\"/></integrator>"
-    );
-    sensor(&mut s, r, (width, height), spp);
+    let eye_medium = integrator_and_media(&mut s, scene);
+    sensor(&mut s, r, (width, height), spp, &eye_medium);
     let dir = xml.parent().unwrap_or(Path::new("."));
     let stem = xml
         .file_stem()
@@ -91,8 +92,10 @@ pub fn export(
             ));
         }
         let material = &scene.materials[inst.material as usize];
-        let bsdf = bsdf(material, ext_ior(scene, i))
-            .map_err(|e| Error::at(material_loc(desc, inst.material, &node.loc), e))?;
+        let (outside, ext) = outside(scene, i, 0);
+        let bsdf = bsdf(material, ext)
+            .map_err(|e| Error::at(material_loc(desc, inst.material, &node.loc), e))?
+            + &media_refs(scene, inst.material, outside);
         let m = inst.world_from_object;
         match inst.shape {
             Shape::Analytic(Analytic::Sphere) => {
@@ -146,13 +149,70 @@ pub fn export(
     })
 }
 
+/// Writes the integrator (`volpath` where a solid absorbs, else `path`) and a `homogeneous`
+/// medium per absorbing material; returns the reference to the camera's medium for the sensor
+/// (empty in air or a clear solid).
+fn integrator_and_media(s: &mut String, scene: &Scene) -> String {
+    let absorbing: Vec<u32> = (0..scene.materials.len() as u32)
+        .filter(|&m| absorbs(&scene.materials[m as usize]))
+        .collect();
+    let integrator = if absorbing.is_empty() {
+        "path"
+    } else {
+        "volpath"
+    };
+    let _ = writeln!(
+        s,
+        "  <integrator type=\"{integrator}\"><integer name=\"max_depth\" value=\"-1\"/></integrator>"
+    );
+    for &m in &absorbing {
+        // Mitsuba reads an RGB `sigma_t` as a reflectance (each channel in [0, 1]): the
+        // coefficients go in divided by their largest, which is the medium's `scale`.
+        let a = scene.materials[m as usize].absorption;
+        let scale = a.max_element();
+        let _ = writeln!(
+            s,
+            "  <medium type=\"homogeneous\" id=\"{}\"><rgb name=\"sigma_t\" value=\"{}, {}, {}\"/><float name=\"scale\" value=\"{scale}\"/><rgb name=\"albedo\" value=\"0, 0, 0\"/></medium>",
+            medium_id(m),
+            a.x / scale,
+            a.y / scale,
+            a.z / scale
+        );
+    }
+    scene
+        .eye_media
+        .stack
+        .winner()
+        .filter(|m| absorbing.contains(m))
+        .map(|m| format!("<ref id=\"{}\"/>", medium_id(m)))
+        .unwrap_or_default()
+}
+
+/// Returns the references to the absorbing media on either side of a dielectric of material
+/// `material` whose outside is `outside`'s medium (empty for an opaque material or clear media).
+fn media_refs(scene: &Scene, material: u32, outside: Option<u32>) -> String {
+    let mut refs = String::new();
+    let m = &scene.materials[material as usize];
+    if m.transparency <= 0.0 {
+        return refs;
+    }
+    if absorbs(m) {
+        refs += &format!("<ref name=\"interior\" id=\"{}\"/>", medium_id(material));
+    }
+    if let Some(o) = outside.filter(|o| absorbs(&scene.materials[*o as usize])) {
+        refs += &format!("<ref name=\"exterior\" id=\"{}\"/>", medium_id(o));
+    }
+    refs
+}
+
 /// Returns the script line of scene material `id` (materials past the script's come from mesh
 /// files: the node's line).
 fn material_loc<'a>(desc: &'a SceneDesc, id: u32, node: &'a Loc) -> &'a Loc {
     desc.materials.get(id as usize).map_or(node, |m| &m.loc)
 }
 
-fn sensor(s: &mut String, r: &RenderDesc, (width, height): (u32, u32), spp: u32) {
+/// Writes the camera; `medium` is the reference to the absorbing medium it is in, if any.
+fn sensor(s: &mut String, r: &RenderDesc, (width, height): (u32, u32), spp: u32, medium: &str) {
     let c = &r.camera;
     let target = c.eye + c.view;
     let _ = writeln!(
@@ -161,7 +221,7 @@ fn sensor(s: &mut String, r: &RenderDesc, (width, height): (u32, u32), spp: u32)
          <transform name=\"to_world\"><lookat origin=\"{}, {}, {}\" target=\"{}, {}, {}\" up=\"{}, {}, {}\"/></transform>\
          <sampler type=\"independent\"><integer name=\"sample_count\" value=\"{spp}\"/></sampler>\
          <film type=\"hdrfilm\"><integer name=\"width\" value=\"{width}\"/><integer name=\"height\" value=\"{height}\"/>\
-         <string name=\"pixel_format\" value=\"rgb\"/><rfilter type=\"box\"/></film></sensor>",
+         <string name=\"pixel_format\" value=\"rgb\"/><rfilter type=\"box\"/></film>{medium}</sensor>",
         c.fov_deg, c.eye.x, c.eye.y, c.eye.z, target.x, target.y, target.z, c.up.x, c.up.y, c.up.z
     );
 }
@@ -174,9 +234,10 @@ fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
     let rgb = |v: Vec3A| format!("{}, {}, {}", v.x, v.y, v.z);
     let black = |v: Vec3A| v.max_element() <= 0.0;
     if m.transparency == 1.0 {
+        // An index below 1 is relative to the medium outside (crate::material::medium).
+        let int_ior = if m.ior < 1.0 { m.ior * ext_ior } else { m.ior };
         return Ok(format!(
-            "<bsdf type=\"dielectric\"><float name=\"int_ior\" value=\"{}\"/><float name=\"ext_ior\" value=\"{ext_ior}\"/></bsdf>",
-            m.ior
+            "<bsdf type=\"dielectric\"><float name=\"int_ior\" value=\"{int_ior}\"/><float name=\"ext_ior\" value=\"{ext_ior}\"/></bsdf>"
         ));
     }
     if m.transparency > 0.0 {
@@ -201,12 +262,16 @@ fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
     Err("a material with a Phong highlight (p > 0) or both kd and ks is outside the Mitsuba subset (diffuse, mirror with p = 0, or t = 1)".into())
 }
 
-/// Returns the index outside dielectric instance `i`: the densest other dielectric whose box
-/// holds its box, else 1 (air). Caustic's media rule (the highest index wins) agrees there.
-fn ext_ior(scene: &Scene, i: usize) -> f32 {
-    let inner = &scene.instances[i];
-    let b = inner.bounds;
-    let mut ior = 1.0f32;
+/// Returns the material of the medium outside dielectric instance `i` and its absolute index:
+/// the densest other dielectric whose box holds its box (a relative index below 1 taken against
+/// what holds that one in turn), else none and 1 (air). Caustic's media rule (the highest index
+/// wins) agrees there. `depth` bounds the chain of holders (boxes of equal size hold each other).
+fn outside(scene: &Scene, i: usize, depth: u32) -> (Option<u32>, f32) {
+    let b = scene.instances[i].bounds;
+    let mut best = (None, 1.0f32);
+    if depth > 8 {
+        return best;
+    }
     for (j, other) in scene.instances.iter().enumerate() {
         let m = &scene.materials[other.material as usize];
         if j == i || m.transparency <= 0.0 {
@@ -214,10 +279,27 @@ fn ext_ior(scene: &Scene, i: usize) -> f32 {
         }
         let o = other.bounds;
         if o.min.cmple(b.min).all() && o.max.cmpge(b.max).all() {
-            ior = ior.max(m.ior);
+            let ior = if m.ior < 1.0 {
+                m.ior * outside(scene, j, depth + 1).1
+            } else {
+                m.ior
+            };
+            if ior > best.1 {
+                best = (Some(other.material), ior);
+            }
         }
     }
-    ior
+    best
+}
+
+/// Returns whether `m` is a dielectric whose interior absorbs.
+fn absorbs(m: &Material) -> bool {
+    m.transparency > 0.0 && m.absorption != Vec3A::ZERO
+}
+
+/// Returns the id of the Mitsuba medium of material `m`.
+fn medium_id(m: u32) -> String {
+    format!("medium{m}")
 }
 
 /// Returns the scale of `m` when it is a uniform scale times a rotation (within 1e-4).

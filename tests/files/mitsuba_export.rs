@@ -131,3 +131,47 @@ fn anything_outside_the_subset_is_refused_with_its_line() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("falloff"), "{err}");
 }
+
+/// Media export (issue 35): an absorbing dielectric becomes a `homogeneous` medium of
+/// `sigma_t = −ln(colour)/distance` (written over its largest channel, at that `scale`, since
+/// Mitsuba reads RGB `sigma_t` as a reflectance) that is the solid's `interior`, the `exterior`
+/// of a bubble in it and the sensor's medium when the eye is in it, under `volpath`; the bubble's
+/// relative index 0.75 becomes the absolute `int_ior` 0.75·1.33 against `ext_ior` 1.33.
+#[test]
+fn absorbing_media_and_relative_indices_export() {
+    let dir = out_dir("export-media");
+    let out = export(
+        &dir,
+        &format!(
+            "water = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 1.33)
+    gr.absorption(water, {{0.5, 0.25, 1}}, 2)
+    air = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 0.75)
+    root = gr.node('root')
+    w = gr.cube('w'); w:scale(4, 4, 4); w:translate(-2, -2, -2); w:set_material(water); root:add_child(w)
+    b = gr.sphere('b'); b:scale(0.2, 0.2, 0.2); b:translate(0, 0, -1); b:set_material(air); root:add_child(b)
+    {}",
+            render_line("{gr.area_light({0, 1.9, 0}, {1, 1, 1}, {0, 0, 1}, nil, nil, {0.5, 0, 0}, {0, 0, 0.5})}")
+        ),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("s.xml")).unwrap();
+    let sigma = [0.5f32.ln() / -2.0, 0.25f32.ln() / -2.0, 0.0];
+    let scale = sigma[1];
+    let medium = format!(
+        "<medium type=\"homogeneous\" id=\"medium0\"><rgb name=\"sigma_t\" value=\"{}, 1, 0\"/><float name=\"scale\" value=\"{scale}\"/>",
+        sigma[0] / scale
+    );
+    for want in [
+        "<integrator type=\"volpath\">",
+        medium.as_str(),
+        "<ref id=\"medium0\"/></sensor>",
+        "<ref name=\"interior\" id=\"medium0\"/>",
+        "<float name=\"int_ior\" value=\"0.99750006\"/><float name=\"ext_ior\" value=\"1.33\"/></bsdf><ref name=\"exterior\" id=\"medium0\"/>",
+    ] {
+        assert!(text.contains(want), "missing {want} in:\n{text}");
+    }
+}

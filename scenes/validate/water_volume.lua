@@ -6,16 +6,11 @@
 -- region ball 0.4 0.6 0.75 0.9
 
 dofile((debug.getinfo(1, 'S').source:match('^@(.*[/\\])') or '') .. 'lib/box.lua')
-
-water_m = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.33)
--- The water stops 0.005 short of every wall: coincident faces are their own test.
-water = gr.cube('water'); water:scale(1.99, 0.795, 1.99); water:translate(-0.995, -0.995, -0.995)
-water:set_material(water_m); root:add_child(water)
+dofile((debug.getinfo(1, 'S').source:match('^@(.*[/\\])') or '') .. 'lib/water.lua')
 yellow = gr.material({0.7, 0.6, 0.2}, {0, 0, 0}, 0)
-ball = gr.sphere('ball'); ball:scale(0.3, 0.3, 0.3); ball:translate(0.25, -0.6, -0.2)
-ball:set_material(yellow); root:add_child(ball)
-block = gr.cube('block'); block:scale(0.45, 0.5, 0.45); block:rotate('Y', 20); block:translate(-0.7, -0.99, -0.7)
-block:set_material(white); root:add_child(block)
+add_water()
+add_ball('ball', yellow)
+add_block()
 
 gr.render(root, 'water_volume.png', 96, 96, {0, 0, 0.95}, {0, 0, -1}, {0, 1, 0}, 80,
           {0, 0, 0}, {light})

@@ -219,10 +219,19 @@ fn gltf_volume_attenuation_becomes_absorption() {
     let want = vec3(-(0.5f32.ln()) / 2.0, -(0.8f32.ln()) / 2.0, 0.0);
     assert!((a - want).abs().max_element() < 1e-6, "{a} against {want}");
     let clear = file("clear", r#""attenuationColor":[0.5,0.8,1]"#);
-    assert_eq!(load_gltf(&clear).unwrap().materials[0].absorption, Vec3::ZERO);
-    let bad = file("bad", r#""attenuationColor":[0.5,0.8,1],"attenuationDistance":0"#);
+    assert_eq!(
+        load_gltf(&clear).unwrap().materials[0].absorption,
+        Vec3::ZERO
+    );
+    let bad = file(
+        "bad",
+        r#""attenuationColor":[0.5,0.8,1],"attenuationDistance":0"#,
+    );
     let e = load_gltf(&bad).unwrap_err().to_string();
-    assert!(e.contains("sea") && e.contains("attenuationDistance"), "{e}");
+    assert!(
+        e.contains("sea") && e.contains("attenuationDistance"),
+        "{e}"
+    );
 }
 
 /// Returns the error message parsing `bytes` as `path` gives; panics on success.

@@ -10,6 +10,18 @@ fn every_scene_in_scenes_renders() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let tree = out_dir("scenes");
     common::copy_assets(&root.join("scenes"), &tree.join("scenes"));
+    // The scripts the scenes load (copy_assets leaves scripts out).
+    for entry in std::fs::read_dir(root.join("scenes/lib")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "lua") {
+            continue;
+        }
+        std::fs::copy(
+            &path,
+            tree.join("scenes/lib").join(path.file_name().unwrap()),
+        )
+        .unwrap();
+    }
     let mut count = 0;
     for entry in std::fs::read_dir(root.join("scenes")).unwrap() {
         let path = entry.unwrap().path();

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Renders every scene in scenes/gallery/ at its script's size (each at most 256 pixels wide) into
+# Renders every scene in scenes/gallery/ at its script's size (each at most 256 pixels wide), and
+# the project's scenes listed in $project below at a quarter of theirs, into
 # docs/gallery/NAME.png and writes docs/gallery.md: a table of thumbnail, name, what the scene
 # shows (the first paragraph of its header comment, without "Gallery: "), the command that
 # renders it and how long that took here.
@@ -25,9 +26,13 @@ describe() {
 }
 
 rows=""
-for scene in scenes/gallery/*.lua; do
+# The gallery's scenes at their size, then the project's scenes named here at a quarter of theirs.
+project="scenes/underwater.lua"
+for scene in scenes/gallery/*.lua $project; do
   name=$(basename "$scene" .lua)
-  log=$("$bin" render "$scene" -q -o "$out/$name.png" 2>&1 >/dev/null) || {
+  flags=()
+  case " $project " in *" $scene "*) flags=(--scale 0.25) ;; esac
+  log=$("$bin" render "$scene" "${flags[@]}" -q -o "$out/$name.png" 2>&1 >/dev/null) || {
     echo "gallery: $scene failed:" >&2
     echo "$log" >&2
     exit 1
@@ -35,7 +40,7 @@ for scene in scenes/gallery/*.lua; do
   seconds=$(sed -n 's/^wrote .* in \([0-9.]*\) s$/\1/p' <<<"$log")
   size=$(sed -n 's/^wrote .* (\([0-9]*x[0-9]*\)) in .*$/\1/p' <<<"$log")
   echo "gallery: $name ($size) in $seconds s" >&2
-  rows+="| ![$name](gallery/$name.png) | [\`$name\`](../$scene) | $(describe "$scene") | \`caustic render $scene\` | $seconds s |"$'\n'
+  rows+="| ![$name](gallery/$name.png) | [\`$name\`](../$scene) | $(describe "$scene") | \`caustic render $scene${flags[*]:+ ${flags[*]}}\` | $seconds s |"$'\n'
 done
 
 cat >docs/gallery.md <<EOF
@@ -48,7 +53,8 @@ the repository's root, \`cargo run --release -- render scenes/gallery/NAME.lua\`
 own folder, so they also render from inside it. \`tests/command_line/gallery.rs\` renders every
 one at a quarter of its size and checks what it shows.
 
-The thumbnails are the scripts' own size and default settings. Regenerate them and this page
+The thumbnails are the scripts' own size and default settings (the last rows, scenes of the
+project, a quarter of theirs). Regenerate them and this page
 with \`bash tools/gallery.sh\`. Times are wall-clock seconds of one render on the machine that
 last ran it ($(nproc) cores$([ -n "${GALLERY_MACHINE:-}" ] && printf ', %s' "$GALLERY_MACHINE")):
 informative, not a benchmark.

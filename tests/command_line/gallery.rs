@@ -369,3 +369,21 @@ fn gallery_page_shows_every_scene() {
         assert!(w <= 256, "{thumbnail} is {w} pixels wide");
     }
 }
+
+/// Coloured water and glass absorb by their colour: the water seen in the glass is blue-green
+/// (its red well under its green and blue), and the caustic the amber ball focuses in front of
+/// it is amber (red over twice blue) and over 1.5 times as bright as with `--disable caustics`.
+#[test]
+fn coloured_glass_tints_what_passes_through_it() {
+    let (with, without) = render_with_and_without("coloured_glass", &["--disable", "caustics"]);
+    let water = mean_rgb(&with, [0.3, 0.45, 0.35, 0.55]);
+    assert!(
+        water[0] < 0.6 * water[1] && water[0] < 0.6 * water[2],
+        "the water is {water:?}"
+    );
+    let spot = [0.64, 0.74, 0.6, 0.68];
+    let caustic = mean_rgb(&with, spot);
+    assert!(caustic[0] > 2.0 * caustic[2], "the caustic is {caustic:?}");
+    let (a, b) = (mean_luminance(&with, spot), mean_luminance(&without, spot));
+    assert!(a > 1.5 * b, "the spot is {a} with caustics, {b} without");
+}

@@ -9,6 +9,7 @@
 //! | light colour (intensity) and ambient, per channel | `[0, 1e8]` ([`MAX_INTENSITY`]) | a physical `1/d²` light `1e4` units away needs `1e8` to light anything; with the attenuation bound below, direct light from one light stays under `2e15` (times reflectance 10 at most `2e16`) and a light's flux (`4π²·rgb`) under `4e9`; the edge-of-range renders peak near `2e23` (a seen emitter of the smallest size, `rgb/R² = 1e20`, through mirrors) |
 //! | falloff coefficients `c0, c1, c2` | each `0` or in `[1e-6, 1e6]` ([`MIN_FALLOFF`], [`MAX_FALLOFF`]), not all `0` | `1/c0` is the attenuation at the light: `c0 = 1e-30` made `rgb·1e30`; at most `1e6` keeps a photon's falloff ratio `d²/(c0 + …)` finite over the whole coordinate range |
 //! | reflectances `kd`, `ks` (script and MTL) | `[0, 10]` ([`MAX_REFLECTANCE`]) | course scenes use up to `1.5`; see the note below on values above 1 |
+//! | index of refraction of a transparent material (script; an MTL `Ni` above 10 is taken as 10, a glTF `ior` is clamped to `[1, 10]`) | `[0.1, 10]` ([`MIN_IOR`], [`MAX_IOR`]) | the radiance crossing an interface scales by the square of the indices' ratio: `ior = 1e-30` made it `1e60`, infinite in `f32`; eight nested relative indices of 0.1 still keep it finite |
 //! | light `power` | `[0, 1e30]` ([`MAX_POWER`]) | only a weight among lights: the sum over many lights must stay finite |
 //! | sphere-light radius, area-light size `√|u × v|` | `≥ 1e-6` ([`MIN_LIGHT_SIZE`]) | an emitter's radiance is `rgb/R²` (`π·rgb/area`): a radius of `1e-30` was infinite |
 //! | photons one light emits for one map (`num_photons`, its share of `--photons`, times `--photon-scale`) | `≤ 1e9` ([`MAX_PHOTONS`]) | 10^9 stored photons would need 20 GB |
@@ -38,6 +39,11 @@ pub const MAX_COORDINATE: f64 = 1e8;
 pub const MAX_INTENSITY: f64 = 1e8;
 /// Largest diffuse or specular reflectance, per channel.
 pub const MAX_REFLECTANCE: f64 = 10.0;
+/// Smallest index of refraction of a transparent material (an index below 1 is relative to the
+/// solid around, [`crate::material::medium`]): air in diamond is 0.41.
+pub const MIN_IOR: f64 = 0.1;
+/// Largest index of refraction of a transparent material: germanium is 4.
+pub const MAX_IOR: f64 = 10.0;
 /// Smallest non-zero falloff coefficient.
 pub const MIN_FALLOFF: f64 = 1e-6;
 /// Largest falloff coefficient.

@@ -498,7 +498,7 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
         ks: f0 * smoothness,
         shininess: (2.0 / alpha2.max(1e-12) - 2.0).clamp(0.0, MAX_SHININESS),
         transparency: transmission.clamp(0.0, 1.0),
-        ior: ior.max(1.0),
+        ior: ior.clamp(1.0, crate::range::MAX_IOR as f32),
         absorption: crate::material::absorption(attenuation, distance),
         texture,
     })

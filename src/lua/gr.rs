@@ -285,10 +285,13 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         ));
     }
     let ior = a.opt_number(5)?.unwrap_or(1.0);
-    if transparency > 0.0 && ior <= 0.0 {
+    let (min_ior, max_ior) = (crate::range::MIN_IOR, crate::range::MAX_IOR);
+    if transparency > 0.0 && !(min_ior..=max_ior).contains(&ior) {
         return Err(a.bad(
             5,
-            format!("index of refraction must be positive, got {ior}"),
+            format!(
+                "index of refraction must be in [{min_ior}, {max_ior}] (below 1: relative to the solid around), got {ior}"
+            ),
         ));
     }
     let perlin_scale = a.opt_number(6)?.unwrap_or(0.0);

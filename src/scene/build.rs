@@ -169,16 +169,41 @@ fn find_media(desc: &SceneDesc, render: &RenderDesc, scene: &mut Scene) {
             if inside { "inside" } else { "outside" }
         );
     }
+    // Each light's media cost PROBES rays per transparent box round it: bounded, so that a
+    // scene of thousands of lights inside thousands of nested shells cannot stall the build.
+    let mut budget = MAX_LIGHT_MEDIA_BOXES;
+    let mut unknown = 0usize;
     scene.light_media = scene
         .lights
         .iter()
         .map(|light| {
             let b = light_bounds(light);
-            scene.media_at((b.min + b.max) * 0.5).stack
+            let p = (b.min + b.max) * 0.5;
+            let boxes = scene
+                .transparent
+                .iter()
+                .filter(|(_, t)| (p.cmpge(t.min) & p.cmple(t.max)).all())
+                .count();
+            if boxes > budget {
+                unknown += 1;
+                return crate::material::medium::MediumStack::air();
+            }
+            budget -= boxes;
+            scene.media_at(p).stack
         })
         .collect();
+    if unknown > 0 {
+        eprintln!(
+            "{}: warning: {unknown} lights lie inside more transparent solids than caustic checks ({MAX_LIGHT_MEDIA_BOXES} boxes round lights in all); their photons start as if in air",
+            render.loc
+        );
+    }
     warn_hidden_solids(desc, scene);
 }
+
+/// Most (light, transparent box holding it) pairs whose media the build probes: 7 rays each,
+/// about a second's work on 2 cores.
+const MAX_LIGHT_MEDIA_BOXES: usize = 1 << 16;
 
 /// Most transparent instances [`warn_hidden_solids`] looks at (each looks for the others that
 /// hold it).

@@ -250,3 +250,31 @@ b = gr.sphere('bubble'); b:set_material(air); root:add_child(b)",
         "{stderr}"
     );
 }
+
+/// Finding the lights' media is bounded: 300 point lights at the centre of 300 nested glass
+/// shells (90,000 light-shell pairs, 7 probe rays each) build with the first 65,536 pairs'
+/// lights placed and the rest warned about by count, instead of tracing every pair.
+#[test]
+fn many_lights_in_many_shells_are_bounded_and_warned_about() {
+    let dir = common::out_dir("media-many-lights");
+    let path = dir.join("shells.lua");
+    let src = "glass = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)
+root = gr.node('root')
+for i = 1, 300 do
+  local s = gr.sphere('shell' .. i); s:scale(i, i, i); s:set_material(glass); root:add_child(s)
+end
+lights = {}
+for i = 1, 300 do lights[i] = gr.light({0, 0, 0}, {0.01, 0.01, 0.01}, {1, 0, 0}) end
+gr.render(root, 'x.png', 8, 8, {0, 0, 0.5}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0}, lights)
+";
+    std::fs::write(&path, src).unwrap();
+    let out = common::caustic().arg("info").arg(&path).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // 65,536 pairs hold 218 lights (300 shells each); the other 82 are warned about.
+    assert!(
+        stderr
+            .contains("warning: 82 lights lie inside more transparent solids than caustic checks"),
+        "{stderr}"
+    );
+}

@@ -580,6 +580,16 @@ gr.absorption(ok, {0.5, 0.5, 0.5}, 1)",
         "{:?}",
         desc.warnings
     );
+    // An index far outside matter's (its square scales radiance) is refused at its line.
+    for ior in ["0.05", "20", "-1"] {
+        let e = common::lua_error(&format!(
+            "glass = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, {ior})"
+        ));
+        assert!(
+            e.contains("test.lua:1") && e.contains("index of refraction must be in [0.1, 10]"),
+            "{ior}: {e}"
+        );
+    }
     for (args, want) in [
         ("{0, 0.5, 0.5}, 1", "(0, 1]"),
         ("{0.5, 1.5, 0.5}, 1", "(0, 1]"),

@@ -176,7 +176,10 @@ pub(super) fn mesh_material(m: &tobj::Material) -> MeshMaterial {
         ks: m.specular.map_or(Vec3::ZERO, Vec3::from_array),
         shininess: m.shininess.unwrap_or(0.0).max(0.0),
         transparency: transparency.clamp(0.0, 1.0),
-        ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(1.0),
+        ior: m
+            .optical_density
+            .filter(|&n| n > 0.0)
+            .map_or(1.0, |n| n.min(crate::range::MAX_IOR as f32)),
         absorption: Vec3::ZERO,
         texture: m.diffuse_texture.as_ref().map(PathBuf::from),
     }

@@ -36,7 +36,7 @@ small=(--scale 0.125 --photon-scale 0.05)
 tree=$work/tree
 mkdir -p "$tree/scenes"
 cp "$root"/scenes/*.lua "$tree/scenes/"
-cp -r "$root"/scenes/textures "$tree/scenes/"
+cp -r "$root"/scenes/textures "$root"/scenes/lib "$tree/scenes/"
 export CAUSTIC_CACHE=${CAUSTIC_CACHE:-$root/target/golden-mesh-cache}
 for s in "$tree"/scenes/*.lua; do
   n=$(basename "$s" .lua)

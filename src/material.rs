@@ -18,6 +18,7 @@
 pub mod bsdf;
 pub mod fresnel;
 pub mod medium;
+pub mod microfacet;
 pub mod perlin;
 pub mod texture;
 

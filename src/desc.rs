@@ -116,6 +116,8 @@ pub struct MaterialDesc {
     pub ior: f32,
     /// Absorption coefficient per channel per unit length of the interior (`gr.absorption`).
     pub absorption: Vec3,
+    /// GGX roughness of the mirror lobe in `[0, 1]` (`gr.roughness`; 0: smooth).
+    pub roughness: f32,
     /// Scale of the Perlin-noise normal perturbation; 0 means none.
     pub perlin_scale: f32,
     /// Texture image replacing `kd`, resolved to a readable path.

@@ -58,6 +58,10 @@ pub struct Material {
     /// Absorption coefficient `σ` per channel, per unit of world length, of the interior of a
     /// transparent solid (Beer–Lambert, [`crate::scene::media`]); zero for clear.
     pub absorption: Vec3A,
+    /// GGX roughness of the mirror lobe (`gr.roughness`): 0 is the smooth mirror, above 0 the
+    /// rough conductor of [`microfacet`] (`alpha = roughness²`) replaces the mirror and the Phong
+    /// highlight.
+    pub roughness: f32,
     /// Scale of the Perlin-noise normal perturbation; 0 for none.
     pub perlin_scale: f32,
     /// Colour map replacing `kd`.
@@ -80,6 +84,7 @@ impl Material {
             transparency: d.transparency,
             ior: d.ior,
             absorption: d.absorption.into(),
+            roughness: d.roughness,
             perlin_scale: d.perlin_scale,
             texture,
             bump,
@@ -95,6 +100,7 @@ impl Material {
             transparency: m.transparency,
             ior: m.ior,
             absorption: m.absorption.into(),
+            roughness: 0.0,
             perlin_scale: 0.0,
             texture,
             bump: None,
@@ -110,6 +116,7 @@ impl Material {
             transparency: 0.0,
             ior: 1.0,
             absorption: Vec3A::ZERO,
+            roughness: 0.0,
             perlin_scale: 0.0,
             texture: None,
             bump: None,

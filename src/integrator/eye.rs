@@ -404,14 +404,21 @@ impl Tracer<'_> {
         } else {
             (state.roulette(weight, rng, counts), 1.0, state.share)
         };
-        if let Some(q) = q {
-            let wr = bsdf.reflected();
+        // A rough material's mirror lobe is a rough conductor: one direction drawn from it.
+        let drawn = q.and_then(|q| {
+            Some((
+                q,
+                bsdf.mirror_sample(crate::material::bsdf::glossy_numbers(mat, rng))?,
+            ))
+        });
+        if let Some((q, (wr, glossy))) = drawn {
             let ray = Ray::new(offset_ray_origin(p, bsdf.ng, wr), wr);
             counts.secondary += 1;
-            let mut child = state.child(weight / q, state.media).shared(share);
-            // A Phong highlight already reflects the lights; the mirror image would count them twice.
-            child.sees_emitters &= mat.shininess <= 0.0;
-            colour += gain * ks / q * self.radiance(&ray, child, rng, counts);
+            let mut child = state.child(weight * glossy / q, state.media).shared(share);
+            // A Phong highlight (or a rough lobe, which `direct` evaluates for every light)
+            // already reflects the lights; the mirror image would count them twice.
+            child.sees_emitters &= mat.shininess <= 0.0 && mat.roughness <= 0.0;
+            colour += gain * ks / q * glossy * self.radiance(&ray, child, rng, counts);
         }
         colour
     }

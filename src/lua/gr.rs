@@ -75,6 +75,7 @@ const GR: &[(&str, Call, GrFn)] = &[
     }),
     ("material", Call::Function, gr_material),
     ("absorption", Call::Function, gr_absorption),
+    ("roughness", Call::Function, gr_roughness),
     ("light", Call::Function, gr_light),
     ("area_light", Call::Function, gr_area_light),
     ("sphere_light", Call::Function, gr_sphere_light),
@@ -336,6 +337,7 @@ fn gr_material(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
         transparency: transparency as f32,
         ior: if ior > 0.0 { ior as f32 } else { 1.0 },
         absorption: glam::Vec3::ZERO,
+        roughness: 0.0,
         perlin_scale: perlin_scale as f32,
         texture,
         bump,
@@ -376,6 +378,27 @@ fn gr_absorption(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
             "gr.absorption on an opaque material (t = 0): nothing enters it to be absorbed".into(),
         );
     }
+    Ok(Value::Nil)
+}
+
+/// `gr.roughness(material, roughness)`: the mirror lobe of an opaque material becomes a rough
+/// conductor (GGX, `alpha = roughness²`, `crate::material::microfacet`) replacing the mirror and
+/// the Phong highlight; 0 is the smooth mirror. Rough dielectrics are not yet rendered: on a
+/// transparent material it is an error.
+fn gr_roughness(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
+    let material = a.material(1)?;
+    let roughness = a.number(2)?;
+    if !(0.0..=1.0).contains(&roughness) {
+        return Err(a.bad(2, format!("roughness must be in [0, 1], got {roughness}")));
+    }
+    let m = &mut s.desc.materials[material.0 as usize];
+    if m.transparency > 0.0 {
+        return Err(a.bad(
+            1,
+            "rough dielectrics are not rendered yet (issue 37): gr.roughness takes an opaque material (t = 0)".to_string(),
+        ));
+    }
+    m.roughness = roughness as f32;
     Ok(Value::Nil)
 }
 

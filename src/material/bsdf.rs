@@ -42,6 +42,7 @@
 //!   surface reflects less than 1 in every channel.
 
 use super::medium::{Crossing, MediumStack};
+use super::microfacet::{Frame, Ggx, RoughConductor};
 use super::{Lobes, Material, fresnel};
 use crate::geometry::hit::SurfaceHit;
 use crate::range::MAX_ALBEDO;
@@ -213,6 +214,12 @@ impl<'a> Bsdf<'a> {
     pub fn phong(&self, wi: Vec3A) -> Vec3A {
         let m = self.material;
         let cos = self.n.dot(wi);
+        if let Some((lobe, frame)) = self.glossy() {
+            // The rough conductor's BRDF in the course's units: a light of colour `rgb` has
+            // intensity `π·rgb`, so the term is `π·f·cos θ` (as `kd·cos θ` is `π·(kd/π)·cos θ`).
+            let f = lobe.eval(frame.to_local(self.wo), frame.to_local(wi));
+            return self.kd * cos + m.ks * (std::f32::consts::PI * f * cos);
+        }
         let rv = fresnel::reflect(wi, self.n).dot(self.wo);
         let spec = if rv > 0.0 && m.shininess > 0.0 {
             m.ks * rv.powf(m.shininess)
@@ -225,6 +232,32 @@ impl<'a> Bsdf<'a> {
     /// Returns the mirror direction of `wo`.
     pub fn reflected(&self) -> Vec3A {
         reflect_above(self.wo, self.n, self.ng)
+    }
+
+    /// Returns the rough conductor that replaces the mirror lobe and the Phong highlight of a
+    /// material with roughness, with its frame around the shading normal; `None` when smooth.
+    pub fn glossy(&self) -> Option<(RoughConductor, Frame)> {
+        (self.material.roughness > 0.0).then(|| {
+            (
+                RoughConductor {
+                    ggx: Ggx::from_roughness(self.material.roughness),
+                },
+                Frame::around(self.n),
+            )
+        })
+    }
+
+    /// Returns the direction the mirror lobe sends a path in and the factor on its weight: the
+    /// mirror direction and 1 for a smooth material; for a rough one a direction drawn from
+    /// the rough conductor by `u` and its weight `G2/G1 ≤ 1`, or `None` when the draw falls
+    /// below the surface (geometric or shading).
+    pub fn mirror_sample(&self, u: (f32, f32)) -> Option<(Vec3A, f32)> {
+        let Some((lobe, frame)) = self.glossy() else {
+            return Some((self.reflected(), 1.0));
+        };
+        let s = lobe.sample(frame.to_local(self.wo), u)?;
+        let wi = frame.to_world(s.wi);
+        (wi.dot(self.ng) > 0.0).then_some((wi, s.weight))
     }
 
     /// Returns how the dielectric interface of `crossing` splits `wo` (Fresnel weight and the two
@@ -305,9 +338,10 @@ impl<'a> Bsdf<'a> {
     ) -> Option<Sample> {
         let p = choice.p;
         if xi < p[0] + p[1] {
+            let (dir, glossy) = self.mirror_sample(glossy_numbers(self.material, rng))?;
             Some(Sample {
-                dir: self.reflected(),
-                weight: lobes.mirror / choice.divisor[1],
+                dir,
+                weight: lobes.mirror / choice.divisor[1] * glossy,
                 lobe: Lobe::Mirror,
                 media: None,
                 radiance_scale: 1.0,
@@ -362,6 +396,16 @@ impl Choice {
         let p = largest.map(|x| x / scale);
         let divisor = if total > MAX_ALBEDO { largest } else { p };
         Choice { p, divisor }
+    }
+}
+
+/// Returns the two numbers a rough mirror lobe draws its direction from; a smooth one draws
+/// none, so smooth scenes keep their random streams (and images) bit for bit.
+pub fn glossy_numbers(mat: &Material, rng: &mut Rng) -> (f32, f32) {
+    if mat.roughness > 0.0 {
+        (rng.next_f32(), rng.next_f32())
+    } else {
+        (0.0, 0.0)
     }
 }
 

@@ -8,6 +8,8 @@
 //! - Materials (caustic shades both sides of every surface, so opaque BSDFs are `twosided`):
 //!   diffuse `kd` (`ks = 0`, `t = 0`) → `diffuse`; a mirror (`kd = 0`, `t = 0`, no Phong
 //!   highlight: `p = 0`) → `conductor` with `material = none` and `specular_reflectance = ks`;
+//!   a rough mirror (`kd = 0`, `t = 0`, `gr.roughness`) → `roughconductor` of distribution
+//!   `ggx`, `alpha = roughness²`, `material = none` and `specular_reflectance = ks`;
 //!   a clear dielectric (`t = 1`) → `dielectric` with `int_ior = ior` and `ext_ior` the index of
 //!   the densest dielectric whose box holds it (glass in water), else 1; an index below 1 is
 //!   relative to that one (an air bubble in water, `ior = 0.75`: `int_ior = 0.75·1.33`);
@@ -250,6 +252,16 @@ fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
         return Ok(format!(
             "<bsdf type=\"twosided\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"{}\"/></bsdf></bsdf>",
             rgb(m.kd)
+        ));
+    }
+    if black(m.kd) && m.roughness > 0.0 {
+        // The rough conductor replaces the mirror and the highlight (p is ignored).
+        let alpha = crate::material::microfacet::Ggx::from_roughness(m.roughness).alpha;
+        return Ok(format!(
+            "<bsdf type=\"twosided\"><bsdf type=\"roughconductor\"><string name=\"material\" value=\"none\"/>\
+             <string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"{alpha}\"/>\
+             <rgb name=\"specular_reflectance\" value=\"{}\"/></bsdf></bsdf>",
+            rgb(m.ks)
         ));
     }
     if black(m.kd) && m.shininess <= 0.0 {

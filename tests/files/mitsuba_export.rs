@@ -175,3 +175,30 @@ fn absorbing_media_and_relative_indices_export() {
         assert!(text.contains(want), "missing {want} in:\n{text}");
     }
 }
+
+/// A rough mirror exports as Mitsuba's `roughconductor` with GGX of `alpha = roughness²`.
+#[test]
+fn rough_mirrors_export_as_rough_conductors() {
+    let dir = out_dir("export-rough");
+    let out = export(
+        &dir,
+        &format!(
+            "metal = gr.material({{0, 0, 0}}, {{0.9, 0.6, 0.5}}, 0)
+    gr.roughness(metal, 0.5)
+    root = gr.node('root')
+    b = gr.sphere('b'); b:set_material(metal); root:add_child(b)
+    {}",
+            render_line(
+                "{gr.area_light({0, 1.9, 0}, {1, 1, 1}, {0, 0, 1}, nil, nil, {0.5, 0, 0}, {0, 0, 0.5})}"
+            )
+        ),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("s.xml")).unwrap();
+    let want = "<bsdf type=\"roughconductor\"><string name=\"material\" value=\"none\"/><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"0.25\"/><rgb name=\"specular_reflectance\" value=\"0.9, 0.6, 0.5\"/>";
+    assert!(text.contains(want), "missing {want} in:\n{text}");
+}

@@ -187,3 +187,43 @@ fn corpus_textured_scenes_render_with_their_images() {
         }
     }
 }
+
+/// A rough mirror (`gr.roughness`, GGX) lit by a point light in the mirror direction of the
+/// camera's centre ray: that pixel is the rough conductor's BRDF in the course's units,
+/// `ks·π·f·cos θi` with `f = D(n)·G2/(4 cos θo cos θi)`, `D(n) = 1/(π α²)` and
+/// `G2 = 1/(1 + 2Λ(45°))`, `Λ(45°) = (√(1 + α²) − 1)/2` (α = roughness² = 0.25: 2.744 for
+/// ks = 0.5), within 1e-3. Everything sits in a black sphere, so the glossy reflection the eye
+/// path follows finds nothing. Before, roughness did not exist and the surface was a mirror.
+#[test]
+fn a_rough_mirror_reflects_a_point_light_by_the_ggx_brdf() {
+    let src = "black = gr.material({0, 0, 0}, {0, 0, 0}, 0)
+metal = gr.material({0, 0, 0}, {0.5, 0.5, 0.5}, 0)
+gr.roughness(metal, 0.5)
+root = gr.node('root')
+enclosure = gr.sphere('enclosure'); enclosure:set_material(black); enclosure:scale(100, 100, 100)
+root:add_child(enclosure)
+plane = gr.cube('plane'); plane:set_material(metal); plane:scale(20, 1, 20); plane:translate(-10, -1, -10)
+root:add_child(plane)
+gr.render(root, 'rough.png', 9, 9, {0, 1, 1}, {0, -1, -1}, {0, 1, 0}, 20, {0, 0, 0},
+          {gr.light({0, 1, -1}, {1, 1, 1}, {1, 0, 0})})
+";
+    let films = common::render_films_with(
+        src.as_bytes(),
+        "rough.lua",
+        Path::new("."),
+        &common::whitted(),
+    )
+    .unwrap();
+    let film = &films[0].2;
+    let centre = film.pixels[4 * 9 + 4];
+    let alpha = 0.25f32;
+    let lambda = ((1.0 + alpha * alpha).sqrt() - 1.0) / 2.0;
+    let g2 = 1.0 / (1.0 + 2.0 * lambda);
+    let cos = std::f32::consts::FRAC_1_SQRT_2;
+    let f = g2 / (std::f32::consts::PI * alpha * alpha) / (4.0 * cos * cos);
+    let want = 0.5 * std::f32::consts::PI * f * cos;
+    assert!(
+        (centre - Vec3A::splat(want)).abs().max_element() < 1e-3 * want,
+        "centre {centre}, closed form {want}"
+    );
+}

@@ -418,7 +418,7 @@ fn unknown_gr_functions_list_the_functions_that_exist() {
         lua_error("\ns = gr.spere('s')"),
         "test.lua:2: unknown function gr.spere (caustic has gr.node, gr.joint, gr.sphere, gr.cube, \
          gr.cylinder, gr.cone, gr.nh_sphere, gr.nh_box, gr.mesh, gr.water_mesh, gr.union, \
-         gr.intersection, gr.difference, gr.material, gr.absorption, gr.light, gr.area_light, gr.sphere_light, \
+         gr.intersection, gr.difference, gr.material, gr.absorption, gr.roughness, gr.light, gr.area_light, gr.sphere_light, \
          gr.settings, gr.render)"
     );
     assert_eq!(
@@ -580,6 +580,24 @@ gr.absorption(ok, {0.5, 0.5, 0.5}, 1)",
         "{:?}",
         desc.warnings
     );
+    // gr.roughness takes [0, 1] on an opaque material (rough dielectrics are not rendered yet).
+    for (src, want) in [
+        (
+            "m = gr.material({0, 0, 0}, {1, 1, 1}, 0)\ngr.roughness(m, 1.5)",
+            "roughness must be in [0, 1], got 1.5",
+        ),
+        (
+            "m = gr.material({0, 0, 0}, {1, 1, 1}, 0)\ngr.roughness(m, -0.1)",
+            "roughness must be in [0, 1]",
+        ),
+        (
+            "m = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)\ngr.roughness(m, 0.3)",
+            "rough dielectrics are not rendered yet",
+        ),
+    ] {
+        let e = common::lua_error(src);
+        assert!(e.contains("test.lua:2") && e.contains(want), "{src}: {e}");
+    }
     // An index far outside matter's (its square scales radiance) is refused at its line.
     for ior in ["0.05", "20", "-1"] {
         let e = common::lua_error(&format!(

@@ -433,30 +433,38 @@ impl Tracer<'_> {
         counts: &mut RayCounts,
     ) -> Vec3A {
         let (p, ng, state) = (at.p(), at.bsdf().ng, at.state);
-        let split = at.bsdf().dielectric(crossing);
+        let mat = at.bsdf().material;
+        let split = at
+            .bsdf()
+            .dielectric(crossing, crate::material::bsdf::glossy_numbers(mat, rng));
         let f = split.f;
         if !state.splits(self.scene.features.specular_depth) {
             return self.dielectric_lobe(at, crossing, &split, rng, counts);
         }
         let mut out = Vec3A::ZERO;
-        if f > 0.0 && state.weight * f > MIN_WEIGHT {
-            let (gain, share) = state.branch(f);
+        // A rough interface's branches carry the microfacets' G2/G1 (1 when smooth).
+        let (wr_weight, wt_weight) = (split.reflect_weight, split.refract_weight);
+        if f > 0.0 && wr_weight > 0.0 && state.weight * f * wr_weight > MIN_WEIGHT {
+            let (gain, share) = state.branch(f * wr_weight);
             let wr = split.reflected;
             let ray = Ray::new(offset_ray_origin(p, ng, wr), wr);
             counts.secondary += 1;
-            let child = state.child(f, state.media).shared(share);
-            out += gain * f * self.radiance(&ray, child, rng, counts);
+            let child = state.child(f * wr_weight, state.media).shared(share);
+            out += gain * f * self.radiance(&ray, child, rng, counts) * wr_weight;
         }
         if f < 1.0
-            && state.weight * (1.0 - f) > MIN_WEIGHT
+            && wt_weight > 0.0
+            && state.weight * (1.0 - f) * wt_weight > MIN_WEIGHT
             && let Some(wt) = split.refracted
         {
-            let (gain, share) = state.branch(1.0 - f);
+            let (gain, share) = state.branch((1.0 - f) * wt_weight);
             let ray = Ray::new(offset_ray_origin(p, ng, wt), wt);
             counts.secondary += 1;
-            let child = state.child(1.0 - f, crossing.after).shared(share);
+            let child = state
+                .child((1.0 - f) * wt_weight, crossing.after)
+                .shared(share);
             let radiance = self.radiance(&ray, child, rng, counts);
-            out += gain * (1.0 - f) * split.radiance_scale * radiance;
+            out += gain * (1.0 - f) * split.radiance_scale * radiance * wt_weight;
         }
         out
     }
@@ -480,11 +488,16 @@ impl Tracer<'_> {
         let (dir, weight, media, radiance_scale) = match split.refracted {
             Some(wt) if rng.next_f32() >= p_reflect => (
                 wt,
-                (1.0 - split.f) / (1.0 - p_reflect),
+                (1.0 - split.f) / (1.0 - p_reflect) * split.refract_weight,
                 crossing.after,
                 split.radiance_scale,
             ),
-            _ => (split.reflected, split.f / p_reflect, state.media, 1.0),
+            _ => (
+                split.reflected,
+                split.f / p_reflect * split.reflect_weight,
+                state.media,
+                1.0,
+            ),
         };
         let Some(q) = state.roulette(weight, rng, counts) else {
             return Vec3A::ZERO;

@@ -381,24 +381,17 @@ fn gr_absorption(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     Ok(Value::Nil)
 }
 
-/// `gr.roughness(material, roughness)`: the mirror lobe of an opaque material becomes a rough
-/// conductor (GGX, `alpha = roughness²`, `crate::material::microfacet`) replacing the mirror and
-/// the Phong highlight; 0 is the smooth mirror. Rough dielectrics are not yet rendered: on a
-/// transparent material it is an error.
+/// `gr.roughness(material, roughness)`: the material's mirror lobe becomes a rough conductor
+/// and its dielectric interface a rough one (GGX, `alpha = roughness²`,
+/// `crate::material::microfacet`), replacing the mirror, the Phong highlight and the smooth
+/// interface; 0 is smooth.
 fn gr_roughness(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     let material = a.material(1)?;
     let roughness = a.number(2)?;
     if !(0.0..=1.0).contains(&roughness) {
         return Err(a.bad(2, format!("roughness must be in [0, 1], got {roughness}")));
     }
-    let m = &mut s.desc.materials[material.0 as usize];
-    if m.transparency > 0.0 {
-        return Err(a.bad(
-            1,
-            "rough dielectrics are not rendered yet (issue 37): gr.roughness takes an opaque material (t = 0)".to_string(),
-        ));
-    }
-    m.roughness = roughness as f32;
+    s.desc.materials[material.0 as usize].roughness = roughness as f32;
     Ok(Value::Nil)
 }
 

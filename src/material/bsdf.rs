@@ -107,7 +107,8 @@ pub enum Lobe {
     Dielectric,
 }
 
-/// The two directions a smooth dielectric interface splits a ray into ([`Bsdf::dielectric`]).
+/// The two directions a dielectric interface splits a ray into ([`Bsdf::dielectric`]): about
+/// the shading normal for a smooth one, about one visible micro-normal for a rough one.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Split {
     /// Fresnel reflectance: the reflected share (1 under total internal reflection).
@@ -122,6 +123,11 @@ pub struct Split {
     /// §5.2). Light entering a denser medium is squeezed into a narrower cone, so radiance under
     /// water is n² times what it was in air; seen from above it is divided by n² again.
     pub radiance_scale: f32,
+    /// What the reflected branch's weight `F` is multiplied by: 1 for a smooth interface; for
+    /// a rough one the microfacets' `G2/G1(wo)` (0 where the direction leaves below).
+    pub reflect_weight: f32,
+    /// The same for the refracted branch's `1 − F`.
+    pub refract_weight: f32,
 }
 
 impl<'a> Bsdf<'a> {
@@ -262,14 +268,51 @@ impl<'a> Bsdf<'a> {
 
     /// Returns how the dielectric interface of `crossing` splits `wo` (Fresnel weight and the two
     /// directions).
-    pub fn dielectric(&self, crossing: &Crossing) -> Split {
+    /// A rough interface (`gr.roughness` on a transparent material) splits about a visible
+    /// micro-normal drawn from `u` (Walter et al. 2007, `super::microfacet::RoughDielectric`);
+    /// a smooth one ignores `u`.
+    pub fn dielectric(&self, crossing: &Crossing, u: (f32, f32)) -> Split {
         let eta = crossing.n_from / crossing.n_to;
+        if self.material.roughness > 0.0 {
+            return self.rough_dielectric(eta, u);
+        }
         let f = fresnel::dielectric(self.n.dot(self.wo).max(0.0), eta);
         Split {
             f,
             reflected: self.reflected(),
             refracted: fresnel::refract(self.wo, self.n, eta).filter(|wt| wt.dot(self.ng) < 0.0),
             radiance_scale: eta * eta,
+            reflect_weight: 1.0,
+            refract_weight: 1.0,
+        }
+    }
+
+    /// [`Bsdf::dielectric`] for a rough interface of relative index `eta`.
+    fn rough_dielectric(&self, eta: f32, u: (f32, f32)) -> Split {
+        let frame = Frame::around(self.n);
+        let ggx = Ggx::from_roughness(self.material.roughness);
+        let wo = frame.to_local(self.wo);
+        let h = ggx.sample_visible(wo, u);
+        let f = fresnel::dielectric(wo.dot(h).max(0.0), eta);
+        let weight = |wi: Vec3A, below: bool| {
+            let l = frame.to_local(wi);
+            let ok = if below {
+                wi.dot(self.ng) < 0.0 && l.z < 0.0
+            } else {
+                wi.dot(self.ng) > 0.0 && l.z > 0.0
+            };
+            if ok { ggx.g2(wo, l) / ggx.g1(wo) } else { 0.0 }
+        };
+        let hw = frame.to_world(h);
+        let reflected = fresnel::reflect(self.wo, hw);
+        let refracted = fresnel::refract(self.wo, hw, eta);
+        Split {
+            f,
+            reflected,
+            refracted,
+            radiance_scale: eta * eta,
+            reflect_weight: weight(reflected, false),
+            refract_weight: refracted.map_or(0.0, |wt| weight(wt, true)),
         }
     }
 
@@ -348,6 +391,9 @@ impl<'a> Bsdf<'a> {
             })
         } else if xi < p[0] + p[1] + p[2] {
             let c = crossing?;
+            if self.material.roughness > 0.0 {
+                return self.rough_dielectric_sample(c, lobes.dielectric / choice.divisor[2], rng);
+            }
             let eta = c.n_from / c.n_to;
             let f = fresnel::dielectric(self.n.dot(self.wo).max(0.0), eta);
             let (dir, media, radiance_scale) = match fresnel::refract(self.wo, self.n, eta) {
@@ -368,6 +414,32 @@ impl<'a> Bsdf<'a> {
         } else {
             None
         }
+    }
+}
+
+impl Bsdf<'_> {
+    /// The rough interface's photon sample: one visible micro-normal, then reflection with
+    /// probability `F` or refraction, the chosen branch's weight `G2/G1` on top of `weight`
+    /// (the lobe's over its probability).
+    fn rough_dielectric_sample(&self, c: &Crossing, weight: f32, rng: &mut Rng) -> Option<Sample> {
+        let split = self.dielectric(c, glossy_numbers(self.material, rng));
+        let refract = split.refracted.filter(|_| rng.next_f32() >= split.f);
+        let (dir, w, media, radiance_scale) = match refract {
+            Some(wt) => (
+                wt,
+                split.refract_weight,
+                Some(c.after),
+                split.radiance_scale,
+            ),
+            None => (split.reflected, split.reflect_weight, None, 1.0),
+        };
+        (w > 0.0).then(|| Sample {
+            dir,
+            weight: Vec3A::splat(weight * w),
+            lobe: Lobe::Dielectric,
+            media,
+            radiance_scale,
+        })
     }
 }
 
@@ -670,7 +742,7 @@ mod tests {
         let wo = Vec3A::new(a.sin(), 0.0, a.cos());
         let b = Bsdf::new(&m, &flat(1), wo, true);
         let c = b.crossing(&MediumStack::air()).unwrap();
-        let s = b.dielectric(&c);
+        let s = b.dielectric(&c, (0.0, 0.0));
         assert!((s.f - fresnel::dielectric(a.cos(), 1.0 / 1.5)).abs() < 1e-7);
         let wt = s.refracted.expect("no TIR entering glass");
         assert!((wt.x.abs() - a.sin() / 1.5).abs() < 1e-5 && wt.z < 0.0);
@@ -683,7 +755,7 @@ mod tests {
             -Vec3A::new(0.9f32.sin(), 0.0, 0.9f32.cos()),
             true,
         );
-        let out = b.dielectric(&b.crossing(&inside).unwrap());
+        let out = b.dielectric(&b.crossing(&inside).unwrap(), (0.0, 0.0));
         assert_eq!((out.f, out.refracted), (1.0, None));
     }
 }

@@ -10,6 +10,7 @@
 //!   highlight: `p = 0`) → `conductor` with `material = none` and `specular_reflectance = ks`;
 //!   a rough mirror (`kd = 0`, `t = 0`, `gr.roughness`) → `roughconductor` of distribution
 //!   `ggx`, `alpha = roughness²`, `material = none` and `specular_reflectance = ks`;
+//!   a rough clear dielectric (`t = 1`, `gr.roughness`) → `roughdielectric` (`ggx`, `alpha`);
 //!   a clear dielectric (`t = 1`) → `dielectric` with `int_ior = ior` and `ext_ior` the index of
 //!   the densest dielectric whose box holds it (glass in water), else 1; an index below 1 is
 //!   relative to that one (an air bubble in water, `ior = 0.75`: `int_ior = 0.75·1.33`);
@@ -238,6 +239,13 @@ fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
     if m.transparency == 1.0 {
         // An index below 1 is relative to the medium outside (crate::material::medium).
         let int_ior = if m.ior < 1.0 { m.ior * ext_ior } else { m.ior };
+        if m.roughness > 0.0 {
+            let alpha = crate::material::microfacet::Ggx::from_roughness(m.roughness).alpha;
+            return Ok(format!(
+                "<bsdf type=\"roughdielectric\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"{alpha}\"/>\
+                 <float name=\"int_ior\" value=\"{int_ior}\"/><float name=\"ext_ior\" value=\"{ext_ior}\"/></bsdf>"
+            ));
+        }
         return Ok(format!(
             "<bsdf type=\"dielectric\"><float name=\"int_ior\" value=\"{int_ior}\"/><float name=\"ext_ior\" value=\"{ext_ior}\"/></bsdf>"
         ));

@@ -176,7 +176,8 @@ fn absorbing_media_and_relative_indices_export() {
     }
 }
 
-/// A rough mirror exports as Mitsuba's `roughconductor` with GGX of `alpha = roughness²`.
+/// A rough mirror exports as Mitsuba's `roughconductor` with GGX of `alpha = roughness²`, and
+/// rough glass as `roughdielectric`.
 #[test]
 fn rough_mirrors_export_as_rough_conductors() {
     let dir = out_dir("export-rough");
@@ -187,6 +188,9 @@ fn rough_mirrors_export_as_rough_conductors() {
     gr.roughness(metal, 0.5)
     root = gr.node('root')
     b = gr.sphere('b'); b:set_material(metal); root:add_child(b)
+    glass = gr.material({{0, 0, 0}}, {{0, 0, 0}}, 0, 1, 1.5)
+    gr.roughness(glass, 0.3)
+    g = gr.sphere('g'); g:scale(0.5, 0.5, 0.5); g:translate(0, 0, -3); g:set_material(glass); root:add_child(g)
     {}",
             render_line(
                 "{gr.area_light({0, 1.9, 0}, {1, 1, 1}, {0, 0, 1}, nil, nil, {0.5, 0, 0}, {0, 0, 0.5})}"
@@ -201,4 +205,9 @@ fn rough_mirrors_export_as_rough_conductors() {
     let text = std::fs::read_to_string(dir.join("s.xml")).unwrap();
     let want = "<bsdf type=\"roughconductor\"><string name=\"material\" value=\"none\"/><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"0.25\"/><rgb name=\"specular_reflectance\" value=\"0.9, 0.6, 0.5\"/>";
     assert!(text.contains(want), "missing {want} in:\n{text}");
+    let alpha = 0.3f32 * 0.3;
+    let glass = format!(
+        "<bsdf type=\"roughdielectric\"><string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"{alpha}\"/><float name=\"int_ior\" value=\"1.5\"/><float name=\"ext_ior\" value=\"1\"/>"
+    );
+    assert!(text.contains(&glass), "missing {glass} in:\n{text}");
 }

@@ -376,7 +376,7 @@ fn spawn_and_check(body: &str, scale: f64, offset: f64, seed: u64) -> Tally {
         let it = scene.interaction(&ray, &hit, Needs::Full, None);
         let (p, ng) = (it.surf.p, it.bsdf.ng);
         let crossing = it.bsdf.crossing(&MediumStack::air()).unwrap();
-        let split = it.bsdf.dielectric(&crossing);
+        let split = it.bsdf.dielectric(&crossing, (0.0, 0.0));
 
         let reflected = Ray::new(offset_ray_origin(p, ng, split.reflected), split.reflected);
         if let Err(f) = bench.check(&reflected, false, left, ng) {

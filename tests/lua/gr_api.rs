@@ -580,7 +580,7 @@ gr.absorption(ok, {0.5, 0.5, 0.5}, 1)",
         "{:?}",
         desc.warnings
     );
-    // gr.roughness takes [0, 1] on an opaque material (rough dielectrics are not rendered yet).
+    // gr.roughness takes [0, 1].
     for (src, want) in [
         (
             "m = gr.material({0, 0, 0}, {1, 1, 1}, 0)\ngr.roughness(m, 1.5)",
@@ -591,8 +591,8 @@ gr.absorption(ok, {0.5, 0.5, 0.5}, 1)",
             "roughness must be in [0, 1]",
         ),
         (
-            "m = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)\ngr.roughness(m, 0.3)",
-            "rough dielectrics are not rendered yet",
+            "m = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)\ngr.roughness(m, 2)",
+            "roughness must be in [0, 1], got 2",
         ),
     ] {
         let e = common::lua_error(src);

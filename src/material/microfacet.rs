@@ -1,9 +1,9 @@
 //! GGX microfacets (Trowbridge–Reitz; Walter et al. 2007) with visible-normal sampling (Heitz,
 //! "Sampling the GGX Distribution of Visible Normals", JCGT 2018): the rough-conductor lobe of
 //! issue 37 and the rough dielectric's (Walter et al. 2007 for transmission), in a local frame
-//! whose `z` is the shading normal. The conductor is the mirror lobe of a material with
-//! roughness (`gr.roughness`, [`super::bsdf::Bsdf::glossy`]); the dielectric is not yet wired
-//! into the one BSDF (issue 37's next step).
+//! whose `z` is the shading normal. With roughness (`gr.roughness`) the conductor is a
+//! material's mirror lobe ([`super::bsdf::Bsdf::glossy`]), and the dielectric's visible normals
+//! split its interface ([`super::bsdf::Bsdf::dielectric`]).
 //!
 //! # Conventions
 //! - Directions are unit vectors pointing away from the surface (`wo` towards where the ray came

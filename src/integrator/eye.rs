@@ -236,7 +236,7 @@ impl Tracer<'_> {
             counters::kind(RayKind::Camera);
             let hit = self.scene.intersect(&ray);
             // What the medium the ray crosses keeps of the light over `t` (Beer–Lambert).
-            let kept = |t: f32| self.scene.transmittance(&state.media, t * ray.dir.length());
+            let kept = |t: f32| self.scene.kept_along(&state.media, &ray, t);
             if state.sees_emitters {
                 let tmax = hit.map_or(ray.tmax, |h| h.t);
                 if let Some((t, radiance)) = emitter_seen(self.scene, &ray, tmax) {

@@ -750,7 +750,7 @@ impl Prepass {
                 return (out, first.unwrap_or(f32::INFINITY));
             };
             let t_first = *first.get_or_insert(hit.t * ray.dir.length());
-            throughput *= scene.transmittance(&media, hit.t * ray.dir.length());
+            throughput *= scene.kept_along(&media, &ray, hit.t);
             let specular = scene.materials[hit.material as usize].is_specular();
             let needs = if specular { Needs::Full } else { Needs::Albedo };
             let it = scene.interaction(&ray, &hit, needs, None);

@@ -832,7 +832,7 @@ fn bounce(
             power *= light.falloff_ratio(hit.t * ray.dir.length());
             first = false;
         }
-        power *= scene.transmittance(&media, hit.t * ray.dir.length());
+        power *= scene.kept_along(&media, &ray, hit.t);
         if power.max_element() <= 0.0 {
             return met;
         }

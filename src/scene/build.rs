@@ -125,6 +125,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         stats,
         transparent: Vec::new(),
         lights_clear_of_media: false,
+        absorbing: false,
         eye_media: Default::default(),
         light_media: Vec::new(),
         features: super::types::Features::GENERAL,
@@ -142,6 +143,10 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         })
         .map(|(i, inst)| (i as u32, inst.bounds))
         .collect();
+    scene.absorbing = scene
+        .materials
+        .iter()
+        .any(|m| m.transparency > 0.0 && m.absorption != glam::Vec3A::ZERO);
     scene.lights_clear_of_media = scene.lights.iter().all(|light| {
         let b = light_bounds(light);
         scene

@@ -96,10 +96,19 @@ impl Scene {
     /// the medium of `media` (Beer–Lambert; 1 in air and clear solids, 0 over an infinite
     /// distance in an absorbing channel).
     pub fn transmittance(&self, media: &MediumStack, distance: f32) -> Vec3A {
-        match media.winner() {
+        match media.winner().filter(|_| self.absorbing) {
             None => Vec3A::ONE,
             Some(id) => beer_lambert(&self.materials[id as usize], distance),
         }
+    }
+
+    /// [`Scene::transmittance`] along `ray` from its origin to parameter `t` (in units of its
+    /// direction), the length taken only in a scene that absorbs: the paths' per-segment call.
+    pub fn kept_along(&self, media: &MediumStack, ray: &Ray, t: f32) -> Vec3A {
+        if !self.absorbing {
+            return Vec3A::ONE;
+        }
+        self.transmittance(media, t * ray.dir.length())
     }
 }
 

@@ -94,6 +94,9 @@ pub struct Scene {
     /// the solid's boundary, which blocks it (the light through it is the caustic map's), so
     /// the eye path casts none ([`Scene::lights_clear_of_media`]).
     pub lights_clear_of_media: bool,
+    /// Whether some transparent material absorbs ([`Material::absorption`]): without one, the
+    /// per-segment Beer–Lambert factor is 1 and the paths skip it ([`Scene::kept_along`]).
+    pub absorbing: bool,
     /// The media the camera is in (under water, inside a glass ball): where camera rays start
     /// ([`Scene::media_at`]).
     pub eye_media: crate::scene::media::Media,

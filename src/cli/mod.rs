@@ -536,6 +536,10 @@ fn info_command(args: InfoArgs) -> Result<()> {
         let scene = build_scene(&desc, r)?;
         let plan = crate::integrator::plan::plan_for(&scene, &settings);
         println!("  plan of render {} ({which}):", i + 1);
+        println!(
+            "    camera medium: {}",
+            report::camera_medium(&desc, &scene)
+        );
         for line in plan.lines() {
             println!("    {line}");
         }

@@ -427,8 +427,6 @@ pub fn describe(name: &str, desc: &SceneDesc) -> Result<String> {
             list(&placed.by_kind),
             placed.triangles
         );
-        let scene = crate::scene::build_scene(desc, r)?;
-        let _ = writeln!(s, "    camera medium: {}", camera_medium(desc, &scene));
     }
     Ok(s)
 }
@@ -436,7 +434,7 @@ pub fn describe(name: &str, desc: &SceneDesc) -> Result<String> {
 /// Returns what `caustic info` says of the medium the camera is in: air, or the solids that hold
 /// it (outermost first), the index and absorption of the one whose medium it is, and the solids
 /// whose probes could not agree.
-fn camera_medium(desc: &SceneDesc, scene: &crate::scene::Scene) -> String {
+pub fn camera_medium(desc: &SceneDesc, scene: &crate::scene::Scene) -> String {
     let media = &scene.eye_media;
     let name = |i: &u32| format!("'{}'", desc.node(scene.instances[*i as usize].node).name);
     let mut out = if media.inside.is_empty() {

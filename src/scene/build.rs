@@ -174,9 +174,7 @@ fn find_media(desc: &SceneDesc, render: &RenderDesc, scene: &mut Scene) {
             if inside { "inside" } else { "outside" }
         );
     }
-    // Each light's media cost PROBES rays per transparent box round it: bounded, so that a
-    // scene of thousands of lights inside thousands of nested shells cannot stall the build.
-    let mut budget = MAX_LIGHT_MEDIA_BOXES;
+    let mut budget = ProbeBudget(MAX_MEDIA_PROBES);
     let mut unknown = 0usize;
     scene.light_media = scene
         .lights
@@ -184,41 +182,57 @@ fn find_media(desc: &SceneDesc, render: &RenderDesc, scene: &mut Scene) {
         .map(|light| {
             let b = light_bounds(light);
             let p = (b.min + b.max) * 0.5;
-            let boxes = scene
-                .transparent
-                .iter()
-                .filter(|(_, t)| (p.cmpge(t.min) & p.cmple(t.max)).all())
-                .count();
-            if boxes > budget {
+            if !budget.take(scene, p) {
                 unknown += 1;
                 return crate::material::medium::MediumStack::air();
             }
-            budget -= boxes;
             scene.media_at(p).stack
         })
         .collect();
     if unknown > 0 {
         eprintln!(
-            "{}: warning: {unknown} lights lie inside more transparent solids than caustic checks ({MAX_LIGHT_MEDIA_BOXES} boxes round lights in all); their photons start as if in air",
+            "{}: warning: {unknown} lights lie inside more transparent solids than caustic checks ({MAX_MEDIA_PROBES} boxes round lights in all); their photons start as if in air",
             render.loc
         );
     }
-    warn_hidden_solids(desc, scene);
+    warn_hidden_solids(desc, scene, &mut budget);
 }
 
-/// Most (light, transparent box holding it) pairs whose media the build probes: 7 rays each,
-/// about a second's work on 2 cores.
-const MAX_LIGHT_MEDIA_BOXES: usize = 1 << 16;
+/// Most (point, transparent box holding it) pairs whose media the build probes
+/// ([`Scene::media_at`]: 7 rays each, about a second's work on 2 cores), over the lights' media
+/// and the hidden-solid check together: a scene of thousands of lights or solids inside
+/// thousands of nested shells cannot stall the build.
+const MAX_MEDIA_PROBES: usize = 1 << 16;
+
+/// What is left of [`MAX_MEDIA_PROBES`].
+struct ProbeBudget(usize);
+
+impl ProbeBudget {
+    /// Takes the probes of point `p` (one per transparent box holding it) and returns true, or
+    /// returns false when they are more than what is left.
+    fn take(&mut self, scene: &Scene, p: glam::Vec3A) -> bool {
+        let boxes = scene
+            .transparent
+            .iter()
+            .filter(|(_, t)| (p.cmpge(t.min) & p.cmple(t.max)).all())
+            .count();
+        let ok = boxes <= self.0;
+        if ok {
+            self.0 -= boxes;
+        }
+        ok
+    }
+}
 
 /// Most transparent instances [`warn_hidden_solids`] looks at (each looks for the others that
-/// hold it).
+/// hold it, a pass over all of them), besides the probes it takes from the [`ProbeBudget`].
 const MAX_HIDDEN_CHECK: usize = 4096;
 
 /// Warns, at the node's script line, about a transparent solid of absolute index placed inside
 /// a denser one (an air bubble of `ior = 1` in water): where solids overlap the denser medium
 /// wins ([`crate::material::medium`]), so the inner one would vanish without a word. An index
 /// below 1, relative to the container, is what makes such a solid.
-fn warn_hidden_solids(desc: &SceneDesc, scene: &Scene) {
+fn warn_hidden_solids(desc: &SceneDesc, scene: &Scene, budget: &mut ProbeBudget) {
     if scene.transparent.len() > MAX_HIDDEN_CHECK {
         return;
     }
@@ -228,7 +242,11 @@ fn warn_hidden_solids(desc: &SceneDesc, scene: &Scene) {
         if inst.mesh_materials || ior < 1.0 {
             continue;
         }
-        let media = scene.media_at((bounds.min + bounds.max) * 0.5);
+        let centre = (bounds.min + bounds.max) * 0.5;
+        if !budget.take(scene, centre) {
+            return;
+        }
+        let media = scene.media_at(centre);
         let holder = media.inside.iter().find(|&&b| {
             let outer = scene.transparent.iter().find(|t| t.0 == b).map(|t| t.1);
             b != a

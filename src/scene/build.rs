@@ -143,10 +143,6 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         })
         .map(|(i, inst)| (i as u32, inst.bounds))
         .collect();
-    scene.absorbing = scene
-        .materials
-        .iter()
-        .any(|m| m.transparency > 0.0 && m.absorption != glam::Vec3A::ZERO);
     scene.lights_clear_of_media = scene.lights.iter().all(|light| {
         let b = light_bounds(light);
         scene
@@ -158,10 +154,14 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Finds the media the camera and each light are in ([`Scene::media_at`]), warning at the
-/// render's line when the eye lies on a solid's surface, and about solids hidden inside denser
-/// ones ([`warn_hidden_solids`]).
+/// Finds whether any medium absorbs and the media the camera and each light are in
+/// ([`Scene::media_at`]), warning at the render's line when the eye lies on a solid's surface,
+/// and about solids hidden inside denser ones ([`warn_hidden_solids`]).
 fn find_media(desc: &SceneDesc, render: &RenderDesc, scene: &mut Scene) {
+    scene.absorbing = scene
+        .materials
+        .iter()
+        .any(|m| m.transparency > 0.0 && m.absorption != glam::Vec3A::ZERO);
     scene.eye_media = scene.media_at(render.camera.eye.into());
     for &i in &scene.eye_media.doubtful {
         let node = desc.node(scene.instances[i as usize].node);

@@ -100,7 +100,7 @@ impl Material {
             transparency: m.transparency,
             ior: m.ior,
             absorption: m.absorption.into(),
-            roughness: 0.0,
+            roughness: m.roughness,
             perlin_scale: 0.0,
             texture,
             bump: None,

@@ -37,9 +37,9 @@ pub struct MeshMaterial {
     pub name: String,
     /// Diffuse colour (OBJ `Kd`, glTF base colour).
     pub kd: Vec3,
-    /// Specular colour (OBJ `Ks`; glTF: approximated from metallic/roughness).
+    /// Specular colour (OBJ `Ks`; glTF: `mix(0.04, baseColor, metallic)`).
     pub ks: Vec3,
-    /// Phong exponent (OBJ `Ns`; glTF: approximated from roughness).
+    /// Phong exponent (OBJ `Ns`; glTF: a mirror's, unused: its roughness is a GGX lobe).
     pub shininess: f32,
     /// Transparency in [0, 1] (OBJ `1 - d`, glTF `KHR_materials_transmission`).
     pub transparency: f32,
@@ -48,6 +48,9 @@ pub struct MeshMaterial {
     /// Absorption coefficient per channel per unit length of the interior (glTF
     /// `KHR_materials_volume`: `−ln(attenuationColor)/attenuationDistance`); zero for clear.
     pub absorption: Vec3,
+    /// GGX roughness of the mirror lobe and the dielectric interface in `[0, 1]` (glTF
+    /// `roughnessFactor`, `alpha = roughness²`; OBJ: 0, Phong's exponent stands in).
+    pub roughness: f32,
     /// Texture replacing `kd` (OBJ `map_Kd`, glTF base colour texture), resolved to a path.
     pub texture: Option<PathBuf>,
 }

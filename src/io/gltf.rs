@@ -22,20 +22,21 @@
 //! rejected, as are required extensions other than the two materials ones below.
 //!
 //! # Materials
-//! glTF's metallic-roughness model is approximated in the renderer's Phong terms. With base
-//! colour `c`, metallic `m`, roughness `r`, smoothness `s = (1 − r)²` and specular colour
-//! `F0 = mix(0.04, c, m)` (the usual dielectric 4 %):
-//! - `kd = c · (1 − m·s)`: dielectrics keep their base colour; smooth metals lose their diffuse
-//!   lobe to the mirror, rough metals keep it (our `ks` is also a perfect-mirror weight);
-//! - `ks = F0 · s`: a smooth surface mirrors with `F0`, a rough one not at all;
-//! - `shininess = 2/α² − 2` with `α = r²`, clamped to `[0, 10000]` (the Blinn-Phong exponent
-//!   matching a Beckmann lobe of roughness α, Walter et al. 2007, §5.2);
+//! glTF's metallic-roughness model maps onto the one BSDF's lobes ([`crate::material`]). With
+//! base colour `c`, metallic `m`, roughness `r` and specular colour `F0 = mix(0.04, c, m)` (the
+//! usual dielectric 4 %):
+//! - `kd = c · (1 − m)`: a dielectric keeps its base colour, a metal has no diffuse lobe;
+//! - `ks = F0` with GGX roughness `r` (`alpha = r²`, the glTF convention, as `gr.roughness`
+//!   takes it): a rough conductor of colour `F0` ([`crate::material::microfacet`]), the smooth
+//!   mirror at `r = 0`; on a dielectric the 4 % lobe stands for its specular reflection;
 //! - `transparency` = `KHR_materials_transmission`'s factor, `ior` = `KHR_materials_ior` (1.5
-//!   when absent, the glTF default).
+//!   when absent, the glTF default), with the roughness making the interface a rough
+//!   dielectric (frosted glass);
+//! - `KHR_materials_volume`: absorption `−ln(attenuationColor)/attenuationDistance`.
 //!
-//! The glTF default material (white, fully metallic and rough) thus becomes a white diffuse
-//! surface. Factors are clamped to their glTF ranges (`ior` to at least 1). The base colour
-//! texture's image is carried as a path when it is an external URI (resolved against the file's
+//! The glTF default material (white, fully metallic and rough) thus becomes a white conductor
+//! of roughness 1, as glTF defines it. Factors are clamped to their glTF ranges (`ior` to at
+//! least 1). The base colour texture's image is carried as a path when it is an external URI (resolved against the file's
 //! folder); embedded images (buffer views, data URIs) leave `texture` as `None`. Alpha, emission
 //! and every other texture are ignored. When no primitive has a material, the mesh carries none;
 //! otherwise primitives without one get the glTF default material.
@@ -445,7 +446,7 @@ fn merge(
     Ok(mesh)
 }
 
-/// Returns the Phong material approximating a glTF material (mapping in the module doc).
+/// Returns the mesh material a glTF material maps to (the mapping is in the module doc).
 fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMaterial, String> {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
@@ -484,9 +485,7 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
     let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
     let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
     let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
-    let smoothness = (1.0 - roughness) * (1.0 - roughness);
     let f0 = Vec3::splat(0.04).lerp(base, metallic);
-    let alpha2 = roughness.powi(4);
     let texture = pbr.base_color_texture().and_then(|info| {
         let image = info.texture().source().index();
         let uri = doc.as_json().images.get(image)?.uri.as_deref()?;
@@ -494,12 +493,14 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
     });
     Ok(MeshMaterial {
         name,
-        kd: base * (1.0 - metallic * smoothness),
-        ks: f0 * smoothness,
-        shininess: (2.0 / alpha2.max(1e-12) - 2.0).clamp(0.0, MAX_SHININESS),
+        kd: base * (1.0 - metallic),
+        ks: f0,
+        // Unused above roughness 0 (the GGX lobe replaces Phong); a perfect mirror at 0.
+        shininess: MAX_SHININESS,
         transparency: transmission.clamp(0.0, 1.0),
         ior: ior.clamp(1.0, crate::range::MAX_IOR as f32),
         absorption: crate::material::absorption(attenuation, distance),
+        roughness,
         texture,
     })
 }

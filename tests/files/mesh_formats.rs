@@ -162,11 +162,12 @@ fn materials_map_metal_roughness_transmission_ior_and_texture() {
     assert_eq!(mesh.triangle_materials, [1, 2, 0]);
     let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
     let water = &mesh.materials[0];
-    // Dielectric, roughness 0.5: smoothness 0.25, ks = 0.04·0.25, α = 0.25, exponent 2/α² − 2.
-    assert!(close(water.kd, vec3(0.2, 0.4, 0.6)) && close(water.ks, Vec3::splat(0.01)));
+    // Dielectric of roughness 0.5: its base colour, the 4 % specular lobe as GGX of roughness
+    // 0.5 (α = 0.25), and a rough interface.
+    assert!(close(water.kd, vec3(0.2, 0.4, 0.6)) && close(water.ks, Vec3::splat(0.04)));
     assert_eq!(
-        (water.shininess, water.transparency, water.ior),
-        (30.0, 0.9, 1.33)
+        (water.roughness, water.transparency, water.ior),
+        (0.5, 0.9, 1.33)
     );
     assert_eq!(water.texture, Some(dir.join("water ripples.png")));
     let metal = &mesh.materials[1];
@@ -179,14 +180,16 @@ fn materials_map_metal_roughness_transmission_ior_and_texture() {
         transparency: 0.0,
         ior: 1.5,
         absorption: glam::Vec3::ZERO,
+        roughness: 0.0,
         texture: None,
     };
     assert_eq!(*metal, expected);
-    // The glTF default material (white, metallic 1, roughness 1) becomes white diffuse.
+    // The glTF default material (white, metallic 1, roughness 1) is a white conductor of
+    // roughness 1, with no diffuse lobe.
     let default = &mesh.materials[2];
     assert_eq!(
-        (default.kd, default.ks, default.shininess),
-        (Vec3::ONE, Vec3::ZERO, 0.0)
+        (default.kd, default.ks, default.roughness),
+        (Vec3::ZERO, Vec3::ONE, 1.0)
     );
     assert_eq!((default.transparency, default.ior), (0.0, 1.5));
 }
@@ -414,6 +417,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         transparency: 0.0,
         ior: 1.5,
         absorption: glam::Vec3::ZERO,
+        roughness: 0.0,
         texture: Some(dir.join("tex/red.png")),
     };
     let glass = MeshMaterial {
@@ -424,6 +428,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         transparency: 0.9,
         ior: 1.33,
         absorption: glam::Vec3::ZERO,
+        roughness: 0.0,
         texture: None,
     };
     let grey = MeshMaterial {
@@ -434,6 +439,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         transparency: 0.0,
         ior: 1.0,
         absorption: glam::Vec3::ZERO,
+        roughness: 0.0,
         texture: None,
     };
     assert_eq!(mesh.materials, [red, glass, grey]);
@@ -464,7 +470,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
 
 // ---- Mesh materials in scenes, and gr.mesh's choice of loader ----
 
-use crate::common::{render_films, run_lua_in};
+use crate::common::{render_films, render_films_with, run_lua_in, whitted};
 
 #[test]
 fn render_shows_the_mtl_colour_unless_the_script_sets_a_material() {
@@ -506,6 +512,60 @@ fn render_shows_the_mtl_colour_unless_the_script_sets_a_material() {
     assert_eq!(pixel_at(-3.0), glam::Vec3A::new(0.8, 0.2, 0.1));
     assert_eq!(pixel_at(0.0), glam::Vec3A::new(0.1, 0.7, 0.2));
     assert_eq!(pixel_at(3.0), glam::Vec3A::splat(0.6));
+}
+
+/// A glTF metal of roughness r is the one BSDF's GGX conductor of colour `baseColor` and
+/// roughness r (issue 37): the file's material renders bit for bit as the script's
+/// `gr.material` with `gr.roughness`, where the Phong approximation it replaced did not.
+#[test]
+fn gltf_roughness_renders_as_the_ggx_conductor_of_gr_roughness() {
+    let dir = out_dir("gltf-rough-render");
+    let mut f = GltfFile::default();
+    f.floats(
+        "VEC3",
+        &[
+            -1.0, 0.0, -1.0, 1.0, 0.0, -1.0, 1.0, 0.0, 1.0, -1.0, 0.0, 1.0,
+        ],
+    );
+    f.indices(5125, &[0, 2, 1, 0, 3, 2]);
+    let rest = r#""nodes":[{"mesh":0}],
+        "materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0.95,0.64,0.54,1],
+          "metallicFactor":1,"roughnessFactor":0.4}}],
+        "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}]"#;
+    f.write_glb(&dir, "copper", rest);
+    let render = |material: &str| {
+        let script = format!(
+            r#"
+            root = gr.node('root')
+            floor = gr.mesh('floor', 'copper.glb')
+            {material}
+            root:add_child(floor)
+            gr.render(root, 'x.png', 24, 24, {{0, 1.5, 2.5}}, {{0, -1.5, -2.5}}, {{0, 1, 0}}, 50,
+                      {{0, 0, 0}}, {{gr.light({{0.4, 2, -0.6}}, {{1, 1, 1}}, {{1, 0, 0}})}})
+        "#
+        );
+        let films = render_films_with(script.as_bytes(), "rough.lua", &dir, &whitted()).unwrap();
+        films.into_iter().next().unwrap().2
+    };
+    let file = render("");
+    let script = render(
+        "m = gr.material({0, 0, 0}, {0.95, 0.64, 0.54}, 10000)
+         gr.roughness(m, 0.4)
+         floor:set_material(m)",
+    );
+    let pixels = |film: &caustic::film::Film| {
+        (0..film.height)
+            .flat_map(|y| (0..film.width).map(move |x| (x, y)))
+            .map(|(x, y)| film.get(x, y))
+            .collect::<Vec<_>>()
+    };
+    let (a, b) = (pixels(&file), pixels(&script));
+    let lit = a.iter().filter(|p| p.max_element() > 1e-3).count();
+    assert!(
+        lit > 50,
+        "the rough floor should show the light's lobe: {lit} lit pixels"
+    );
+    assert_eq!(a, b);
 }
 
 #[test]

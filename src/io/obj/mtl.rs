@@ -181,6 +181,7 @@ pub(super) fn mesh_material(m: &tobj::Material) -> MeshMaterial {
             .filter(|&n| n > 0.0)
             .map_or(1.0, |n| n.min(crate::range::MAX_IOR as f32)),
         absorption: Vec3::ZERO,
+        roughness: 0.0,
         texture: m.diffuse_texture.as_ref().map(PathBuf::from),
     }
 }
@@ -195,6 +196,7 @@ pub(super) fn default_material() -> MeshMaterial {
         transparency: 0.0,
         ior: 1.0,
         absorption: Vec3::ZERO,
+        roughness: 0.0,
         texture: None,
     }
 }

@@ -238,6 +238,17 @@ pub struct RenderDesc {
     pub settings: Vec<String>,
 }
 
+impl RenderDesc {
+    /// Returns where light `l` of a scene built for this render was made: the script's lights
+    /// come first, in this render's order; the lights of placed meshes' emissive surfaces
+    /// after them are placed by the render itself, so its line stands for them.
+    pub fn light_loc<'a>(&'a self, desc: &'a SceneDesc, l: usize) -> &'a Loc {
+        self.lights
+            .get(l)
+            .map_or(&self.loc, |id| &desc.lights[id.0 as usize].loc)
+    }
+}
+
 /// Everything a script has described so far.
 #[derive(Clone, Debug, Default)]
 pub struct SceneDesc {

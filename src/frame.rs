@@ -229,7 +229,7 @@ fn check_photon_budget(
             if n <= MAX_PHOTONS {
                 continue;
             }
-            let loc = &desc.lights[r.lights[l].0 as usize].loc;
+            let loc = r.light_loc(desc, l);
             return Err(Error::at(
                 loc,
                 format!(
@@ -264,7 +264,7 @@ pub fn charge_photons(
     for kind in kinds {
         for (l, &n) in photons.budget(&scene.lights, kind).iter().enumerate() {
             let what = format!("this light's {n} photons for the {kind:?} map").to_lowercase();
-            let at = crate::budget::At::Script(&desc.lights[r.lights[l].0 as usize].loc);
+            let at = crate::budget::At::Script(r.light_loc(desc, l));
             scene
                 .account
                 .charge(n.saturating_mul(PHOTON_BYTES), what, at)?;

@@ -1,5 +1,6 @@
-//! Lights: point, one-sided parallelogram (area) and sphere lights, for direct lighting by shadow
-//! rays and for photon emission — one lighting model for both.
+//! Lights: point, one-sided parallelogram (area), sphere and triangle-mesh (emissive surface)
+//! lights, for direct lighting by shadow rays and for photon emission — one lighting model for
+//! both.
 //!
 //! ```lua
 //! gr.light({0, 0.5, 0}, {0.7, 0.5, 0.9}, {1, 0, 0}, 10000, 200000)          -- point
@@ -31,12 +32,124 @@
 //!   to `power` (or, when absent, to their flux). Their absolute brightness always comes from `rgb`,
 //!   so that direct and photon lighting agree.
 //! - Attenuation applies to light from lights only, never to the ambient term.
+//! - A mesh light ([`Shape::Mesh`]: one emissive primitive of a glTF file, placed) is a set of
+//!   one-sided triangles of uniform radiance `L` and total area `A`, each emitting on the side its
+//!   counter-clockwise winding faces. It is an area light spread over triangles: its `rgb` is
+//!   `L·A/π`, so it is seen with radiance `π·rgb/A = L`, sheds `Φ = π·L·A`, and is sampled by
+//!   choosing a triangle by its area and a point uniformly on it ([`Light::mesh`]).
 
 use crate::desc::{LightDesc, LightShape};
 use crate::geometry::Ray;
 use crate::sampling::{cosine_around, uniform_sphere};
 use glam::Vec3A;
 use std::f32::consts::{PI, TAU};
+use std::sync::Arc;
+
+/// One triangle of a mesh light in world space: corner `p0`, edges `e1`, `e2`, and the unit
+/// normal of its emitting side, `e1 × e2` normalised.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterTriangle {
+    pub p0: Vec3A,
+    pub e1: Vec3A,
+    pub e2: Vec3A,
+    pub normal: Vec3A,
+}
+
+impl EmitterTriangle {
+    /// Returns the triangle with corners `a`, `b`, `c` (counter-clockwise seen from the front).
+    pub fn new(a: Vec3A, b: Vec3A, c: Vec3A) -> EmitterTriangle {
+        let (e1, e2) = (b - a, c - a);
+        EmitterTriangle {
+            p0: a,
+            e1,
+            e2,
+            normal: e1.cross(e2).normalize_or_zero(),
+        }
+    }
+
+    /// Returns the triangle's area.
+    pub fn area(&self) -> f32 {
+        0.5 * self.e1.cross(self.e2).length()
+    }
+
+    /// Returns the point of barycentric square root parametrisation `u` in [0, 1)²: uniform
+    /// over the triangle's area.
+    fn point(&self, u: (f32, f32)) -> Vec3A {
+        let s = u.0.sqrt();
+        self.p0 + self.e1 * (s * (1.0 - u.1)) + self.e2 * (s * u.1)
+    }
+
+    /// Returns the distance along `ray` at which it meets the triangle (Möller–Trumbore), if
+    /// within `(ray.tmin, tmax)`.
+    fn hit(&self, ray: &Ray, tmax: f32) -> Option<f32> {
+        let p = ray.dir.cross(self.e2);
+        let det = self.e1.dot(p);
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let s = ray.origin - self.p0;
+        let b1 = s.dot(p) * inv;
+        if !(0.0..=1.0).contains(&b1) {
+            return None;
+        }
+        let q = s.cross(self.e1);
+        let b2 = ray.dir.dot(q) * inv;
+        if !(b2 >= 0.0 && b1 + b2 <= 1.0) {
+            return None;
+        }
+        let t = self.e2.dot(q) * inv;
+        (t > ray.tmin && t < tmax).then_some(t)
+    }
+}
+
+/// The triangles of a mesh light with what sampling them needs, shared by the light's clones.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmitterMesh {
+    pub triangles: Vec<EmitterTriangle>,
+    /// Running sums of the triangles' areas divided by the total: `cdf[i]` is the probability
+    /// of choosing a triangle up to `i`; the last entry is 1.
+    pub cdf: Vec<f32>,
+    /// The total area.
+    pub area: f32,
+    /// The area-weighted centroid of the triangles.
+    pub centroid: Vec3A,
+    /// The area-weighted mean of the normals (shorter than 1 where the surface curves).
+    pub mean_normal: Vec3A,
+    /// World bounds of the triangles, for a quick miss in [`Light::seen_by`].
+    pub min: Vec3A,
+    pub max: Vec3A,
+}
+
+impl EmitterMesh {
+    /// Returns the triangle chosen by `u` in [0, 1) in proportion to area, and `u` rescaled to
+    /// [0, 1) within that triangle's share.
+    fn choose(&self, u: f32) -> (&EmitterTriangle, f32) {
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.triangles.len() - 1);
+        let below = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let width = self.cdf[i] - below;
+        let v = if width > 0.0 {
+            ((u - below) / width).clamp(0.0, 1.0 - f32::EPSILON)
+        } else {
+            0.0
+        };
+        (&self.triangles[i], v)
+    }
+
+    /// Returns whether `ray` can meet the mesh's bounds before `tmax` (a slab test).
+    fn may_hit(&self, ray: &Ray, tmax: f32) -> bool {
+        let inv = ray.dir.recip();
+        let t0 = (self.min - ray.origin) * inv;
+        let t1 = (self.max - ray.origin) * inv;
+        let near = t0.min(t1).max_element().max(ray.tmin);
+        let far = t0.max(t1).min_element().min(tmax);
+        // NaN (a zero direction component on a slab's plane) lets the triangles decide.
+        near.partial_cmp(&far) != Some(std::cmp::Ordering::Greater)
+    }
+}
 
 /// A light in world space.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,6 +182,8 @@ pub enum Shape {
         centre: Vec3A,
         radius: f32,
     },
+    /// One-sided emitting triangles of one radiance ([`Light::mesh`]).
+    Mesh(Arc<EmitterMesh>),
 }
 
 /// A point sampled on a light, as seen from a shaded point.
@@ -134,6 +249,64 @@ impl Light {
         }
     }
 
+    /// Returns the light of emitting triangles of radiance `radiance` (per channel), or `None`
+    /// when their total area is zero (nothing emits). The falloff is physical, and the light's
+    /// `power` is its flux summed over the channels: it takes part in photon mapping, as a
+    /// physical light does, with a share of the photons in proportion to its flux.
+    pub fn mesh(triangles: Vec<EmitterTriangle>, radiance: Vec3A) -> Option<Light> {
+        let areas: Vec<f64> = triangles.iter().map(|t| f64::from(t.area())).collect();
+        let total: f64 = areas.iter().sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return None;
+        }
+        let mut sum = 0.0;
+        let cdf = areas
+            .iter()
+            .map(|a| {
+                sum += a;
+                (sum / total) as f32
+            })
+            .collect::<Vec<f32>>();
+        let weighted = |f: &dyn Fn(&EmitterTriangle) -> Vec3A| {
+            triangles
+                .iter()
+                .zip(&areas)
+                .map(|(t, &a)| f(t) * (a / total) as f32)
+                .sum::<Vec3A>()
+        };
+        let centroid = weighted(&|t| t.p0 + (t.e1 + t.e2) / 3.0);
+        let mean_normal = weighted(&|t| t.normal);
+        let corners = triangles
+            .iter()
+            .flat_map(|t| [t.p0, t.p0 + t.e1, t.p0 + t.e2]);
+        let (min, max) = corners.fold(
+            (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(p), hi.max(p)),
+        );
+        let area = total as f32;
+        let mut cdf = cdf;
+        // Rounding must not leave a sliver above the last triangle.
+        if let Some(last) = cdf.last_mut() {
+            *last = 1.0;
+        }
+        Some(Light {
+            shape: Shape::Mesh(Arc::new(EmitterMesh {
+                triangles,
+                cdf,
+                area,
+                centroid,
+                mean_normal,
+                min,
+                max,
+            })),
+            colour: radiance * area / PI,
+            falloff: [0.0, 0.0, 1.0],
+            // A physical light: it takes part in photon mapping, its photon share by its flux.
+            power: Some(PI * (radiance * area).element_sum()),
+            photons: None,
+        })
+    }
+
     /// Returns the attenuation `1 / (c0 + c1·d + c2·d²)` at distance `d`.
     pub fn attenuation(&self, d: f32) -> f32 {
         let [c0, c1, c2] = self.falloff;
@@ -153,20 +326,28 @@ impl Light {
     /// Returns the total emitted flux `Φ` per channel (physical units: `I_phys = π·rgb`).
     pub fn flux(&self) -> Vec3A {
         match self.shape {
-            Shape::Area { .. } => PI * PI * self.colour,
-            _ => 2.0 * TAU * PI * self.colour,
+            Shape::Area { .. } | Shape::Mesh(_) => PI * PI * self.colour,
+            Shape::Point { .. } | Shape::Sphere { .. } => 2.0 * TAU * PI * self.colour,
         }
     }
 
     /// Returns the light as a point at its centre seen from `p`, for hard shadows (the plan's
     /// soft shadows off): a point light itself; an area light's centre with its cosine falloff;
-    /// a sphere light's centre with its intensity from afar (the mean of [`Light::sample`]).
+    /// a sphere light's centre with its intensity from afar (the mean of [`Light::sample`]); a
+    /// mesh light's area-weighted centroid with the cosine of its mean normal.
     pub fn centre_sample(&self, p: Vec3A) -> LightSample {
-        match self.shape {
+        match &self.shape {
             Shape::Point { .. } | Shape::Area { .. } => self.sample(p, (0.5, 0.5)),
             Shape::Sphere { centre, .. } => LightSample {
-                position: centre,
+                position: *centre,
                 intensity: self.colour,
+            },
+            Shape::Mesh(m) => LightSample {
+                position: m.centroid,
+                intensity: self.colour
+                    * m.mean_normal
+                        .dot((p - m.centroid).normalize_or_zero())
+                        .max(0.0),
             },
         }
     }
@@ -178,6 +359,16 @@ impl Light {
                 position,
                 intensity: self.colour,
             },
+            Shape::Mesh(ref m) => {
+                // Uniform over the total area, as an area light's parallelogram is.
+                let (t, u0) = m.choose(u.0);
+                let y = t.point((u0, u.1));
+                let to_p = (p - y).normalize_or_zero();
+                LightSample {
+                    position: y,
+                    intensity: self.colour * t.normal.dot(to_p).max(0.0),
+                }
+            }
             Shape::Area {
                 centre,
                 u: eu,
@@ -208,11 +399,33 @@ impl Light {
     /// Returns where `ray` first meets the light's emitting surface within `(tmin, tmax)` and the
     /// radiance it sees there: `I_phys/A` (that is `π·rgb/A`) on the emitting side of an area
     /// light and black on its back, `I_phys/(πR²)` (that is `rgb/R²`) on a sphere light. Point
-    /// lights are never seen. The course's falloff does not apply to seen emitters: only the
-    /// light they shed on surfaces is attenuated.
+    /// lights are never seen; a mesh light is seen as an area light is, `π·rgb/A` on the front
+    /// of its triangles. The course's falloff does not apply to seen emitters: only the light
+    /// they shed on surfaces is attenuated.
     pub fn seen_by(&self, ray: &Ray, tmax: f32) -> Option<(f32, Vec3A)> {
         let (t, radiance) = match self.shape {
             Shape::Point { .. } => return None,
+            Shape::Mesh(ref m) => {
+                if !m.may_hit(ray, tmax) {
+                    return None;
+                }
+                let mut best: Option<(f32, &EmitterTriangle)> = None;
+                for tri in &m.triangles {
+                    if let Some(t) = tri.hit(ray, best.map_or(tmax, |b| b.0)) {
+                        best = Some((t, tri));
+                    }
+                }
+                let (t, tri) = best?;
+                let front = ray.dir.dot(tri.normal) < 0.0;
+                (
+                    t,
+                    if front {
+                        PI * self.colour / m.area
+                    } else {
+                        Vec3A::ZERO
+                    },
+                )
+            }
             Shape::Area {
                 centre,
                 u,
@@ -272,6 +485,14 @@ impl Light {
                 dir: uniform_sphere((u[0], u[1])),
                 normal: Vec3A::ZERO,
             },
+            Shape::Mesh(ref m) => {
+                let (t, u0) = m.choose(u[0]);
+                Emission {
+                    origin: t.point((u0, u[1])),
+                    dir: cosine_around(t.normal, (u[2], u[3])),
+                    normal: t.normal,
+                }
+            }
             Shape::Area {
                 centre,
                 u: eu,
@@ -358,6 +579,115 @@ mod tests {
             .sum::<Vec3A>()
             / n as f32;
         assert!((mean.x - 3.0).abs() < 0.03, "{mean}");
+    }
+
+    /// A unit square at height 1 facing down, as two triangles, of radiance `l`.
+    fn square(l: f32) -> Light {
+        let (a, b, c, d) = (
+            Vec3A::new(-0.5, 1.0, -0.5),
+            Vec3A::new(0.5, 1.0, -0.5),
+            Vec3A::new(0.5, 1.0, 0.5),
+            Vec3A::new(-0.5, 1.0, 0.5),
+        );
+        // Counter-clockwise seen from below: the normal points down.
+        let tris = vec![EmitterTriangle::new(a, b, c), EmitterTriangle::new(a, c, d)];
+        Light::mesh(tris, Vec3A::splat(l)).unwrap()
+    }
+
+    #[test]
+    fn a_mesh_light_is_the_area_light_of_its_shape_and_radiance() {
+        let mesh = square(3.0);
+        assert_eq!(mesh.colour, Vec3A::splat(3.0 / PI));
+        let Shape::Mesh(m) = &mesh.shape else {
+            unreachable!()
+        };
+        assert_eq!(m.triangles[0].normal, -Vec3A::Y);
+        assert_eq!((m.area, m.cdf.clone()), (1.0, vec![0.5, 1.0]));
+        // The area light of the same square and rgb (L·A/π): the same flux, the same mean
+        // intensity seen from any point, in closed form for the area light.
+        let area = Light {
+            shape: Shape::Area {
+                centre: Vec3A::Y,
+                u: Vec3A::X,
+                v: Vec3A::Z,
+                normal: -Vec3A::Y,
+                area: 1.0,
+            },
+            ..mesh.clone()
+        };
+        assert_eq!(mesh.flux(), area.flux());
+        let mut rng = Rng::new(3, Pass::Pixel, 0);
+        let n = 200_000;
+        for p in [
+            Vec3A::ZERO,
+            Vec3A::new(2.0, -1.0, 0.3),
+            Vec3A::new(0.1, 0.2, 0.0),
+        ] {
+            let mut sum = 0.0f64;
+            let mut sum_area = 0.0f64;
+            for _ in 0..n {
+                let u = (rng.next_f32(), rng.next_f32());
+                let s = mesh.sample(p, u);
+                let d2 = (s.position - p).length_squared();
+                let cos = (s.position - p).normalize().y.max(0.0);
+                sum += f64::from(s.intensity.x * cos / d2);
+                let s = area.sample(p, u);
+                let d2 = (s.position - p).length_squared();
+                let cos = (s.position - p).normalize().y.max(0.0);
+                sum_area += f64::from(s.intensity.x * cos / d2);
+            }
+            // The same uniform density over the square: irradiances agree to their noise.
+            let (e, e_area) = (sum / n as f64, sum_area / n as f64);
+            assert!(
+                (e - e_area).abs() < 0.01 * e_area,
+                "{p}: {e} against {e_area}"
+            );
+        }
+        // Seen from below: the radiance L; from above: black, and it still stops the ray.
+        let up = Ray::new(Vec3A::new(0.2, 0.0, 0.1), Vec3A::Y);
+        assert_eq!(mesh.seen_by(&up, 10.0), Some((1.0, Vec3A::splat(3.0))));
+        assert_eq!(area.seen_by(&up, 10.0), Some((1.0, Vec3A::splat(3.0))));
+        let down = Ray::new(Vec3A::new(0.2, 2.0, 0.1), -Vec3A::Y);
+        assert_eq!(mesh.seen_by(&down, 10.0), Some((1.0, Vec3A::ZERO)));
+        let beside = Ray::new(Vec3A::new(0.7, 0.0, 0.1), Vec3A::Y);
+        assert_eq!(mesh.seen_by(&beside, 10.0), None);
+        assert_eq!(mesh.seen_by(&up, 0.9), None);
+        // Photons leave from the square, downwards, cosine-distributed: E[cos] = 2/3.
+        let mut cos = 0.0;
+        for _ in 0..n {
+            let u = [
+                rng.next_f32(),
+                rng.next_f32(),
+                rng.next_f32(),
+                rng.next_f32(),
+            ];
+            let e = mesh.emit(u);
+            assert!(e.origin.x.abs() <= 0.5 + 1e-6 && e.origin.z.abs() <= 0.5 + 1e-6);
+            assert_eq!((e.origin.y, e.normal), (1.0, -Vec3A::Y));
+            cos += -e.dir.y;
+        }
+        assert!((cos / n as f32 - 2.0 / 3.0).abs() < 0.005);
+    }
+
+    #[test]
+    fn a_mesh_light_chooses_triangles_in_proportion_to_area() {
+        // Areas 1 and 3: a quarter of the samples on the first.
+        let small = EmitterTriangle::new(Vec3A::ZERO, Vec3A::X * 2.0, Vec3A::Z);
+        let large =
+            EmitterTriangle::new(Vec3A::X * 10.0, Vec3A::X * 12.0, Vec3A::new(10.0, 0.0, 3.0));
+        let light = Light::mesh(vec![small, large], Vec3A::ONE).unwrap();
+        let mut rng = Rng::new(5, Pass::Pixel, 0);
+        let n = 100_000;
+        let first = (0..n)
+            .filter(|_| {
+                let s = light.sample(Vec3A::Y, (rng.next_f32(), rng.next_f32()));
+                s.position.x < 5.0
+            })
+            .count();
+        assert!((first as f32 / n as f32 - 0.25).abs() < 0.005, "{first}");
+        // Degenerate triangles alone emit nothing: no light.
+        let flat = EmitterTriangle::new(Vec3A::ZERO, Vec3A::X, Vec3A::X * 2.0);
+        assert!(Light::mesh(vec![flat], Vec3A::ONE).is_none());
     }
 
     #[test]

@@ -12,6 +12,7 @@
 //! | index of refraction of a transparent material (script; an MTL `Ni` above 10 is taken as 10, a glTF `ior` is clamped to `[1, 10]`) | `[0.1, 10]` ([`MIN_IOR`], [`MAX_IOR`]) | the radiance crossing an interface scales by the square of the indices' ratio: `ior = 1e-30` made it `1e60`, infinite in `f32`; eight nested relative indices of 0.1 still keep it finite |
 //! | `gr.absorption`: the colour kept, the distance it is kept over (glTF `attenuationColor`, `attenuationDistance`) | colour in `(0, 1]` per channel (glTF: clamped to `[1e-6, 1]`), distance `≥ 1e-6` ([`MIN_LIGHT_SIZE`]; glTF: `> 0`, infinite is clear) | `σ = −ln(colour)/distance` must be finite and `≥ 0` |
 //! | `gr.roughness` | `[0, 1]` | GGX's `alpha = roughness²`, clamped below at `1e-3` where the lobe is a mirror to `f32` precision |
+//! | glTF emitted radiance `emissiveFactor × emissiveStrength`, per channel; a mesh light's `rgb = L·A/π` after placing | `[0, 1e8]` ([`MAX_INTENSITY`]) | a mesh light is an area light spread over triangles: the same bounds as a light's colour |
 //! | light `power` | `[0, 1e30]` ([`MAX_POWER`]) | only a weight among lights: the sum over many lights must stay finite |
 //! | sphere-light radius, area-light size `√|u × v|` | `≥ 1e-6` ([`MIN_LIGHT_SIZE`]) | an emitter's radiance is `rgb/R²` (`π·rgb/area`): a radius of `1e-30` was infinite |
 //! | photons one light emits for one map (`num_photons`, its share of `--photons`, times `--photon-scale`) | `≤ 1e9` ([`MAX_PHOTONS`]) | 10^9 stored photons would need 20 GB |

@@ -108,7 +108,7 @@ pub struct PhotonsArgs {
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// The Lua scene script.
+    /// The scene: a Lua script, or a glTF file (.gltf, .glb) rendered as a whole scene.
     pub scene: PathBuf,
     /// The words after `render` on the command line as typed, so a scene's `gr.settings` can
     /// be applied under them ([`Cli::from_env`] fills it; empty, the scene's settings apply
@@ -120,6 +120,12 @@ pub struct RenderArgs {
     /// Write the image here instead of the script's file name (scripts that render one image).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
+    /// A glTF scene's camera, by the camera's or its node's name (default: the first).
+    #[arg(long, value_name = "NAME")]
+    pub camera: Option<String>,
+    /// A glTF scene's image size in pixels (default: 800 wide at the camera's aspect ratio).
+    #[arg(long, value_names = ["W", "H"], num_args = 2)]
+    pub size: Option<Vec<u32>>,
     /// Worker threads (default: one per core).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -460,7 +466,7 @@ fn parse_crop(s: &str) -> std::result::Result<[u32; 4], String> {
 
 #[derive(Debug, Args)]
 pub struct InfoArgs {
-    /// The Lua scene script.
+    /// The scene: a Lua script, or a glTF file (.gltf, .glb).
     pub scene: PathBuf,
     #[command(flatten)]
     pub script: ScriptArgs,

@@ -59,6 +59,83 @@ fn job_with_settings(
     Ok(Some(with))
 }
 
+/// Returns whether `path` names a glTF file, which caustic renders as a whole scene.
+fn is_gltf(path: &std::path::Path) -> bool {
+    crate::desc::MeshFormat::from_path(path) == Some(crate::desc::MeshFormat::Gltf)
+}
+
+/// Runs the scene at `path`, calling `hook` for each image it asks for: a Lua script, or a
+/// glTF file read as a whole scene ([`crate::io::gltf::scene`]) viewed as `view` says, which
+/// asks for one image. Returns the final description.
+fn run_scene(
+    path: &std::path::Path,
+    mut hook: crate::lua::RenderHook,
+    options: ScriptOptions,
+    view: crate::io::gltf::scene::View,
+) -> Result<SceneDesc> {
+    if !is_gltf(path) {
+        if view.camera.is_some() || view.size.is_some() {
+            return Err(Error::Usage(format!(
+                "--camera and --size choose a glTF scene's view; {} is a script, whose gr.render \
+                 sets its own",
+                path.display()
+            )));
+        }
+        return run_script_with(path, hook, options);
+    }
+    let dir = path.parent().unwrap_or(std::path::Path::new(""));
+    let folders = crate::lua::sandbox::Folders::new(dir, &options.allow_read);
+    let mut desc = crate::io::gltf::scene::describe_scene(
+        path,
+        &view,
+        options.budget_within(folders.read_scope()),
+    )?;
+    desc.missing_textures_warn = options.missing_textures_warn;
+    for w in &desc.warnings {
+        eprintln!("{}: warning: {w}", path.display());
+    }
+    let render = desc.renders[0].clone();
+    hook(&desc, &render)?;
+    Ok(desc)
+}
+
+/// Returns the description of the scene at `path` without rendering it: a script run with its
+/// renders skipped, or a glTF file at its default view.
+fn describe_scene(path: &std::path::Path, options: ScriptOptions) -> Result<SceneDesc> {
+    let view = crate::io::gltf::scene::View {
+        output: PathBuf::from(path.file_stem().unwrap_or_default()).with_extension("png"),
+        ..Default::default()
+    };
+    run_scene(path, Box::new(|_, _| Ok(())), options, view)
+}
+
+/// Returns the view of a glTF scene the render flags choose, writing to `output` (else the
+/// file's name with `.png`, in the working directory).
+fn gltf_view(args: &RenderArgs) -> Result<crate::io::gltf::scene::View> {
+    let size = match args.size.as_deref() {
+        None => None,
+        Some(&[w, h]) => {
+            if w == 0 || h == 0 || u64::from(w) * u64::from(h) > crate::film::MAX_PIXELS {
+                return Err(Error::Usage(format!(
+                    "--size {w} {h}: each side at least 1 and at most {} pixels in all",
+                    crate::film::MAX_PIXELS
+                )));
+            }
+            Some((w, h))
+        }
+        Some(_) => return Err(Error::Usage("--size takes a width and a height".into())),
+    };
+    let output = args.output.clone().unwrap_or_else(|| {
+        let stem = args.scene.file_stem().unwrap_or_default();
+        PathBuf::from(stem).with_extension("png")
+    });
+    Ok(crate::io::gltf::scene::View {
+        camera: args.camera.clone(),
+        size,
+        output,
+    })
+}
+
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
@@ -179,6 +256,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     }
     // The flags' own errors first, then the outputs, then the work.
     let job = RenderJob::from_args(&args)?;
+    let view = gltf_view(&args)?;
     let inputs = script_inputs(&args.scene, args.photon_maps.as_ref());
     for out in args.output.iter().chain(&args.aa_map) {
         check_out(out, &inputs)?;
@@ -220,7 +298,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
         interruptible: !args.no_partial,
         ..args.script.options()
     };
-    run_script_with(&args.scene, hook, options)?;
+    run_scene(&args.scene, hook, options, view)?;
     if crate::interrupt::requested() {
         // Ctrl-C came as the last image was being written, or after: nothing was lost, but
         // the exit status says the run was interrupted, as it always does.
@@ -430,7 +508,7 @@ fn export_command(args: ExportArgs) -> Result<()> {
         )));
     }
     check_out(&args.output, &[&args.scene])?;
-    let desc = run_script_with(&args.scene, Box::new(|_, _| Ok(())), args.script.options())?;
+    let desc = describe_scene(&args.scene, args.script.options())?;
     let Some(r) = desc.renders.first() else {
         return Err(Error::Usage(format!(
             "{} never calls gr.render: nothing to export",
@@ -515,11 +593,17 @@ fn diff_command(args: DiffArgs) -> Result<()> {
 }
 
 fn info_command(args: InfoArgs) -> Result<()> {
-    let desc = run_script_with(&args.scene, Box::new(|_, _| Ok(())), args.script.options())?;
+    let desc = describe_scene(&args.scene, args.script.options())?;
     print!(
         "{}",
         report::describe(&args.scene.display().to_string(), &desc)?
     );
+    if is_gltf(&args.scene) && !desc.warnings.is_empty() {
+        println!("  what caustic ignores or stands in for:");
+        for w in &desc.warnings {
+            println!("    {w}");
+        }
+    }
     // The plan each render would follow at the default settings, or under the scene's own
     // gr.settings, with the photon budgets.
     for (i, r) in desc.renders.iter().enumerate() {

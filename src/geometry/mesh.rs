@@ -28,6 +28,21 @@ pub struct MeshData {
     pub triangle_materials: Vec<u32>,
     /// The file this mesh was read from, for messages.
     pub source: PathBuf,
+    /// Emissive surfaces the file carries (glTF primitives whose material emits): the scene
+    /// build makes each placed one a light ([`crate::light::Light::mesh`]); they are not in
+    /// `triangles`.
+    pub emitters: Vec<MeshEmitter>,
+}
+
+/// An emissive surface of a mesh file: one primitive under one node, in the mesh's frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshEmitter {
+    /// The emitting material's name, for messages.
+    pub name: String,
+    /// Emitted radiance per channel (glTF `emissiveFactor × emissiveStrength`).
+    pub radiance: Vec3,
+    /// Triangles, each counter-clockwise seen from the side it emits on.
+    pub triangles: Vec<[Vec3; 3]>,
 }
 
 /// A material carried by a mesh file, in the terms of `gr.material`.

@@ -42,12 +42,13 @@
 //! otherwise primitives without one get the glTF default material.
 
 mod buffer;
+pub mod scene;
 mod write;
 
 pub use write::write_gltf;
 
 use crate::budget::Account;
-use crate::geometry::mesh::{MeshData, MeshMaterial};
+use crate::geometry::mesh::{MeshData, MeshEmitter, MeshMaterial};
 use buffer::{load_buffers, read_indices, read_uvs, read_vec3, split_glb, uri_path};
 use glam::{DAffine3, DMat3, DQuat, DVec3, Vec2, Vec3};
 use gltf::json::validation::Checked;
@@ -58,6 +59,10 @@ use std::path::{Path, PathBuf};
 
 /// Phong exponent given to a perfectly smooth glTF surface.
 const MAX_SHININESS: f32 = 10_000.0;
+
+/// Most emissive triangles a file may carry: each one is tested against every camera ray that
+/// meets its light's bounds ([`crate::light::Light::seen_by`]), so lamps, not emissive scans.
+pub const MAX_EMITTER_TRIANGLES: usize = 4096;
 
 /// A fault found while reading a glTF file; every message names the file.
 #[derive(Debug, thiserror::Error)]
@@ -71,6 +76,18 @@ pub enum GltfError {
     /// The file is valid glTF but needs something caustic does not read.
     #[error("{}: unsupported: {message}", path.display())]
     Unsupported { path: PathBuf, message: String },
+}
+
+impl From<GltfError> for crate::error::Error {
+    /// Returns the file error the fault is: its message names the file.
+    fn from(e: GltfError) -> crate::error::Error {
+        let (path, message) = match e {
+            GltfError::Read { path, error } => (path, format!("cannot read: {error}")),
+            GltfError::Invalid { path, message } => (path, message),
+            GltfError::Unsupported { path, message } => (path, format!("unsupported: {message}")),
+        };
+        crate::error::Error::File { path, message }
+    }
 }
 
 /// Reads a `.gltf` or `.glb` file into one mesh (see the module doc for what is read).
@@ -104,6 +121,105 @@ pub fn parse_gltf_with(
     path: &Path,
     account: &Account,
 ) -> Result<MeshData, GltfError> {
+    let invalid = |message: String| GltfError::Invalid {
+        path: path.to_owned(),
+        message,
+    };
+    let (doc, bin) = open_document(bytes, path)?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let buffers = load_buffers(&doc, bin, dir, account.read_scope()).map_err(invalid)?;
+    let mut parts = Vec::new();
+    let (mut emitters, mut emitted) = (Vec::new(), 0);
+    let mut default_material = None;
+    for (node, world) in placements(&doc).map_err(invalid)? {
+        let Some(mesh) = node.mesh() else { continue };
+        let det = world.matrix3.determinant();
+        if det == 0.0 || !det.is_finite() {
+            continue;
+        }
+        for prim in mesh.primitives() {
+            let at = format!("mesh {} primitive {}", mesh.index(), prim.index());
+            let what = format!(
+                "{at} under node {}: {}",
+                node.index(),
+                primitive_size(&prim)
+            );
+            account
+                .try_charge(primitive_bytes(&prim), what)
+                .map_err(|e| invalid(e.to_string()))?;
+            let Some(mut part) =
+                read_primitive(&prim, &buffers).map_err(|e| GltfError::Invalid {
+                    path: path.to_owned(),
+                    message: format!("{at}: {e}"),
+                })?
+            else {
+                continue;
+            };
+            bake(&mut part, &world)
+                .map_err(|e| invalid(format!("{at} under node {}: {e}", node.index())))?;
+            if let Some(emitter) = emitter(&prim.material(), &part).map_err(invalid)? {
+                emitted += emitter.triangles.len();
+                if emitted > MAX_EMITTER_TRIANGLES {
+                    return Err(GltfError::Unsupported {
+                        path: path.to_owned(),
+                        message: format!(
+                            "{at}: more than {MAX_EMITTER_TRIANGLES} emissive triangles in the \
+                             file; caustic tests every one against each camera ray"
+                        ),
+                    });
+                }
+                emitters.push(emitter);
+                continue;
+            }
+            if part.material.is_none() && default_material.is_none() {
+                default_material = Some(material(&prim.material(), &doc, dir).map_err(invalid)?);
+            }
+            parts.push(part);
+        }
+    }
+    let mut mesh = merge(parts, default_material, &doc, dir, path).map_err(invalid)?;
+    mesh.emitters = emitters;
+    Ok(mesh)
+}
+
+/// Returns the emitter a primitive's triangles make when its material emits, or `None` when
+/// it does not: radiance `emissiveFactor × emissiveStrength` (the emissive texture is not read).
+fn emitter(m: &gltf::Material, part: &Part) -> Result<Option<MeshEmitter>, String> {
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    let radiance = Vec3::from(m.emissive_factor()) * strength;
+    let name = material_name(m);
+    let what = format!("{name}: emitted radiance");
+    crate::range::within(&radiance.to_array(), &what, crate::range::MAX_INTENSITY)?;
+    if radiance.max_element() == 0.0 {
+        return Ok(None);
+    }
+    let triangles = part
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| part.positions[i as usize]))
+        .collect();
+    Ok(Some(MeshEmitter {
+        name,
+        radiance,
+        triangles,
+    }))
+}
+
+/// Returns a material's name for messages: its own, else its index.
+fn material_name(m: &gltf::Material) -> String {
+    match (m.name(), m.index()) {
+        (Some(name), _) => name.to_owned(),
+        (None, Some(i)) => format!("material {i}"),
+        (None, None) => "default material".to_owned(),
+    }
+}
+
+/// Returns the validated document of glTF JSON or GLB `bytes` and the GLB's binary chunk, if
+/// any; rejects required extensions caustic does not read.
+fn open_document<'b>(
+    bytes: &'b [u8],
+    path: &Path,
+) -> Result<(Document, Option<&'b [u8]>), GltfError> {
     let invalid = |message: String| GltfError::Invalid {
         path: path.to_owned(),
         message,
@@ -143,43 +259,7 @@ pub fn parse_gltf_with(
         }
     }
     let doc = Document::from_json(root).map_err(|e| invalid(validation_message(e)))?;
-    let dir = path.parent().unwrap_or(Path::new(""));
-    let buffers = load_buffers(&doc, bin, dir, account.read_scope()).map_err(invalid)?;
-    let mut parts = Vec::new();
-    let mut default_material = None;
-    for (node, world) in placements(&doc).map_err(invalid)? {
-        let Some(mesh) = node.mesh() else { continue };
-        let det = world.matrix3.determinant();
-        if det == 0.0 || !det.is_finite() {
-            continue;
-        }
-        for prim in mesh.primitives() {
-            let at = format!("mesh {} primitive {}", mesh.index(), prim.index());
-            let what = format!(
-                "{at} under node {}: {}",
-                node.index(),
-                primitive_size(&prim)
-            );
-            account
-                .try_charge(primitive_bytes(&prim), what)
-                .map_err(|e| invalid(e.to_string()))?;
-            let Some(mut part) =
-                read_primitive(&prim, &buffers).map_err(|e| GltfError::Invalid {
-                    path: path.to_owned(),
-                    message: format!("{at}: {e}"),
-                })?
-            else {
-                continue;
-            };
-            bake(&mut part, &world)
-                .map_err(|e| invalid(format!("{at} under node {}: {e}", node.index())))?;
-            if part.material.is_none() && default_material.is_none() {
-                default_material = Some(material(&prim.material(), &doc, dir).map_err(invalid)?);
-            }
-            parts.push(part);
-        }
-    }
-    merge(parts, default_material, &doc, dir, path).map_err(invalid)
+    Ok((doc, bin))
 }
 
 /// Formats gltf's validation errors (at most three) as one message.
@@ -469,11 +549,7 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
         attenuation[1],
         attenuation[2],
     ];
-    let name = match (m.name(), m.index()) {
-        (Some(name), _) => name.to_owned(),
-        (None, Some(i)) => format!("material {i}"),
-        (None, None) => "default material".to_owned(),
-    };
+    let name = material_name(m);
     if factors.iter().any(|f| !f.is_finite()) {
         return Err(format!("{name} has a non-finite factor"));
     }

@@ -95,6 +95,8 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
         instances: Vec::new(),
         bounds: Vec::new(),
         stats: BuildStats::default(),
+        mesh_lights: Vec::new(),
+        emitter_triangles: 0,
     };
     for p in &placements {
         b.place(p)?;
@@ -119,6 +121,7 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
             .lights
             .iter()
             .map(|l| Light::from_desc(&desc.lights[l.0 as usize]))
+            .chain(b.mesh_lights)
             .collect(),
         ambient: render.ambient.into(),
         tlas,
@@ -319,6 +322,7 @@ fn light_bounds(light: &Light) -> Bounds {
         Shape::Point { position } => (position, Vec3A::ZERO),
         Shape::Area { centre, u, v, .. } => (centre, u.abs() + v.abs()),
         Shape::Sphere { centre, radius } => (centre, Vec3A::splat(radius)),
+        Shape::Mesh(ref m) => ((m.min + m.max) / 2.0, (m.max - m.min) / 2.0),
     };
     Bounds {
         min: centre - half,
@@ -470,6 +474,10 @@ struct Builder<'a> {
     instances: Vec<Instance>,
     bounds: Vec<Bounds>,
     stats: BuildStats,
+    /// The lights placed meshes' emissive surfaces make ([`super::emitters`]), and how many
+    /// triangles they have in all.
+    mesh_lights: Vec<Light>,
+    emitter_triangles: usize,
 }
 
 /// Returns at most the first 40 characters of a name, for messages: a script may give a node a
@@ -635,6 +643,10 @@ impl Builder<'_> {
             NodeKind::Group => return Ok(()),
             NodeKind::Mesh(id) => {
                 let index = self.mesh(*id)?;
+                let data = self.mesh_files.get(self.desc, *id)?;
+                let lights =
+                    super::emitters::place(&data, &world, node, &mut self.emitter_triangles)?;
+                self.mesh_lights.extend(lights);
                 let mesh = &self.meshes[index as usize];
                 if mesh.triangles.is_empty() {
                     if self.warned_empty.insert(p.node) {

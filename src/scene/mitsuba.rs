@@ -46,20 +46,51 @@ fn mesh_name(stem: &str, i: usize) -> String {
     format!("{stem}_mesh{i}.obj")
 }
 
-/// Returns every file [`export`] of `scene` to `xml` writes: `xml` and the OBJ file of each
-/// mesh instance beside it, so that a caller can check them all before the export starts.
+/// Returns the name of the OBJ file holding the triangles of material `m` of instance `i`
+/// (a mesh whose file gives each triangle its material).
+fn part_name(stem: &str, i: usize, m: u32) -> String {
+    format!("{stem}_mesh{i}_material{m}.obj")
+}
+
+/// Returns the name of the OBJ file holding the triangles of light `l`, a mesh light.
+fn light_name(stem: &str, l: usize) -> String {
+    format!("{stem}_light{l}.obj")
+}
+
+/// Returns the OBJ files of instance `i`: one, or one per material of a mesh whose file gives
+/// each triangle its material, with the material each file takes (`None`: the instance's).
+fn mesh_files(scene: &Scene, stem: &str, i: usize) -> Vec<(String, Option<u32>)> {
+    let inst = &scene.instances[i];
+    match inst.shape {
+        Shape::Mesh(_) if inst.mesh_materials => scene
+            .instance_materials(inst)
+            .into_iter()
+            .map(|m| (part_name(stem, i, m), Some(m)))
+            .collect(),
+        Shape::Mesh(_) => vec![(mesh_name(stem, i), None)],
+        Shape::Analytic(_) | Shape::Csg(_) => Vec::new(),
+    }
+}
+
+/// Returns every file [`export`] of `scene` to `xml` writes: `xml`, the OBJ files of each mesh
+/// instance and of each mesh light beside it, so that a caller can check them all before the
+/// export starts.
 pub fn outputs(scene: &Scene, xml: &Path) -> Vec<std::path::PathBuf> {
     let stem = xml
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    let meshes = scene
-        .instances
+    let meshes = (0..scene.instances.len()).flat_map(|i| mesh_files(scene, &stem, i));
+    let lights = scene
+        .lights
         .iter()
         .enumerate()
-        .filter(|(_, inst)| matches!(inst.shape, Shape::Mesh(_)))
-        .map(|(i, _)| xml.with_file_name(mesh_name(&stem, i)));
-    std::iter::once(xml.to_path_buf()).chain(meshes).collect()
+        .filter(|(_, l)| matches!(l.shape, LightShape::Mesh(_)))
+        .map(|(l, _)| light_name(&stem, l));
+    std::iter::once(xml.to_path_buf())
+        .chain(meshes.map(|(name, _)| xml.with_file_name(name)))
+        .chain(lights.map(|name| xml.with_file_name(name)))
+        .collect()
 }
 
 /// Writes the Mitsuba 3 scene of `scene` (built from `desc`'s `gr.render` call `r`) to `xml`, at
@@ -89,17 +120,31 @@ pub fn export(
     for (i, inst) in scene.instances.iter().enumerate() {
         let node = desc.node(inst.node);
         let at = |what: String| Error::at(&node.loc, format!("node '{}': {what}", node.name));
-        if inst.mesh_materials {
-            return Err(at(
-                "per-triangle materials from a mesh file are outside the Mitsuba subset; set one material on the node".into(),
-            ));
-        }
-        let material = &scene.materials[inst.material as usize];
         let (outside, ext) = outside(scene, i, 0);
-        let bsdf = bsdf(material, ext)
-            .map_err(|e| Error::at(material_loc(desc, inst.material, &node.loc), e))?
-            + &media_refs(scene, inst.material, outside);
+        let bsdf_of = |material: u32| -> Result<String> {
+            Ok(bsdf(&scene.materials[material as usize], ext)
+                .map_err(|e| Error::at(material_loc(desc, material, &node.loc), e))?
+                + &media_refs(scene, material, outside))
+        };
         let m = inst.world_from_object;
+        if let Shape::Mesh(k) = inst.shape {
+            for (name, material) in mesh_files(scene, &stem, i) {
+                let bsdf = bsdf_of(material.unwrap_or(inst.material))?;
+                let obj = Obj {
+                    mesh: &scene.meshes[k as usize],
+                    world_from_object: &m,
+                    normal_to_world: inst.normal_to_world,
+                    material,
+                };
+                obj.write(&dir.join(&name))?;
+                let _ = writeln!(
+                    s,
+                    "  <shape type=\"obj\"><string name=\"filename\" value=\"{name}\"/>{bsdf}</shape>"
+                );
+            }
+            continue;
+        }
+        let bsdf = bsdf_of(inst.material)?;
         match inst.shape {
             Shape::Analytic(Analytic::Sphere) => {
                 let radius = uniform_scale(&m).ok_or_else(|| {
@@ -125,15 +170,9 @@ pub fn export(
                     matrix(&(m * unit))
                 );
             }
-            Shape::Mesh(k) => {
-                let name = mesh_name(&stem, i);
-                write_obj(scene, k, &m, inst.normal_to_world, &dir.join(&name))?;
-                let _ = writeln!(
-                    s,
-                    "  <shape type=\"obj\"><string name=\"filename\" value=\"{name}\"/>{bsdf}</shape>"
-                );
-            }
-            Shape::Analytic(Analytic::Cylinder | Analytic::Cone) | Shape::Csg(_) => {
+            Shape::Analytic(Analytic::Cylinder | Analytic::Cone)
+            | Shape::Csg(_)
+            | Shape::Mesh(_) => {
                 return Err(at(format!(
                     "a {} is outside the Mitsuba subset (spheres, cubes and triangle meshes)",
                     inst.shape.label()
@@ -141,15 +180,40 @@ pub fn export(
             }
         }
     }
-    for (l, light) in scene.lights.iter().enumerate() {
-        let loc = &desc.lights[r.lights[l].0 as usize].loc;
-        emitter(&mut s, light).map_err(|e| Error::at(loc, e))?;
-    }
+    lights(&mut s, desc, r, scene, (dir, &stem))?;
     let _ = writeln!(s, "</scene>");
     crate::files::write_bytes(xml, s.as_bytes()).map_err(|e| Error::File {
         path: xml.to_path_buf(),
         message: format!("cannot write the Mitsuba scene: {e}"),
     })
+}
+
+/// Writes the scene's lights: the script's by [`emitter`], and each mesh light as an OBJ of its
+/// triangles (in `dir`, named after `stem`) under an `area` emitter.
+fn lights(
+    s: &mut String,
+    desc: &SceneDesc,
+    r: &RenderDesc,
+    scene: &Scene,
+    (dir, stem): (&Path, &str),
+) -> Result<()> {
+    for (l, light) in scene.lights.iter().enumerate() {
+        let loc = r.light_loc(desc, l);
+        if let LightShape::Mesh(mesh) = &light.shape {
+            let name = light_name(stem, l);
+            write_emitter_obj(mesh, &dir.join(&name))?;
+            let _ = writeln!(
+                s,
+                "  <shape type=\"obj\"><string name=\"filename\" value=\"{name}\"/>\
+                 <boolean name=\"face_normals\" value=\"true\"/>{BLACK}<emitter type=\"area\">\
+                 <rgb name=\"radiance\" value=\"{}\"/></emitter></shape>",
+                rgb(std::f32::consts::PI * light.colour / mesh.area)
+            );
+            continue;
+        }
+        emitter(s, light).map_err(|e| Error::at(loc, e))?;
+    }
+    Ok(())
 }
 
 /// Writes the integrator (`volpath` where a solid absorbs, else `path`) and a `homogeneous`
@@ -272,6 +336,21 @@ fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
             rgb(m.ks)
         ));
     }
+    if m.roughness > 0.0 {
+        // kd and a rough ks lobe add (crate::material::bsdf): their sum is the blend of weight
+        // w = max ks of each divided by its weight, both within [0, 1] where kd + ks is.
+        let alpha = crate::material::microfacet::Ggx::from_roughness(m.roughness).alpha;
+        let w = m.ks.max_element().min(1.0);
+        return Ok(format!(
+            "<bsdf type=\"twosided\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"{w}\"/>\
+             <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"{}\"/></bsdf>\
+             <bsdf type=\"roughconductor\"><string name=\"material\" value=\"none\"/>\
+             <string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"{alpha}\"/>\
+             <rgb name=\"specular_reflectance\" value=\"{}\"/></bsdf></bsdf></bsdf>",
+            rgb(m.kd / (1.0 - w).max(1e-6)),
+            rgb(m.ks / w)
+        ));
+    }
     if black(m.kd) && m.shininess <= 0.0 {
         return Ok(format!(
             "<bsdf type=\"twosided\"><bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/>\
@@ -348,6 +427,14 @@ fn matrix(m: &Affine3A) -> String {
     )
 }
 
+/// The BSDF of an emitter's shape: black, so that it only emits, as caustic's lights do.
+const BLACK: &str = "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0, 0, 0\"/></bsdf>";
+
+/// Returns `v` as a Mitsuba RGB value.
+fn rgb(v: Vec3A) -> String {
+    format!("{}, {}, {}", v.x, v.y, v.z)
+}
+
 fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
     if light.falloff != [0.0, 0.0, 1.0] {
         return Err(format!(
@@ -356,8 +443,7 @@ fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
         ));
     }
     let pi = std::f32::consts::PI;
-    let rgb = |v: Vec3A| format!("{}, {}, {}", v.x, v.y, v.z);
-    let black = "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0, 0, 0\"/></bsdf>";
+    let black = BLACK;
     match light.shape {
         LightShape::Point { position } => {
             let _ = writeln!(
@@ -382,6 +468,7 @@ fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
                 rgb(pi * light.colour / area)
             );
         }
+        LightShape::Mesh(_) => return Err("a mesh light is written by export itself".into()),
         LightShape::Sphere { centre, radius } => {
             let _ = writeln!(
                 s,
@@ -395,33 +482,64 @@ fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
     Ok(())
 }
 
-/// Writes mesh `k` placed by `m` as a world-space OBJ (with vertex normals when it has them).
-fn write_obj(
-    scene: &Scene,
-    k: u32,
-    m: &Affine3A,
+/// One OBJ file of a placed mesh: its triangles in world space (with vertex normals when it
+/// has them), all of them or those of one scene material.
+struct Obj<'a> {
+    mesh: &'a crate::accel::mesh::MeshGeom,
+    world_from_object: &'a Affine3A,
     normal_to_world: glam::Mat3A,
-    path: &Path,
-) -> Result<()> {
-    let mesh = &scene.meshes[k as usize];
-    let mut s = String::with_capacity(mesh.positions.len() * 40 + mesh.triangles.len() * 24);
-    for p in &mesh.positions {
-        let q = m.transform_point3a(*p);
-        let _ = writeln!(s, "v {} {} {}", q.x, q.y, q.z);
+    /// Only the triangles of this scene material, or all of them.
+    material: Option<u32>,
+}
+
+impl Obj<'_> {
+    /// Writes the file to `path`.
+    fn write(&self, path: &Path) -> Result<()> {
+        let mesh = self.mesh;
+        let mut s = String::with_capacity(mesh.positions.len() * 40 + mesh.triangles.len() * 24);
+        for p in &mesh.positions {
+            let q = self.world_from_object.transform_point3a(*p);
+            let _ = writeln!(s, "v {} {} {}", q.x, q.y, q.z);
+        }
+        for n in &mesh.normals {
+            let q = (self.normal_to_world * *n).normalize_or_zero();
+            let _ = writeln!(s, "vn {} {} {}", q.x, q.y, q.z);
+        }
+        let with_normals = !mesh.normals.is_empty();
+        for (i, t) in mesh.triangles.iter().enumerate() {
+            if self
+                .material
+                .is_some_and(|m| mesh.materials.get(i) != Some(&m))
+            {
+                continue;
+            }
+            let [a, b, c] = t.map(|i| i + 1);
+            if with_normals {
+                let _ = writeln!(s, "f {a}//{a} {b}//{b} {c}//{c}");
+            } else {
+                let _ = writeln!(s, "f {a} {b} {c}");
+            }
+        }
+        write_text(path, &s)
     }
-    for n in &mesh.normals {
-        let q = (normal_to_world * *n).normalize_or_zero();
-        let _ = writeln!(s, "vn {} {} {}", q.x, q.y, q.z);
-    }
-    let with_normals = !mesh.normals.is_empty();
+}
+
+/// Writes a mesh light's triangles as an OBJ, each counter-clockwise from its emitting side.
+fn write_emitter_obj(mesh: &crate::light::EmitterMesh, path: &Path) -> Result<()> {
+    let mut s = String::new();
     for t in &mesh.triangles {
-        let [a, b, c] = t.map(|i| i + 1);
-        if with_normals {
-            let _ = writeln!(s, "f {a}//{a} {b}//{b} {c}//{c}");
-        } else {
-            let _ = writeln!(s, "f {a} {b} {c}");
+        for p in [t.p0, t.p0 + t.e1, t.p0 + t.e2] {
+            let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
         }
     }
+    for k in 0..mesh.triangles.len() {
+        let _ = writeln!(s, "f {} {} {}", 3 * k + 1, 3 * k + 2, 3 * k + 3);
+    }
+    write_text(path, &s)
+}
+
+/// Writes one of the export's mesh files.
+fn write_text(path: &Path, s: &str) -> Result<()> {
     crate::files::write_bytes(path, s.as_bytes()).map_err(|e| Error::File {
         path: path.to_path_buf(),
         message: format!("cannot write mesh: {e}"),

@@ -16,6 +16,7 @@
 mod common;
 
 mod filesystem;
+mod gltf_scenes;
 mod hostile;
 mod image_formats;
 mod input_quirks;

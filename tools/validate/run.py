@@ -11,6 +11,14 @@ floor: NAME.second.exr); caustic renders the scene at its defaults; the metrics 
 to docs/validation.md and the pictures (reference | caustic | difference) to docs/validation/.
 With --equal-time, Mitsuba also renders at caustic's CPU time and both errors are compared.
 
+With --gltf, the scenes are glTF files rendered as whole scenes instead (by default
+scenes/gltf/{copper_bowl,frosted_sphere,glass_of_water}.glb, or --scenes), at --scale 0.25
+(200x150) for both the export and caustic's render, with their regions from
+scenes/validate/gltf_regions.txt (lines `SCENE REGION x0 y0 x1 y1`), and the table goes to
+docs/validation/gltf.md (a section to merge into docs/validation.md, which is left alone):
+
+    tools/validate/.venv/bin/python tools/validate/run.py --gltf [--render-refs]
+
 Regions come from the scene's `-- region NAME x0 y0 x1 y1` comments (fractions of the image).
 Metrics per region, over all three channels, against the truth as estimated from the two
 references (see cross_rms: the references' noise drops out): the mean ratio, RMSE, relative
@@ -47,6 +55,62 @@ def choose_variant():
         except (ImportError, AttributeError, RuntimeError):
             continue
     sys.exit("validate: no usable Mitsuba variant")
+
+
+GLTF_SCENES = [os.path.join(ROOT, "scenes", "gltf", n + ".glb")
+               for n in ("copper_bowl", "frosted_sphere", "glass_of_water")]
+GLTF_REGIONS = os.path.join(ROOT, "scenes", "validate", "gltf_regions.txt")
+
+
+def sidecar_regions(path, name):
+    """The regions of scene NAME in a sidecar file of lines `SCENE REGION x0 y0 x1 y1` (fractions
+    of the image; `#` starts a comment), in file order."""
+    out = []
+    for line in open(path):
+        f = line.split("#", 1)[0].split()
+        if len(f) == 6 and f[0] == name:
+            out.append((f[1], tuple(float(v) for v in f[2:])))
+        elif f and len(f) != 6:
+            sys.exit(f"validate: {path}: expected SCENE REGION x0 y0 x1 y1, got {line.strip()!r}")
+    return out
+
+
+# caustic's exporter writes a diffuse + rough-specular material (kd and ks add) as an even
+# blendbsdf of each at twice its weight; Mitsuba refuses a diffuse reflectance above 1, which
+# 2 kd is for kd above 0.5 (a glTF base colour of 0.7). The same sum, kd + ks, is a blend of
+# weight w = max ks with kd / (1 - w) and ks / w, all in [0, 1] while max kd + max ks <= 1.
+_BLEND = re.compile(
+    r'<bsdf type="blendbsdf"><float name="weight" value="0\.5"/>'
+    r'<bsdf type="diffuse"><rgb name="reflectance" value="([^"]+)"/></bsdf>'
+    r'(<bsdf type="roughconductor">.*?)<rgb name="specular_reflectance" value="([^"]+)"/></bsdf></bsdf>')
+
+
+def fix_blends(xml):
+    """Rewrites, in the exported file xml, each even blend whose diffuse reflectance exceeds 1
+    (see _BLEND) into the equal blend Mitsuba accepts; returns how many it rewrote."""
+    n = 0
+
+    def sub(m):
+        nonlocal n
+        d2 = [float(v) for v in m.group(1).split(",")]
+        if max(d2) <= 1:
+            return m.group(0)
+        kd = [v / 2 for v in d2]
+        ks = [float(v) / 2 for v in m.group(3).split(",")]
+        w = max(ks)
+        if w <= 0 or max(kd) > 1 - w + 1e-6:
+            sys.exit(f"validate: {xml}: kd {kd} + ks {ks} exceeds 1, no blend in [0, 1] adds to it")
+        f = lambda v: ", ".join(f"{x:.9g}" for x in v)
+        n += 1
+        return (f'<bsdf type="blendbsdf"><float name="weight" value="{w:.9g}"/>'
+                f'<bsdf type="diffuse"><rgb name="reflectance" value="{f([x / (1 - w) for x in kd])}"/></bsdf>'
+                f'{m.group(2)}<rgb name="specular_reflectance" value="{f([x / w for x in ks])}"/></bsdf></bsdf>')
+
+    text = open(xml).read()
+    new = _BLEND.sub(sub, text)
+    if n:
+        open(xml, "w").write(new)
+    return n
 
 
 def regions(scene_path):
@@ -155,7 +219,14 @@ def main():
     ap.add_argument("--render-refs", action="store_true", help="render the Mitsuba references anew")
     ap.add_argument("--ref-spp", type=int, default=4096)
     ap.add_argument("--caustic", default=os.path.join(ROOT, "target", "release", "caustic"))
-    ap.add_argument("--scenes", default=os.path.join(ROOT, "scenes", "validate", "*.lua"))
+    ap.add_argument("--scenes", help="a glob of the scenes (default: scenes/validate/*.lua; "
+                    "with --gltf, the three glTF scenes named above)")
+    ap.add_argument("--gltf", action="store_true", help="validate glTF scenes (see the top)")
+    ap.add_argument("--regions", help="a sidecar file of lines `SCENE REGION x0 y0 x1 y1` "
+                    "(default with --gltf: scenes/validate/gltf_regions.txt; else the scene's "
+                    "`-- region` comments)")
+    ap.add_argument("--scale", type=float, help="export and render at this multiple of the "
+                    "scene's image size (default: 1; with --gltf 0.25)")
     ap.add_argument("--render-with", help="the caustic binary that renders (default: --caustic), "
                     "e.g. an older build for a before/after table")
     ap.add_argument("--equal-time", action="store_true", help="also compare at equal CPU time")
@@ -163,31 +234,48 @@ def main():
     ap.add_argument("--label", default="caustic defaults")
     ap.add_argument("--seeds", type=int, default=2, choices=(1, 2),
                     help="2: also render with --seed 1 for the seed-pair bias column")
-    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "validation.md"))
+    ap.add_argument("--out", help="the Markdown file to write (default: docs/validation.md; "
+                    "with --gltf docs/validation/gltf.md)")
     a = ap.parse_args()
+    if a.gltf:
+        scenes = sorted(glob.glob(a.scenes)) if a.scenes else GLTF_SCENES
+        a.regions = a.regions or GLTF_REGIONS
+        a.scale = 0.25 if a.scale is None else a.scale
+        a.out = a.out or os.path.join(PICS, "gltf.md")
+    else:
+        scenes = sorted(glob.glob(a.scenes or os.path.join(ROOT, "scenes", "validate", "*.lua")))
+        a.scale = 1.0 if a.scale is None else a.scale
+        a.out = a.out or os.path.join(ROOT, "docs", "validation.md")
+    scale_args = [] if a.scale == 1.0 else ["--scale", repr(a.scale)]
     variant = choose_variant()
     os.makedirs(REFS, exist_ok=True)
     os.makedirs(PICS, exist_ok=True)
     tmp = tempfile.mkdtemp()
-    rows, timing = [], []
-    for scene in sorted(glob.glob(a.scenes)):
+    rows, timing, times, notes = [], [], [], []
+    for scene in scenes:
         name = os.path.splitext(os.path.basename(scene))[0]
         xml = os.path.join(tmp, name + ".xml")
-        subprocess.run([a.caustic, "export-mitsuba", scene, "-o", xml, "--spp", str(a.ref_spp)],
-                       check=True, cwd=ROOT, stderr=subprocess.DEVNULL)
+        subprocess.run([a.caustic, "export-mitsuba", scene, "-o", xml, "--spp", str(a.ref_spp)]
+                       + scale_args, check=True, cwd=ROOT, stderr=subprocess.DEVNULL)
+        fixed = fix_blends(xml)
+        if fixed:
+            notes.append(f"{name}: {fixed} diffuse + rough-specular blend(s) rewritten to weights "
+                         "Mitsuba accepts (fix_blends)")
         ref = os.path.join(REFS, name + ".exr")
         side = os.path.join(REFS, name + ".json")
         second = os.path.join(REFS, name + ".second.exr")
         if a.render_refs or not os.path.exists(ref) or not os.path.exists(second):
             cpu, wall = render_mitsuba(xml, a.ref_spp, 1, ref)
-            render_mitsuba(xml, a.ref_spp, 2, second)
-            json.dump({"spp": a.ref_spp, "variant": variant, "cpu_s": cpu, "wall_s": wall},
+            cpu2, wall2 = render_mitsuba(xml, a.ref_spp, 2, second)
+            json.dump({"spp": a.ref_spp, "variant": variant, "cpu_s": cpu, "wall_s": wall,
+                       "second_cpu_s": cpu2, "second_wall_s": wall2},
                       open(side, "w"), indent=1)
         info = json.load(open(side))
         r1, r2 = load(ref), load(second)
-        regs = [("image", (0, 0, 1, 1))] + regions(scene)
+        own = sidecar_regions(a.regions, name) if a.regions else regions(scene)
+        regs = [("image", (0, 0, 1, 1))] + own
         out = os.path.join(tmp, name + ".exr")
-        args = a.caustic_args.split()
+        args = a.caustic_args.split() + scale_args
         cpu, wall = caustic_render(a.render_with or a.caustic, scene, out, args)
         c = load(out)
         c2 = None
@@ -207,8 +295,72 @@ def main():
                 mc = metrics(c, r1, r2, box)["rel_rmse"]
                 mm = metrics(m, r1, r2, box)["rel_rmse"]
                 timing.append((name, reg, cpu, wall, spp, mcpu, mc, mm))
+        times.append((name, info, cpu, wall))
         print(f"{name}: caustic {wall:.1f} s wall, {cpu:.1f} s CPU", file=sys.stderr)
-    write_md(a, variant, rows, timing)
+    for n in notes:
+        print(f"validate: {n}", file=sys.stderr)
+    if a.gltf:
+        write_gltf_md(a, variant, rows, times, notes)
+    else:
+        write_md(a, variant, rows, timing)
+
+
+def pic_link(a, name):
+    """The picture's path relative to the Markdown file being written."""
+    return os.path.relpath(os.path.join(PICS, name + ".png"), os.path.dirname(os.path.abspath(a.out)))
+
+
+def table(rows):
+    lines = [
+        "| scene | region | mean ratio | RMSE | rel. RMSE | block error | bias | reference noise (rel. RMSE / block) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, reg, m, f in rows:
+        fl = f"{f['rel_rmse']:.3f} / {f['block_bias']:.3f}"
+        sb = f"{m['seed_bias']:.3f}" if "seed_bias" in m else "n/a"
+        lines.append(f"| {name} | {reg} | {m['mean_ratio']:.4f} | {m['rmse']:.4f} | "
+                     f"{m['rel_rmse']:.3f} | {m['block_bias']:.3f} | {sb} | {fl} |")
+    return lines
+
+
+def write_gltf_md(a, variant, rows, times, notes):
+    """The glTF section, to merge into docs/validation.md (whose metrics it shares)."""
+    w, h = int(round(800 * a.scale)), int(round(600 * a.scale))
+    regions_file = os.path.relpath(a.regions, ROOT)
+    lines = [
+        "## glTF scenes",
+        "",
+        "caustic's render of glTF files as whole scenes (`scenes/gltf/`, exported by Blender, see "
+        "`tools/gltf_scenes/README.md`) against Mitsuba 3's path tracer "
+        f"(`{variant}`) on the scene `caustic export-mitsuba SCENE.glb --scale {a.scale:g}` writes, "
+        f"at {w}x{h} for the 4:3 cameras. Regenerate with:",
+        "",
+        "```sh",
+        "tools/validate/.venv/bin/python tools/validate/run.py --gltf     # --render-refs to re-render the references",
+        "```",
+        "",
+        f"Rendered: {a.label} (`caustic render SCENE.glb --scale {a.scale:g} {a.caustic_args}`). "
+        f"Regions are in `{regions_file}`; the metrics are defined as for the `scenes/validate` table.",
+        "",
+    ] + table(rows) + [
+        "",
+        "Render times (Mitsuba: each reference; caustic: the seed-0 render):",
+        "",
+        "| scene | reference spp | reference 1 wall / CPU s | reference 2 wall / CPU s | caustic wall / CPU s |",
+        "|---|---|---|---|---|",
+    ]
+    for name, info, cpu, wall in times:
+        r2 = (f"{info['second_wall_s']:.1f} / {info['second_cpu_s']:.1f}"
+              if "second_wall_s" in info else "n/a")
+        lines.append(f"| {name} | {info['spp']} | {info['wall_s']:.1f} / {info['cpu_s']:.1f} | "
+                     f"{r2} | {wall:.1f} / {cpu:.1f} |")
+    if notes:
+        lines += ["", "Export fix-ups:", ""] + [f"- {n}" for n in notes]
+    lines += ["", "Pictures (reference | caustic | difference: red brighter, blue darker, 4x):", ""]
+    for name in sorted({r[0] for r in rows}):
+        lines.append(f"- `{name}`: ![{name}]({pic_link(a, name)})")
+    open(a.out, "w").write("\n".join(lines) + "\n")
+    print("\n".join(lines))
 
 
 def write_md(a, variant, rows, timing):
@@ -240,14 +392,7 @@ def write_md(a, variant, rows, timing):
         "centre ray per pixel aliases (a box-filtered Mitsuba pixel averages them): it is "
         "reported, not part of the bar.",
         "",
-        "| scene | region | mean ratio | RMSE | rel. RMSE | block error | bias | reference noise (rel. RMSE / block) |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for name, reg, m, f in rows:
-        fl = f"{f['rel_rmse']:.3f} / {f['block_bias']:.3f}"
-        sb = f"{m['seed_bias']:.3f}" if "seed_bias" in m else "n/a"
-        lines.append(f"| {name} | {reg} | {m['mean_ratio']:.4f} | {m['rmse']:.4f} | "
-                     f"{m['rel_rmse']:.3f} | {m['block_bias']:.3f} | {sb} | {fl} |")
+    ] + table(rows)
     lines += ["", "Pictures (reference | caustic | difference: red brighter, blue darker, 4x):", ""]
     for name in sorted({r[0] for r in rows}):
         lines.append(f"- `{name}`: ![{name}](validation/{name}.png)")

@@ -40,66 +40,41 @@
 
 use crate::desc::{LightDesc, LightShape};
 use crate::geometry::Ray;
+use crate::geometry::triangle::{self, RayShear};
 use crate::sampling::{cosine_around, uniform_sphere};
 use glam::Vec3A;
 use std::f32::consts::{PI, TAU};
 use std::sync::Arc;
 
-/// One triangle of a mesh light in world space: corner `p0`, edges `e1`, `e2`, and the unit
-/// normal of its emitting side, `e1 × e2` normalised.
+/// One triangle of a mesh light in world space: its corners, counter-clockwise seen from the
+/// emitting side, and the unit normal of that side.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmitterTriangle {
-    pub p0: Vec3A,
-    pub e1: Vec3A,
-    pub e2: Vec3A,
+    pub corners: [Vec3A; 3],
     pub normal: Vec3A,
 }
 
 impl EmitterTriangle {
     /// Returns the triangle with corners `a`, `b`, `c` (counter-clockwise seen from the front).
     pub fn new(a: Vec3A, b: Vec3A, c: Vec3A) -> EmitterTriangle {
-        let (e1, e2) = (b - a, c - a);
         EmitterTriangle {
-            p0: a,
-            e1,
-            e2,
-            normal: e1.cross(e2).normalize_or_zero(),
+            corners: [a, b, c],
+            normal: (b - a).cross(c - a).normalize_or_zero(),
         }
     }
 
     /// Returns the triangle's area.
     pub fn area(&self) -> f32 {
-        0.5 * self.e1.cross(self.e2).length()
+        let [a, b, c] = self.corners;
+        0.5 * (b - a).cross(c - a).length()
     }
 
     /// Returns the point of barycentric square root parametrisation `u` in [0, 1)²: uniform
     /// over the triangle's area.
     fn point(&self, u: (f32, f32)) -> Vec3A {
+        let [a, b, c] = self.corners;
         let s = u.0.sqrt();
-        self.p0 + self.e1 * (s * (1.0 - u.1)) + self.e2 * (s * u.1)
-    }
-
-    /// Returns the distance along `ray` at which it meets the triangle (Möller–Trumbore), if
-    /// within `(ray.tmin, tmax)`.
-    fn hit(&self, ray: &Ray, tmax: f32) -> Option<f32> {
-        let p = ray.dir.cross(self.e2);
-        let det = self.e1.dot(p);
-        if det == 0.0 || !det.is_finite() {
-            return None;
-        }
-        let inv = 1.0 / det;
-        let s = ray.origin - self.p0;
-        let b1 = s.dot(p) * inv;
-        if !(0.0..=1.0).contains(&b1) {
-            return None;
-        }
-        let q = s.cross(self.e1);
-        let b2 = ray.dir.dot(q) * inv;
-        if !(b2 >= 0.0 && b1 + b2 <= 1.0) {
-            return None;
-        }
-        let t = self.e2.dot(q) * inv;
-        (t > ray.tmin && t < tmax).then_some(t)
+        a + (b - a) * (s * (1.0 - u.1)) + (c - a) * (s * u.1)
     }
 }
 
@@ -260,13 +235,17 @@ impl Light {
             return None;
         }
         let mut sum = 0.0;
-        let cdf = areas
+        let mut cdf: Vec<f32> = areas
             .iter()
             .map(|a| {
                 sum += a;
                 (sum / total) as f32
             })
-            .collect::<Vec<f32>>();
+            .collect();
+        // Rounding must not leave a sliver above the last triangle.
+        if let Some(last) = cdf.last_mut() {
+            *last = 1.0;
+        }
         let weighted = |f: &dyn Fn(&EmitterTriangle) -> Vec3A| {
             triangles
                 .iter()
@@ -274,21 +253,14 @@ impl Light {
                 .map(|(t, &a)| f(t) * (a / total) as f32)
                 .sum::<Vec3A>()
         };
-        let centroid = weighted(&|t| t.p0 + (t.e1 + t.e2) / 3.0);
+        let centroid = weighted(&|t| t.corners.iter().sum::<Vec3A>() / 3.0);
         let mean_normal = weighted(&|t| t.normal);
-        let corners = triangles
-            .iter()
-            .flat_map(|t| [t.p0, t.p0 + t.e1, t.p0 + t.e2]);
+        let corners = triangles.iter().flat_map(|t| t.corners);
         let (min, max) = corners.fold(
             (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
             |(lo, hi), p| (lo.min(p), hi.max(p)),
         );
         let area = total as f32;
-        let mut cdf = cdf;
-        // Rounding must not leave a sliver above the last triangle.
-        if let Some(last) = cdf.last_mut() {
-            *last = 1.0;
-        }
         Some(Light {
             shape: Shape::Mesh(Arc::new(EmitterMesh {
                 triangles,
@@ -409,10 +381,14 @@ impl Light {
                 if !m.may_hit(ray, tmax) {
                     return None;
                 }
+                // The meshes' watertight test: no crack along the edges the triangles share.
+                let shear = RayShear::new(ray);
                 let mut best: Option<(f32, &EmitterTriangle)> = None;
                 for tri in &m.triangles {
-                    if let Some(t) = tri.hit(ray, best.map_or(tmax, |b| b.0)) {
-                        best = Some((t, tri));
+                    let [a, b, c] = tri.corners;
+                    let limit = best.map_or(tmax, |b| b.0);
+                    if let Some(hit) = triangle::intersect(&shear, a, b, c, ray.tmin, limit) {
+                        best = Some((hit.t, tri));
                     }
                 }
                 let (t, tri) = best?;
@@ -649,6 +625,12 @@ mod tests {
         assert_eq!(area.seen_by(&up, 10.0), Some((1.0, Vec3A::splat(3.0))));
         let down = Ray::new(Vec3A::new(0.2, 2.0, 0.1), -Vec3A::Y);
         assert_eq!(mesh.seen_by(&down, 10.0), Some((1.0, Vec3A::ZERO)));
+        // On the diagonal the two triangles share: no crack.
+        let diagonal = Ray::new(Vec3A::new(0.2, 0.0, 0.2), Vec3A::Y);
+        assert_eq!(
+            mesh.seen_by(&diagonal, 10.0),
+            Some((1.0, Vec3A::splat(3.0)))
+        );
         let beside = Ray::new(Vec3A::new(0.7, 0.0, 0.1), Vec3A::Y);
         assert_eq!(mesh.seen_by(&beside, 10.0), None);
         assert_eq!(mesh.seen_by(&up, 0.9), None);

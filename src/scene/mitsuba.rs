@@ -528,7 +528,7 @@ impl Obj<'_> {
 fn write_emitter_obj(mesh: &crate::light::EmitterMesh, path: &Path) -> Result<()> {
     let mut s = String::new();
     for t in &mesh.triangles {
-        for p in [t.p0, t.p0 + t.e1, t.p0 + t.e2] {
+        for p in t.corners {
             let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
         }
     }

@@ -187,12 +187,12 @@ pub fn parse_gltf_with(
 fn emitter(m: &gltf::Material, part: &Part) -> Result<Option<MeshEmitter>, String> {
     let strength = m.emissive_strength().unwrap_or(1.0);
     let radiance = Vec3::from(m.emissive_factor()) * strength;
+    if radiance == Vec3::ZERO {
+        return Ok(None);
+    }
     let name = material_name(m);
     let what = format!("{name}: emitted radiance");
     crate::range::within(&radiance.to_array(), &what, crate::range::MAX_INTENSITY)?;
-    if radiance.max_element() == 0.0 {
-        return Ok(None);
-    }
     let triangles = part
         .triangles
         .iter()

@@ -75,44 +75,6 @@ def sidecar_regions(path, name):
     return out
 
 
-# caustic's exporter writes a diffuse + rough-specular material (kd and ks add) as an even
-# blendbsdf of each at twice its weight; Mitsuba refuses a diffuse reflectance above 1, which
-# 2 kd is for kd above 0.5 (a glTF base colour of 0.7). The same sum, kd + ks, is a blend of
-# weight w = max ks with kd / (1 - w) and ks / w, all in [0, 1] while max kd + max ks <= 1.
-_BLEND = re.compile(
-    r'<bsdf type="blendbsdf"><float name="weight" value="0\.5"/>'
-    r'<bsdf type="diffuse"><rgb name="reflectance" value="([^"]+)"/></bsdf>'
-    r'(<bsdf type="roughconductor">.*?)<rgb name="specular_reflectance" value="([^"]+)"/></bsdf></bsdf>')
-
-
-def fix_blends(xml):
-    """Rewrites, in the exported file xml, each even blend whose diffuse reflectance exceeds 1
-    (see _BLEND) into the equal blend Mitsuba accepts; returns how many it rewrote."""
-    n = 0
-
-    def sub(m):
-        nonlocal n
-        d2 = [float(v) for v in m.group(1).split(",")]
-        if max(d2) <= 1:
-            return m.group(0)
-        kd = [v / 2 for v in d2]
-        ks = [float(v) / 2 for v in m.group(3).split(",")]
-        w = max(ks)
-        if w <= 0 or max(kd) > 1 - w + 1e-6:
-            sys.exit(f"validate: {xml}: kd {kd} + ks {ks} exceeds 1, no blend in [0, 1] adds to it")
-        f = lambda v: ", ".join(f"{x:.9g}" for x in v)
-        n += 1
-        return (f'<bsdf type="blendbsdf"><float name="weight" value="{w:.9g}"/>'
-                f'<bsdf type="diffuse"><rgb name="reflectance" value="{f([x / (1 - w) for x in kd])}"/></bsdf>'
-                f'{m.group(2)}<rgb name="specular_reflectance" value="{f([x / w for x in ks])}"/></bsdf></bsdf>')
-
-    text = open(xml).read()
-    new = _BLEND.sub(sub, text)
-    if n:
-        open(xml, "w").write(new)
-    return n
-
-
 def regions(scene_path):
     out = []
     for line in open(scene_path):
@@ -251,16 +213,12 @@ def main():
     os.makedirs(REFS, exist_ok=True)
     os.makedirs(PICS, exist_ok=True)
     tmp = tempfile.mkdtemp()
-    rows, timing, times, notes = [], [], [], []
+    rows, timing, times = [], [], []
     for scene in scenes:
         name = os.path.splitext(os.path.basename(scene))[0]
         xml = os.path.join(tmp, name + ".xml")
         subprocess.run([a.caustic, "export-mitsuba", scene, "-o", xml, "--spp", str(a.ref_spp)]
                        + scale_args, check=True, cwd=ROOT, stderr=subprocess.DEVNULL)
-        fixed = fix_blends(xml)
-        if fixed:
-            notes.append(f"{name}: {fixed} diffuse + rough-specular blend(s) rewritten to weights "
-                         "Mitsuba accepts (fix_blends)")
         ref = os.path.join(REFS, name + ".exr")
         side = os.path.join(REFS, name + ".json")
         second = os.path.join(REFS, name + ".second.exr")
@@ -297,10 +255,8 @@ def main():
                 timing.append((name, reg, cpu, wall, spp, mcpu, mc, mm))
         times.append((name, info, cpu, wall))
         print(f"{name}: caustic {wall:.1f} s wall, {cpu:.1f} s CPU", file=sys.stderr)
-    for n in notes:
-        print(f"validate: {n}", file=sys.stderr)
     if a.gltf:
-        write_gltf_md(a, variant, rows, times, notes)
+        write_gltf_md(a, variant, rows, times)
     else:
         write_md(a, variant, rows, timing)
 
@@ -323,7 +279,7 @@ def table(rows):
     return lines
 
 
-def write_gltf_md(a, variant, rows, times, notes):
+def write_gltf_md(a, variant, rows, times):
     """The glTF section, to merge into docs/validation.md (whose metrics it shares)."""
     w, h = int(round(800 * a.scale)), int(round(600 * a.scale))
     regions_file = os.path.relpath(a.regions, ROOT)
@@ -354,8 +310,6 @@ def write_gltf_md(a, variant, rows, times, notes):
               if "second_wall_s" in info else "n/a")
         lines.append(f"| {name} | {info['spp']} | {info['wall_s']:.1f} / {info['cpu_s']:.1f} | "
                      f"{r2} | {wall:.1f} / {cpu:.1f} |")
-    if notes:
-        lines += ["", "Export fix-ups:", ""] + [f"- {n}" for n in notes]
     lines += ["", "Pictures (reference | caustic | difference: red brighter, blue darker, 4x):", ""]
     for name in sorted({r[0] for r in rows}):
         lines.append(f"- `{name}`: ![{name}]({pic_link(a, name)})")

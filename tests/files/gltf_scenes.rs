@@ -29,6 +29,17 @@ fn describe(path: &Path, view: &View) -> caustic::desc::SceneDesc {
     describe_scene(path, view, caustic::budget::Budget::machine_default()).unwrap()
 }
 
+/// Returns the error reading `path` as a scene seen from `camera` gives.
+fn describe_err(path: &Path, camera: Option<&str>) -> String {
+    let v = View {
+        camera: camera.map(str::to_owned),
+        ..view()
+    };
+    describe_scene(path, &v, caustic::budget::Budget::machine_default())
+        .unwrap_err()
+        .to_string()
+}
+
 fn view() -> View {
     View {
         output: "x.png".into(),
@@ -270,16 +281,7 @@ fn bad_views_and_emitters_are_errors_naming_the_file() {
         r#""nodes":[{"mesh":0},{"name":"Wide","camera":0}],
            "cameras":[{"name":"WideCam","type":"perspective","perspective":{"yfov":1,"znear":0.1}}]"#,
     );
-    let err = describe_scene(
-        &cams,
-        &View {
-            camera: Some("Close".into()),
-            ..view()
-        },
-        caustic::budget::Budget::machine_default(),
-    )
-    .unwrap_err()
-    .to_string();
+    let err = describe_err(&cams, Some("Close"));
     assert!(
         err.contains("cams.glb") && err.contains("--camera Close") && err.contains("WideCam"),
         "{err}"
@@ -298,17 +300,10 @@ fn bad_views_and_emitters_are_errors_naming_the_file() {
     let ortho = with(
         "ortho",
         r#""nodes":[{"mesh":0},{"camera":0}],
-           "cameras":[{"type":"orthographic","orthographic":{"xmag":1,"ymag":1,"zfar":10,"znear":0.1}}]"#,
+           "cameras":[{"name":"Flat","type":"orthographic","orthographic":{"xmag":1,"ymag":1,"zfar":10,"znear":0.1}}]"#,
     );
-    let err = describe_scene(
-        &ortho,
-        &View {
-            camera: Some("camera 0".into()),
-            ..view()
-        },
-        caustic::budget::Budget::machine_default(),
-    );
-    assert!(err.is_err());
+    let err = describe_err(&ortho, Some("Flat"));
+    assert!(err.contains("ortho.glb") && err.contains("orthographic"), "{err}");
     // Without --camera, the orthographic camera is listed and the scene framed instead.
     let d = describe(&ortho, &view());
     assert!(
@@ -323,9 +318,7 @@ fn bad_views_and_emitters_are_errors_naming_the_file() {
         r#""nodes":[{"mesh":0},{"camera":0}],
            "cameras":[{"type":"perspective","perspective":{"yfov":0,"znear":0.1}}]"#,
     );
-    let err = describe_scene(&zero, &view(), caustic::budget::Budget::machine_default())
-        .unwrap_err()
-        .to_string();
+    let err = describe_err(&zero, None);
     assert!(err.contains("zero.glb") && err.contains("yfov"), "{err}");
 
     // An emitter of radiance 1e9: over the range of a light's intensity.

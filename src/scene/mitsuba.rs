@@ -188,8 +188,8 @@ pub fn export(
     })
 }
 
-/// Writes the scene's lights: the script's by [`emitter`], and each mesh light as an OBJ of its
-/// triangles (in `dir`, named after `stem`) under an `area` emitter.
+/// Writes the scene's lights ([`emitter`]), each mesh light's triangles to an OBJ in `dir`
+/// named after `stem`.
 fn lights(
     s: &mut String,
     desc: &SceneDesc,
@@ -198,20 +198,8 @@ fn lights(
     (dir, stem): (&Path, &str),
 ) -> Result<()> {
     for (l, light) in scene.lights.iter().enumerate() {
-        let loc = r.light_loc(desc, l);
-        if let LightShape::Mesh(mesh) = &light.shape {
-            let name = light_name(stem, l);
-            write_emitter_obj(mesh, &dir.join(&name))?;
-            let _ = writeln!(
-                s,
-                "  <shape type=\"obj\"><string name=\"filename\" value=\"{name}\"/>\
-                 <boolean name=\"face_normals\" value=\"true\"/>{BLACK}<emitter type=\"area\">\
-                 <rgb name=\"radiance\" value=\"{}\"/></emitter></shape>",
-                rgb(std::f32::consts::PI * light.colour / mesh.area)
-            );
-            continue;
-        }
-        emitter(s, light).map_err(|e| Error::at(loc, e))?;
+        let obj = dir.join(light_name(stem, l));
+        emitter(s, light, &obj).map_err(|e| Error::at(r.light_loc(desc, l), e))?;
     }
     Ok(())
 }
@@ -435,7 +423,8 @@ fn rgb(v: Vec3A) -> String {
     format!("{}, {}, {}", v.x, v.y, v.z)
 }
 
-fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
+/// Writes `light` as a Mitsuba emitter; a mesh light's triangles go to the OBJ file `obj`.
+fn emitter(s: &mut String, light: &Light, obj: &Path) -> std::result::Result<(), String> {
     if light.falloff != [0.0, 0.0, 1.0] {
         return Err(format!(
             "the course's falloff {:?} is outside the Mitsuba subset (only {{0, 0, 1}}, the physical inverse square)",
@@ -468,7 +457,17 @@ fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
                 rgb(pi * light.colour / area)
             );
         }
-        LightShape::Mesh(_) => return Err("a mesh light is written by export itself".into()),
+        LightShape::Mesh(ref mesh) => {
+            write_emitter_obj(mesh, obj).map_err(|e| e.to_string())?;
+            let name = obj.file_name().unwrap_or_default().to_string_lossy();
+            let _ = writeln!(
+                s,
+                "  <shape type=\"obj\"><string name=\"filename\" value=\"{name}\"/>\
+                 <boolean name=\"face_normals\" value=\"true\"/>{black}<emitter type=\"area\">\
+                 <rgb name=\"radiance\" value=\"{}\"/></emitter></shape>",
+                rgb(pi * light.colour / mesh.area)
+            );
+        }
         LightShape::Sphere { centre, radius } => {
             let _ = writeln!(
                 s,

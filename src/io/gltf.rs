@@ -36,10 +36,18 @@
 //!
 //! The glTF default material (white, fully metallic and rough) thus becomes a white conductor
 //! of roughness 1, as glTF defines it. Factors are clamped to their glTF ranges (`ior` to at
-//! least 1). The base colour texture's image is carried as a path when it is an external URI (resolved against the file's
-//! folder); embedded images (buffer views, data URIs) leave `texture` as `None`. Alpha, emission
-//! and every other texture are ignored. When no primitive has a material, the mesh carries none;
-//! otherwise primitives without one get the glTF default material.
+//! least 1). The base colour texture's image is carried as a path when it is an external URI
+//! (resolved against the file's folder); embedded images (buffer views, data URIs) leave
+//! `texture` as `None`. Alpha and every other texture are ignored (a whole-scene render lists
+//! them, [`scene`]). When no primitive has a material, the mesh carries none; otherwise
+//! primitives without one get the glTF default material.
+//!
+//! # Emission
+//! A primitive whose material emits (`emissiveFactor × KHR_materials_emissive_strength`, the
+//! emissive texture not read) is not geometry: its triangles, under its node's transform, are
+//! one of [`MeshData::emitters`], which the scene build turns into a light where the mesh is
+//! placed ([`crate::scene::emitters`]). The radiance must lie within a light's range
+//! ([`crate::range`]), and a file carries at most [`MAX_EMITTER_TRIANGLES`] emissive triangles.
 
 mod buffer;
 pub mod scene;

@@ -266,7 +266,8 @@ fn what_the_scene_uses_and_caustic_ignores_is_listed() {
 }
 
 /// Every way a file can name a bad view or light is an error naming the file: an unknown
-/// camera (the message lists the scene's cameras), an orthographic or zero-fov camera, an
+/// camera (the message lists the scene's cameras), an orthographic or zero-fov camera, a
+/// point light of negative or blinding intensity, more point lights than caustic samples, an
 /// emitter brighter than a light may be, and more emissive triangles than caustic tests.
 #[test]
 fn bad_views_and_emitters_are_errors_naming_the_file() {
@@ -303,7 +304,10 @@ fn bad_views_and_emitters_are_errors_naming_the_file() {
            "cameras":[{"name":"Flat","type":"orthographic","orthographic":{"xmag":1,"ymag":1,"zfar":10,"znear":0.1}}]"#,
     );
     let err = describe_err(&ortho, Some("Flat"));
-    assert!(err.contains("ortho.glb") && err.contains("orthographic"), "{err}");
+    assert!(
+        err.contains("ortho.glb") && err.contains("orthographic"),
+        "{err}"
+    );
     // Without --camera, the orthographic camera is listed and the scene framed instead.
     let d = describe(&ortho, &view());
     assert!(
@@ -320,6 +324,35 @@ fn bad_views_and_emitters_are_errors_naming_the_file() {
     );
     let err = describe_err(&zero, None);
     assert!(err.contains("zero.glb") && err.contains("yfov"), "{err}");
+
+    // A light of negative intensity, or brighter than a light may be: refused, not dropped.
+    let lights = |name: &str, intensity: &str, count: usize| {
+        let nodes: Vec<String> = (0..count)
+            .map(|_| r#"{"extensions":{"KHR_lights_punctual":{"light":0}}}"#.to_owned())
+            .collect();
+        let rest = format!(
+            r#""nodes":[{{"mesh":0}},{}],"extensionsUsed":["KHR_lights_punctual"],
+               "extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"point","intensity":{intensity}}}]}}}},{mesh}"#,
+            nodes.join(",")
+        );
+        f.write_glb(&dir, name, &rest)
+    };
+    for (name, intensity) in [("negative", "-5"), ("blinding", "1e15")] {
+        let err = describe_err(&lights(name, intensity, 1), None);
+        assert!(
+            err.contains(&format!("{name}.glb")) && err.contains("outside [0, 1e8]"),
+            "{err}"
+        );
+    }
+    // 1024 lights are read; one more, and the file is refused before any render.
+    assert_eq!(
+        describe(&lights("many_lights", "1", 1024), &view())
+            .lights
+            .len(),
+        1024
+    );
+    let err = describe_err(&lights("too_many_lights", "1", 1025), None);
+    assert!(err.contains("more than 1024 point lights"), "{err}");
 
     // An emitter of radiance 1e9: over the range of a light's intensity.
     let bright = f.write_glb(

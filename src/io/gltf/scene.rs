@@ -23,6 +23,9 @@
 //!   `rgb` is a physical intensity over π, [`crate::light`]) `rgb = color · intensity /
 //!   (683 π)`, with physical (inverse-square) falloff. Lights and emitters are physical: each
 //!   has a `power` (its flux), so photon mapping is on and shares the photons by flux.
+//! - **Bounds**: a light's `color × intensity / (683 π)` must lie within a light colour's range
+//!   ([`crate::range::MAX_INTENSITY`]) and its position within the coordinate range, else the
+//!   file is refused; so is a file placing more than [`MAX_LIGHTS`] point lights.
 //! - **A file with no light at all** (no punctual light and no emissive material, as many
 //!   sample models) gets a point light at the camera, bright enough that the middle of its
 //!   bounds receives an irradiance of 1 W/m², and a warning says so.
@@ -46,6 +49,10 @@ use std::sync::Arc;
 
 /// Image width when neither `--size` nor anything else sets it.
 pub const DEFAULT_WIDTH: u32 = 800;
+
+/// Most punctual lights a file may place: caustic samples every light at every shaded point,
+/// so a file of a million lights would render for days.
+pub const MAX_LIGHTS: usize = 1024;
 
 /// Lumens per watt: how Blender's glTF exporter turns watts into candela and lux, and how
 /// caustic turns them back.
@@ -116,10 +123,20 @@ pub fn describe_scene(path: &Path, view: &View, budget: Budget) -> Result<SceneD
     let mut warnings = unsupported(&doc);
     for (node, world) in &placed {
         let Some(light) = node.light() else { continue };
-        match point_light(&light, world, &loc) {
-            Ok(d) => desc.lights.push(d),
-            Err(why) => warnings.push(why),
+        let Some(d) = point_light(&light, world, &loc, &mut warnings).map_err(invalid)? else {
+            continue;
+        };
+        if desc.lights.len() == MAX_LIGHTS {
+            return Err(GltfError::Unsupported {
+                path: path.to_owned(),
+                message: format!(
+                    "more than {MAX_LIGHTS} point lights (node {}); caustic samples every \
+                     light at every shaded point",
+                    node.index()
+                ),
+            });
         }
+        desc.lights.push(d);
     }
     let emissive = doc
         .materials()
@@ -301,12 +318,15 @@ fn framing((lo, hi): (DVec3, DVec3)) -> CameraDesc {
     }
 }
 
-/// Returns the light a punctual light at `world` makes, or why it is not rendered.
+/// Returns the light a punctual light at `world` makes, or `None` (with a line in `warnings`)
+/// for a kind caustic does not render yet; a colour, intensity or position out of range is an
+/// error.
 fn point_light(
     light: &gltf::khr_lights_punctual::Light,
     world: &DAffine3,
     loc: &Loc,
-) -> Result<LightDesc, String> {
+    warnings: &mut Vec<String>,
+) -> Result<Option<LightDesc>, String> {
     use gltf::khr_lights_punctual::Kind;
     let name = light
         .name()
@@ -315,9 +335,14 @@ fn point_light(
         });
     match light.kind() {
         Kind::Point => {}
-        Kind::Spot { .. } => return Err(format!("{name}: spot lights are not rendered yet")),
-        Kind::Directional => {
-            return Err(format!("{name}: directional lights are not rendered yet"));
+        Kind::Spot { .. } | Kind::Directional => {
+            let kind = if matches!(light.kind(), Kind::Spot { .. }) {
+                "spot"
+            } else {
+                "directional"
+            };
+            warnings.push(format!("{name}: {kind} lights are not rendered yet"));
+            return Ok(None);
         }
     }
     let colour =
@@ -332,7 +357,7 @@ fn point_light(
     // A physical light: it takes part in photon mapping, its share of photons by its flux
     // (4π · π·rgb per channel).
     let flux = 4.0 * std::f32::consts::PI * std::f32::consts::PI * colour.element_sum();
-    Ok(LightDesc {
+    Ok(Some(LightDesc {
         shape: LightShape::Point,
         position,
         colour,
@@ -340,7 +365,7 @@ fn point_light(
         power: Some(flux),
         photons: None,
         loc: loc.clone(),
-    })
+    }))
 }
 
 /// Returns what the file uses that caustic does not render, one line each.

@@ -439,3 +439,55 @@ fn blender_scenes_render_at_the_defaults() {
         );
     }
 }
+
+/// A script cannot multiply a small emitter past the scene's bound by instancing it: 2048
+/// placements of a two-triangle panel (4096 triangles) build, one more is an error naming
+/// the node that placed it.
+#[test]
+fn instanced_emitters_are_bounded_over_the_scene() {
+    let dir = out_dir("gltf-scene-instanced-emitters");
+    let mut f = GltfFile::default();
+    f.floats(
+        "VEC3",
+        &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0],
+    );
+    f.indices(5125, &[0, 1, 2, 0, 2, 3]);
+    f.write_glb(
+        &dir,
+        "panel",
+        r#""nodes":[{"mesh":0}],"materials":[{"emissiveFactor":[1,1,1]}],
+           "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}]"#,
+    );
+    let build = |copies: usize| {
+        let script = format!(
+            r#"
+            panel = gr.mesh('panel', 'panel.glb')
+            root = gr.node('root')
+            for i = 1, {copies} do
+                n = gr.node('copy' .. i); n:translate(i, 0, 0); n:add_child(panel); root:add_child(n)
+            end
+            gr.render(root, 'x.png', 4, 4, {{0, 5, 0}}, {{0, -1, 0}}, {{0, 0, -1}}, 50, {{0, 0, 0}},
+                      {{gr.light({{0, 9, 0}}, {{1, 1, 1}}, {{1, 0, 0}})}})
+        "#
+        );
+        let lights = std::rc::Rc::new(std::cell::Cell::new(0));
+        let seen = std::rc::Rc::clone(&lights);
+        caustic::lua::run_source(
+            script.as_bytes(),
+            "copies.lua",
+            &dir,
+            Box::new(move |desc, r| {
+                seen.set(build_scene(desc, r)?.lights.len());
+                Ok(())
+            }),
+        )
+        .map(|_| lights.get())
+    };
+    // The script's light and one mesh light per placement.
+    assert_eq!(build(2048).unwrap(), 2049);
+    let err = build(2049).unwrap_err().to_string();
+    assert!(
+        err.contains("copies.lua") && err.contains("more than 4096 triangles"),
+        "{err}"
+    );
+}

@@ -169,6 +169,19 @@ pub struct LightSample {
     /// Radiant intensity towards the shaded point, already divided by the sample's density
     /// (so averaging samples estimates the light's intensity).
     pub intensity: Vec3A,
+    /// The light's unit normal at the point (zero for a point light and a centre stand-in).
+    pub normal: Vec3A,
+}
+
+/// Where a ray meets a light's emitting surface ([`Light::seen`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Seen {
+    /// The distance along the ray, in units of its direction.
+    pub t: f32,
+    /// The radiance seen there (black on the back of a one-sided light).
+    pub radiance: Vec3A,
+    /// The surface's unit normal there (the emitting side's for area and mesh lights).
+    pub normal: Vec3A,
 }
 
 /// A photon leaving a light.
@@ -313,6 +326,7 @@ impl Light {
             Shape::Sphere { centre, .. } => LightSample {
                 position: *centre,
                 intensity: self.colour,
+                normal: Vec3A::ZERO,
             },
             Shape::Mesh(m) => LightSample {
                 position: m.centroid,
@@ -320,6 +334,7 @@ impl Light {
                     * m.mean_normal
                         .dot((p - m.centroid).normalize_or_zero())
                         .max(0.0),
+                normal: Vec3A::ZERO,
             },
         }
     }
@@ -330,6 +345,7 @@ impl Light {
             Shape::Point { position } => LightSample {
                 position,
                 intensity: self.colour,
+                normal: Vec3A::ZERO,
             },
             Shape::Mesh(ref m) => {
                 // Uniform over the total area, as an area light's parallelogram is.
@@ -339,6 +355,7 @@ impl Light {
                 LightSample {
                     position: y,
                     intensity: self.colour * t.normal.dot(to_p).max(0.0),
+                    normal: t.normal,
                 }
             }
             Shape::Area {
@@ -353,6 +370,7 @@ impl Light {
                 LightSample {
                     position: y,
                     intensity: self.colour * normal.dot(to_p).max(0.0),
+                    normal,
                 }
             }
             Shape::Sphere { centre, radius } => {
@@ -363,6 +381,7 @@ impl Light {
                 LightSample {
                     position: y,
                     intensity: self.colour * 4.0 * n.dot(to_p).max(0.0),
+                    normal: n,
                 }
             }
         }
@@ -375,7 +394,12 @@ impl Light {
     /// of its triangles. The course's falloff does not apply to seen emitters: only the light
     /// they shed on surfaces is attenuated.
     pub fn seen_by(&self, ray: &Ray, tmax: f32) -> Option<(f32, Vec3A)> {
-        let (t, radiance) = match self.shape {
+        self.seen(ray, tmax).map(|s| (s.t, s.radiance))
+    }
+
+    /// [`Light::seen_by`] with the emitting surface's unit normal where the ray meets it.
+    pub fn seen(&self, ray: &Ray, tmax: f32) -> Option<Seen> {
+        let (t, radiance, normal) = match self.shape {
             Shape::Point { .. } => return None,
             Shape::Mesh(ref m) => {
                 if !m.may_hit(ray, tmax) {
@@ -400,6 +424,7 @@ impl Light {
                     } else {
                         Vec3A::ZERO
                     },
+                    tri.normal,
                 )
             }
             Shape::Area {
@@ -433,6 +458,7 @@ impl Light {
                     } else {
                         Vec3A::ZERO
                     },
+                    normal,
                 )
             }
             Shape::Sphere { centre, radius } => {
@@ -447,10 +473,39 @@ impl Light {
                 let root = disc.sqrt();
                 let t0 = (-b - root) / a;
                 let t = if t0 > ray.tmin { t0 } else { (-b + root) / a };
-                (t, self.colour / (radius * radius))
+                let normal = ((ray.at(t) - centre) / radius).normalize_or_zero();
+                (t, self.colour / (radius * radius), normal)
             }
         };
-        (t > ray.tmin && t < tmax).then_some((t, radiance))
+        (t > ray.tmin && t < tmax).then_some(Seen {
+            t,
+            radiance,
+            normal,
+        })
+    }
+
+    /// Returns whether shading may weigh this light's samples against a BSDF's by multiple
+    /// importance sampling ([`crate::integrator::mis`]): a light with extent whose falloff is
+    /// physical, so that its shadow-ray estimate and the radiance a path sees on it estimate the
+    /// same light (the course's falloff dims only the former).
+    pub fn weighs_by_mis(&self) -> bool {
+        self.is_area() && self.falloff == [0.0, 0.0, 1.0]
+    }
+
+    /// Returns the density per steradian, seen from `from`, with which [`Light::sample`] draws
+    /// the point `y` of normal `normal` on the light (uniform over its area, the whole sphere's
+    /// for a sphere light): `d² / (A·|cos θ_y|)`; infinite for a point light, which has no area.
+    pub fn density_towards(&self, from: Vec3A, y: Vec3A, normal: Vec3A) -> f32 {
+        let area = match &self.shape {
+            Shape::Point { .. } => return f32::INFINITY,
+            Shape::Area { area, .. } => *area,
+            Shape::Mesh(m) => m.area,
+            Shape::Sphere { radius, .. } => 2.0 * TAU * radius * radius,
+        };
+        let to = y - from;
+        let d2 = to.length_squared();
+        let cos = normal.dot(to).abs() / d2.sqrt();
+        d2 / (area * cos)
     }
 
     /// Returns a photon's emission from four uniform numbers in [0, 1).
@@ -496,6 +551,29 @@ impl Light {
 mod tests {
     use super::*;
     use crate::sampling::{Pass, Rng};
+
+    /// Drawing points uniformly on an area light and dividing by their density towards a
+    /// point estimates the solid angle the light subtends: `4·asin(ab/√((a² + d²)(b² + d²)))`
+    /// for a `2a × 2b` rectangle seen on its axis from `d`, within 0.5% over 256² stratified
+    /// draws.
+    #[test]
+    fn an_area_lights_density_is_its_solid_angle_measure() {
+        let light = area(1.0);
+        let p = Vec3A::new(0.0, -0.7, 0.0);
+        let n = 256;
+        let mut omega = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let u = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let s = light.sample(p, u);
+                omega += 1.0 / light.density_towards(p, s.position, s.normal) as f64;
+            }
+        }
+        omega /= (n * n) as f64;
+        let (a, b, d) = (0.25f64, 1.0f64, 0.7f64);
+        let want = 4.0 * (a * b / ((a * a + d * d) * (b * b + d * d)).sqrt()).asin();
+        assert!((omega / want - 1.0).abs() < 0.005, "{omega} against {want}");
+    }
 
     fn area(colour: f32) -> Light {
         Light {

@@ -14,6 +14,8 @@
 //! Area and sphere lights are seen by camera rays and by the specular paths that follow them
 //! ([`emitter_seen`]): their direct light on surfaces comes from shadow rays, so seeing them
 //! only along eye paths counts nothing twice. Point lights stay invisible, as in the course.
+//! A rough dielectric (frosted glass) does both: it samples the lights and follows its drawn
+//! directions, and multiple importance sampling weighs the two ([`super::mis`]).
 //!
 //! Rays carry a [`MediumStack`], so nested and touching dielectrics refract with the ratio of the
 //! two media at each interface, and the boundary of a solid inside a denser one (a water surface
@@ -35,10 +37,12 @@
 //! for a few percent of the light.
 
 use super::irradiance_cache::Probe;
+use super::mis::Mis;
 use super::photon_map::Prepass;
 use crate::accel::counters::{self, RayKind};
 use crate::camera::Camera;
 use crate::geometry::{Ray, offset_ray_origin};
+use crate::light::{Light, Seen};
 use crate::material::bsdf::{Bsdf, Split};
 use crate::material::medium::{Crossing, MediumStack};
 use crate::render::{Radiance, Share, WEAK_BRANCH};
@@ -89,6 +93,9 @@ pub struct PathState {
     pub sees_emitters: bool,
     /// How this sample shares weak branches with the other samples of its pixel.
     pub share: Share,
+    /// Set on a path drawn from a rough interface that also sampled the lights: how to weigh
+    /// the light it meets against those samples ([`Mis`]).
+    pub mis: Option<Mis>,
 }
 
 impl PathState {
@@ -106,6 +113,7 @@ impl PathState {
             media: scene.eye_media.stack,
             sees_emitters: true,
             share,
+            mis: None,
         }
     }
 
@@ -150,6 +158,7 @@ impl PathState {
             media,
             sees_emitters: self.sees_emitters,
             share: self.share,
+            mis: None,
         }
     }
 
@@ -171,11 +180,16 @@ pub fn background(camera: &Camera, dir: Vec3A) -> Vec3A {
 /// Returns the distance along `ray` (in units of its direction) and the radiance of the nearest
 /// area or sphere light that `ray` meets before `tmax`, if any ([`crate::light::Light::seen_by`]).
 pub fn emitter_seen(scene: &Scene, ray: &Ray, tmax: f32) -> Option<(f32, Vec3A)> {
-    let mut best: Option<(f32, Vec3A)> = None;
+    nearest_emitter(scene, ray, tmax).map(|(_, seen)| (seen.t, seen.radiance))
+}
+
+/// Returns the nearest light `ray` meets before `tmax` and where ([`Light::seen`]).
+pub fn nearest_emitter<'s>(scene: &'s Scene, ray: &Ray, tmax: f32) -> Option<(&'s Light, Seen)> {
+    let mut best: Option<(&Light, Seen)> = None;
     for light in &scene.lights {
-        let limit = best.map_or(tmax, |b| b.0);
-        if let Some(seen) = light.seen_by(ray, limit) {
-            best = Some(seen);
+        let limit = best.map_or(tmax, |b| b.1.t);
+        if let Some(seen) = light.seen(ray, limit) {
+            best = Some((light, seen));
         }
     }
     best
@@ -239,8 +253,9 @@ impl Tracer<'_> {
             let kept = |t: f32| self.scene.kept_along(&state.media, &ray, t);
             if state.sees_emitters {
                 let tmax = hit.map_or(ray.tmax, |h| h.t);
-                if let Some((t, radiance)) = emitter_seen(self.scene, &ray, tmax) {
-                    return seen_scale * scale * kept(t) * radiance;
+                if let Some((light, seen)) = nearest_emitter(self.scene, &ray, tmax) {
+                    let w = state.mis.map_or(1.0, |m| m.weight(light, &ray, &seen));
+                    return w * seen_scale * scale * kept(seen.t) * seen.radiance;
                 }
             }
             let Some(hit) = hit else {
@@ -277,7 +292,11 @@ impl Tracer<'_> {
                 };
                 ray = Ray::new(offset_ray_origin(it.surf.p, it.surf.ng, ray.dir), ray.dir);
                 counts.secondary += 1;
-                state = state.child(1.0 / q, c.after);
+                // Straight on: a drawn path still weighs the light it meets from its vertex.
+                state = PathState {
+                    mis: state.mis,
+                    ..state.child(1.0 / q, c.after)
+                };
                 scale /= q;
                 continue;
             }
@@ -341,11 +360,7 @@ impl Tracer<'_> {
                 if n.dot(wi) <= 0.0 || ng.dot(wi) <= 0.0 {
                     continue;
                 }
-                let origin = offset_ray_origin(p, ng, wi);
-                let shadow = Ray::new(origin, ls.position - origin).with_tmax(1.0 - 1e-4);
-                counts.shadow += 1;
-                counters::kind(RayKind::Shadow);
-                if self.scene.occluded(&shadow) {
+                if !self.sees_light(p, ng, wi, ls.position, counts) {
                     continue;
                 }
                 let kept = self.scene.transmittance(media, d);
@@ -354,6 +369,23 @@ impl Tracer<'_> {
             colour += sum / samples.len() as f32;
         }
         colour
+    }
+
+    /// Returns whether the point `y` of a light is in sight of the surface point `p` (geometric
+    /// normal `ng`) along the unit direction `wi` towards it, by one shadow ray.
+    pub fn sees_light(
+        &self,
+        p: Vec3A,
+        ng: Vec3A,
+        wi: Vec3A,
+        y: Vec3A,
+        counts: &mut RayCounts,
+    ) -> bool {
+        let origin = offset_ray_origin(p, ng, wi);
+        let shadow = Ray::new(origin, y - origin).with_tmax(1.0 - 1e-4);
+        counts.shadow += 1;
+        counters::kind(RayKind::Shadow);
+        !self.scene.occluded(&shadow)
     }
 
     /// Returns the light the opaque part of a surface sends towards its `wo`.
@@ -441,7 +473,8 @@ impl Tracer<'_> {
         if !state.splits(self.scene.features.specular_depth) {
             return self.dielectric_lobe(at, crossing, &split, rng, counts);
         }
-        let mut out = Vec3A::ZERO;
+        // A rough interface also samples the lights, weighed against its branches' draws.
+        let mut out = self.rough_interface_direct(&at, crossing, true, rng, counts);
         // A rough interface's branches carry the microfacets' G2/G1 (1 when smooth).
         let (wr_weight, wt_weight) = (split.reflect_weight, split.refract_weight);
         if f > 0.0 && wr_weight > 0.0 && state.weight * f * wr_weight > MIN_WEIGHT {
@@ -449,7 +482,10 @@ impl Tracer<'_> {
             let wr = split.reflected;
             let ray = Ray::new(offset_ray_origin(p, ng, wr), wr);
             counts.secondary += 1;
-            let child = state.child(f * wr_weight, state.media).shared(share);
+            let child = PathState {
+                mis: self.drawn_from(&at, crossing, wr, true),
+                ..state.child(f * wr_weight, state.media).shared(share)
+            };
             out += gain * f * self.radiance(&ray, child, rng, counts) * wr_weight;
         }
         if f < 1.0
@@ -460,9 +496,12 @@ impl Tracer<'_> {
             let (gain, share) = state.branch((1.0 - f) * wt_weight);
             let ray = Ray::new(offset_ray_origin(p, ng, wt), wt);
             counts.secondary += 1;
-            let child = state
-                .child((1.0 - f) * wt_weight, crossing.after)
-                .shared(share);
+            let child = PathState {
+                mis: self.drawn_from(&at, crossing, wt, true),
+                ..state
+                    .child((1.0 - f) * wt_weight, crossing.after)
+                    .shared(share)
+            };
             let radiance = self.radiance(&ray, child, rng, counts);
             out += gain * (1.0 - f) * split.radiance_scale * radiance * wt_weight;
         }
@@ -499,12 +538,17 @@ impl Tracer<'_> {
                 1.0,
             ),
         };
+        let direct = self.rough_interface_direct(&at, crossing, false, rng, counts);
         let Some(q) = state.roulette(weight, rng, counts) else {
-            return Vec3A::ZERO;
+            return direct;
         };
         let ray = Ray::new(offset_ray_origin(it.surf.p, it.bsdf.ng, dir), dir);
         counts.secondary += 1;
-        let radiance = self.radiance(&ray, state.child(weight / q, media), rng, counts);
-        weight * radiance_scale / q * radiance
+        let child = PathState {
+            mis: self.drawn_from(&at, crossing, dir, false),
+            ..state.child(weight / q, media)
+        };
+        let radiance = self.radiance(&ray, child, rng, counts);
+        direct + weight * radiance_scale / q * radiance
     }
 }

@@ -21,6 +21,7 @@
 pub mod eye;
 pub mod irradiance_cache;
 pub mod maps_file;
+pub mod mis;
 pub mod passes_file;
 pub mod photon_map;
 pub mod plan;

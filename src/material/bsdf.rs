@@ -42,7 +42,7 @@
 //!   surface reflects less than 1 in every channel.
 
 use super::medium::{Crossing, MediumStack};
-use super::microfacet::{Frame, Ggx, RoughConductor};
+use super::microfacet::{Frame, Ggx, RoughConductor, RoughDielectric};
 use super::{Lobes, Material, fresnel};
 use crate::geometry::hit::SurfaceHit;
 use crate::range::MAX_ALBEDO;
@@ -285,6 +285,20 @@ impl<'a> Bsdf<'a> {
             reflect_weight: 1.0,
             refract_weight: 1.0,
         }
+    }
+
+    /// Returns the rough dielectric a rough material's interface is for a ray crossing by
+    /// `crossing`, with its frame around the shading normal; `None` when the interface is smooth.
+    pub fn rough_interface(&self, crossing: &Crossing) -> Option<(RoughDielectric, Frame)> {
+        (self.material.roughness > 0.0).then(|| {
+            (
+                RoughDielectric {
+                    ggx: Ggx::from_roughness(self.material.roughness),
+                    eta: crossing.n_from / crossing.n_to,
+                },
+                Frame::around(self.n),
+            )
+        })
     }
 
     /// [`Bsdf::dielectric`] for a rough interface of relative index `eta`.

@@ -227,3 +227,84 @@ gr.render(root, 'rough.png', 9, 9, {0, 1, 1}, {0, -1, -1}, {0, 1, 0}, 20, {0, 0,
         "centre {centre}, closed form {want}"
     );
 }
+
+/// Frosted glass under a lamp: a rough dielectric floor (`gr.roughness(glass, 0.3)`, GGX
+/// `alpha = 0.09`, index 1.5, its inside absorbing everything that enters) reflects a square
+/// area light of radiance `L` towards a camera in the light's mirror direction. Each pixel is
+/// `∫ f_r(wo, wi)·cos θi·L·cos θl / d² dA` over the light, the Walter et al. reflection lobe
+/// integrated here by a 400 × 400 midpoint rule (the field of view is 0.5°, so every pixel sees
+/// the centre's integral to 1e-3). With the lights sampled at the interface and weighed against
+/// the path's own draw (multiple importance sampling, `caustic::integrator::mis`) the mean over
+/// the 81 pixels is within 2% of it and the pixels' spread is under half that of the draw alone
+/// (`light_samples = 0`), whose mean is within three standard errors. Before, the draw alone
+/// was all there was.
+#[test]
+fn frosted_glass_reflects_a_lamp_by_the_walter_lobe_with_less_noise_under_mis() {
+    use caustic::material::microfacet::{Ggx, RoughDielectric};
+    let src = "black = gr.material({0, 0, 0}, {0, 0, 0}, 0)
+glass = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)
+gr.roughness(glass, 0.3)
+gr.absorption(glass, {0.001, 0.001, 0.001}, 0.01)
+root = gr.node('root')
+enclosure = gr.sphere('enclosure'); enclosure:set_material(black); enclosure:scale(100, 100, 100)
+root:add_child(enclosure)
+slab = gr.cube('slab'); slab:set_material(glass); slab:scale(20, 1, 20); slab:translate(-10, -1, -10)
+root:add_child(slab)
+lamp = gr.area_light({0, 1, -1}, {2, 2, 2}, {0, 0, 1}, nil, nil, {0.5, 0, 0}, {0, 0, 0.5})
+gr.render(root, 'frosted.png', 9, 9, {0, 1, 1}, {0, -1, -1}, {0, 1, 0}, 0.5, {0, 0, 0}, {lamp})
+";
+    let render = |light_samples: u32| {
+        let mut settings = common::whitted();
+        settings.light_samples = light_samples;
+        let films =
+            common::render_films_with(src.as_bytes(), "frosted.lua", Path::new("."), &settings)
+                .unwrap();
+        let film = &films[0].2;
+        let values: Vec<f32> = film.pixels.iter().map(|p| p.x).collect();
+        let mean = values.iter().sum::<f32>() / values.len() as f32;
+        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f32>() / values.len() as f32;
+        (mean, var.sqrt())
+    };
+    // The closed form: L = π·rgb/A on the lamp (caustic's units), the lobe in a frame whose z
+    // is the floor's normal +y.
+    let lobe = RoughDielectric {
+        ggx: Ggx::from_roughness(0.3),
+        eta: 1.0 / 1.5,
+    };
+    let local = |v: Vec3A| Vec3A::new(v.x, v.z, v.y);
+    let wo = Vec3A::new(0.0, 1.0, 1.0).normalize();
+    let radiance = std::f32::consts::PI * 2.0 / 0.25;
+    let n = 400;
+    let mut want = 0.0f64;
+    for i in 0..n {
+        for j in 0..n {
+            let y = Vec3A::new(
+                -0.25 + 0.5 * (i as f32 + 0.5) / n as f32,
+                1.0,
+                -1.25 + 0.5 * (j as f32 + 0.5) / n as f32,
+            );
+            let d2 = y.length_squared();
+            let wi = y / d2.sqrt();
+            let f = lobe.eval(local(wo), local(wi));
+            let cos_light = wi.y;
+            let da = 0.25 / (n * n) as f32;
+            want += (f * wi.y * radiance * cos_light / d2 * da) as f64;
+        }
+    }
+    let want = want as f32;
+    let (mis, mis_spread) = render(16);
+    let (drawn, drawn_spread) = render(0);
+    assert!(
+        (mis / want - 1.0).abs() < 0.02,
+        "with MIS {mis}, closed form {want}"
+    );
+    // Unbiased too, within three standard errors of its 81 pixels.
+    assert!(
+        (drawn - want).abs() < 3.0 * drawn_spread / 9.0,
+        "the draw alone {drawn} (spread {drawn_spread}), closed form {want}"
+    );
+    assert!(
+        mis_spread < 0.5 * drawn_spread,
+        "spread with MIS {mis_spread}, of the draw alone {drawn_spread}"
+    );
+}

@@ -68,6 +68,10 @@ pub struct Material {
     pub texture: Option<Arc<Texture>>,
     /// Normal or height map.
     pub bump: Option<Arc<BumpMap>>,
+    /// Radiance the surface emits (a glTF emissive material; zero otherwise). Its light is a
+    /// mesh light over the same triangles ([`crate::scene::emitters`]), which is what shading
+    /// reads; the surface keeps it so that exporters write it as the emitter it is.
+    pub emission: Vec3A,
 }
 
 impl Material {
@@ -88,6 +92,7 @@ impl Material {
             perlin_scale: d.perlin_scale,
             texture,
             bump,
+            emission: Vec3A::ZERO,
         }
     }
 
@@ -104,6 +109,7 @@ impl Material {
             perlin_scale: 0.0,
             texture,
             bump: None,
+            emission: m.emission.into(),
         }
     }
 
@@ -120,6 +126,7 @@ impl Material {
             perlin_scale: 0.0,
             texture: None,
             bump: None,
+            emission: Vec3A::ZERO,
         }
     }
 

@@ -68,6 +68,9 @@ pub struct MeshMaterial {
     pub roughness: f32,
     /// Texture replacing `kd` (OBJ `map_Kd`, glTF base colour texture), resolved to a path.
     pub texture: Option<PathBuf>,
+    /// Radiance emitted (glTF `emissiveFactor × KHR_materials_emissive_strength`; zero for
+    /// OBJ): the primitive is also one of [`MeshData::emitters`].
+    pub emission: Vec3,
 }
 
 impl MeshData {

@@ -56,6 +56,10 @@ pub use crate::scene::MAX_DEPTH;
 /// Deepest chain followed at all, even under roulette (a closed box of perfect mirrors never
 /// loses weight).
 pub const MAX_PATH_DEPTH: u32 = 1024;
+/// How far behind the surface a ray meets (relative to its distance) a light still counts as
+/// seen: a glTF emissive surface is both a surface and a light over the same triangles, met at
+/// the same distance to within rounding, and the light must win.
+pub const EMITTER_ON_SURFACE: f32 = 1e-4;
 /// Paths whose weight falls below this are not traced further.
 pub const MIN_WEIGHT: f32 = 1e-3;
 
@@ -252,7 +256,7 @@ impl Tracer<'_> {
             // What the medium the ray crosses keeps of the light over `t` (Beer–Lambert).
             let kept = |t: f32| self.scene.kept_along(&state.media, &ray, t);
             if state.sees_emitters {
-                let tmax = hit.map_or(ray.tmax, |h| h.t);
+                let tmax = hit.map_or(ray.tmax, |h| h.t * (1.0 + EMITTER_ON_SURFACE));
                 if let Some((light, seen)) = nearest_emitter(self.scene, &ray, tmax) {
                     let w = state.mis.map_or(1.0, |m| m.weight(light, &ray, &seen));
                     return w * seen_scale * scale * kept(seen.t) * seen.radiance;

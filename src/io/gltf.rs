@@ -44,9 +44,10 @@
 //!
 //! # Emission
 //! A primitive whose material emits (`emissiveFactor × KHR_materials_emissive_strength`, the
-//! emissive texture not read) is not geometry: its triangles, under its node's transform, are
-//! one of [`MeshData::emitters`], which the scene build turns into a light where the mesh is
-//! placed ([`crate::scene::emitters`]). The radiance must lie within a light's range
+//! emissive texture not read) is a surface like any other (it reflects by its base colour and
+//! hides what is behind it, as glTF and every path tracer have it) and also a light: its
+//! triangles, under its node's transform, are one of [`MeshData::emitters`], which the scene
+//! build turns into a light where the mesh is placed ([`crate::scene::emitters`]). The radiance must lie within a light's range
 //! ([`crate::range`]), and a file carries at most [`MAX_EMITTER_TRIANGLES`] emissive triangles.
 
 mod buffer;
@@ -176,8 +177,8 @@ pub fn parse_gltf_with(
                         ),
                     });
                 }
+                // Still a surface too: it reflects by its material and hides what is behind.
                 emitters.push(emitter);
-                continue;
             }
             if part.material.is_none() && default_material.is_none() {
                 default_material = Some(material(&prim.material(), &doc, dir).map_err(invalid)?);
@@ -586,6 +587,10 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
         absorption: crate::material::absorption(attenuation, distance),
         roughness,
         texture,
+        // Validated where the primitive becomes a light (`emitter`); kept only when it can be.
+        emission: Some(Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0))
+            .filter(|e| e.is_finite() && e.min_element() >= 0.0)
+            .unwrap_or(Vec3::ZERO),
     })
 }
 

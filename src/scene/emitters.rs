@@ -1,9 +1,14 @@
 //! Mesh lights: the emissive surfaces a mesh file carries ([`MeshData::emitters`]) become
 //! lights where the mesh is placed, one [`Light::mesh`] per emissive primitive per placement.
 //!
-//! An emissive surface is a light, not geometry, like `gr.area_light`'s parallelogram: camera
-//! rays see its front ([`Light::seen_by`]), shadow rays sample it, photons leave it, and nothing
-//! bounces off it. What caustic reads of a glTF emissive material is in [`crate::io::gltf`].
+//! An emissive surface is both a surface and a light over the same triangles, as glTF and
+//! Mitsuba have it: the surface reflects by its material and hides what is behind it (a black
+//! panel under a ceiling absorbs the light that reaches it from the room), and the light is
+//! seen by camera rays on its front ([`Light::seen_by`], winning over the surface it lies on:
+//! [`crate::integrator::eye::EMITTER_ON_SURFACE`]), sampled by shadow rays and left by photons.
+//! Before, the surface was a light only: the ceiling behind a Blender panel reflected the
+//! room's light that the panel should have absorbed, 2–3% too much light in the glTF
+//! validation scenes. What caustic reads of a glTF emissive material is in [`crate::io::gltf`].
 //!
 //! ```lua
 //! lamp = gr.mesh('lamp', 'panel.glb')   -- a quad with emissiveFactor and emissiveStrength

@@ -20,7 +20,8 @@
 //! - Lights (physical falloff `{0, 0, 1}` only): point → `point` with intensity `π·rgb`; area →
 //!   an emitting `rectangle` of radiance `π·rgb/A` on the side of `u × v`, black behind; sphere
 //!   → an emitting `sphere` of radiance `rgb/R²` (see [`crate::light`] for why those are the
-//!   same lights).
+//!   same lights); an emissive surface (a glTF emissive material, whose mesh light covers its
+//!   triangles) → its shape with its BSDF and an `area` emitter of its radiance.
 //! - The camera: `perspective` with the vertical field of view, a box pixel filter, an HDR film.
 //!   The integrator: `path`, unbounded depth with Russian roulette.
 //!
@@ -52,11 +53,6 @@ fn part_name(stem: &str, i: usize, m: u32) -> String {
     format!("{stem}_mesh{i}_material{m}.obj")
 }
 
-/// Returns the name of the OBJ file holding the triangles of light `l`, a mesh light.
-fn light_name(stem: &str, l: usize) -> String {
-    format!("{stem}_light{l}.obj")
-}
-
 /// Returns the OBJ files of instance `i`: one, or one per material of a mesh whose file gives
 /// each triangle its material, with the material each file takes (`None`: the instance's).
 fn mesh_files(scene: &Scene, stem: &str, i: usize) -> Vec<(String, Option<u32>)> {
@@ -72,24 +68,16 @@ fn mesh_files(scene: &Scene, stem: &str, i: usize) -> Vec<(String, Option<u32>)>
     }
 }
 
-/// Returns every file [`export`] of `scene` to `xml` writes: `xml`, the OBJ files of each mesh
-/// instance and of each mesh light beside it, so that a caller can check them all before the
-/// export starts.
+/// Returns every file [`export`] of `scene` to `xml` writes: `xml` and the OBJ files of each
+/// mesh instance beside it, so that a caller can check them all before the export starts.
 pub fn outputs(scene: &Scene, xml: &Path) -> Vec<std::path::PathBuf> {
     let stem = xml
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
     let meshes = (0..scene.instances.len()).flat_map(|i| mesh_files(scene, &stem, i));
-    let lights = scene
-        .lights
-        .iter()
-        .enumerate()
-        .filter(|(_, l)| matches!(l.shape, LightShape::Mesh(_)))
-        .map(|(l, _)| light_name(&stem, l));
     std::iter::once(xml.to_path_buf())
         .chain(meshes.map(|(name, _)| xml.with_file_name(name)))
-        .chain(lights.map(|name| xml.with_file_name(name)))
         .collect()
 }
 
@@ -129,7 +117,8 @@ pub fn export(
         let m = inst.world_from_object;
         if let Shape::Mesh(k) = inst.shape {
             for (name, material) in mesh_files(scene, &stem, i) {
-                let bsdf = bsdf_of(material.unwrap_or(inst.material))?;
+                let id = material.unwrap_or(inst.material);
+                let bsdf = bsdf_of(id)? + &surface_emitter(&scene.materials[id as usize]);
                 let obj = Obj {
                     mesh: &scene.meshes[k as usize],
                     world_from_object: &m,
@@ -180,7 +169,7 @@ pub fn export(
             }
         }
     }
-    lights(&mut s, desc, r, scene, (dir, &stem))?;
+    lights(&mut s, desc, r, scene)?;
     let _ = writeln!(s, "</scene>");
     crate::files::write_bytes(xml, s.as_bytes()).map_err(|e| Error::File {
         path: xml.to_path_buf(),
@@ -188,18 +177,25 @@ pub fn export(
     })
 }
 
-/// Writes the scene's lights ([`emitter`]), each mesh light's triangles to an OBJ in `dir`
-/// named after `stem`.
-fn lights(
-    s: &mut String,
-    desc: &SceneDesc,
-    r: &RenderDesc,
-    scene: &Scene,
-    (dir, stem): (&Path, &str),
-) -> Result<()> {
+/// Returns the area emitter of a surface that emits (a glTF emissive material), else nothing.
+/// The surface is written with its own BSDF and this emitter, as Mitsuba has emissive shapes:
+/// its mesh light ([`crate::scene::emitters`]) covers the same triangles and is not written
+/// again ([`lights`]). Mitsuba's area emitter emits on the side the shading normal faces,
+/// which for the flat panels glTF files light with is the winding's.
+fn surface_emitter(m: &Material) -> String {
+    if m.emission == Vec3A::ZERO {
+        return String::new();
+    }
+    format!(
+        "<emitter type=\"area\"><rgb name=\"radiance\" value=\"{}\"/></emitter>",
+        rgb(m.emission)
+    )
+}
+
+/// Writes the scene's lights ([`emitter`]).
+fn lights(s: &mut String, desc: &SceneDesc, r: &RenderDesc, scene: &Scene) -> Result<()> {
     for (l, light) in scene.lights.iter().enumerate() {
-        let obj = dir.join(light_name(stem, l));
-        emitter(s, light, &obj).map_err(|e| Error::at(r.light_loc(desc, l), e))?;
+        emitter(s, light).map_err(|e| Error::at(r.light_loc(desc, l), e))?;
     }
     Ok(())
 }
@@ -424,7 +420,7 @@ fn rgb(v: Vec3A) -> String {
 }
 
 /// Writes `light` as a Mitsuba emitter; a mesh light's triangles go to the OBJ file `obj`.
-fn emitter(s: &mut String, light: &Light, obj: &Path) -> std::result::Result<(), String> {
+fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
     if light.falloff != [0.0, 0.0, 1.0] {
         return Err(format!(
             "the course's falloff {:?} is outside the Mitsuba subset (only {{0, 0, 1}}, the physical inverse square)",
@@ -457,17 +453,8 @@ fn emitter(s: &mut String, light: &Light, obj: &Path) -> std::result::Result<(),
                 rgb(pi * light.colour / area)
             );
         }
-        LightShape::Mesh(ref mesh) => {
-            write_emitter_obj(mesh, obj).map_err(|e| e.to_string())?;
-            let name = obj.file_name().unwrap_or_default().to_string_lossy();
-            let _ = writeln!(
-                s,
-                "  <shape type=\"obj\"><string name=\"filename\" value=\"{name}\"/>\
-                 <boolean name=\"face_normals\" value=\"true\"/>{black}<emitter type=\"area\">\
-                 <rgb name=\"radiance\" value=\"{}\"/></emitter></shape>",
-                rgb(pi * light.colour / mesh.area)
-            );
-        }
+        // An emissive surface's light: written with the surface ([`surface_emitter`]).
+        LightShape::Mesh(_) => {}
         LightShape::Sphere { centre, radius } => {
             let _ = writeln!(
                 s,
@@ -521,20 +508,6 @@ impl Obj<'_> {
         }
         write_text(path, &s)
     }
-}
-
-/// Writes a mesh light's triangles as an OBJ, each counter-clockwise from its emitting side.
-fn write_emitter_obj(mesh: &crate::light::EmitterMesh, path: &Path) -> Result<()> {
-    let mut s = String::new();
-    for t in &mesh.triangles {
-        for p in t.corners {
-            let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
-        }
-    }
-    for k in 0..mesh.triangles.len() {
-        let _ = writeln!(s, "f {} {} {}", 3 * k + 1, 3 * k + 2, 3 * k + 3);
-    }
-    write_text(path, &s)
 }
 
 /// Writes one of the export's mesh files.

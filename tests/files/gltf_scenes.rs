@@ -2,7 +2,7 @@
 //! lights in Blender's units, emissive surfaces as lights, and what caustic cannot honour
 //! listed rather than dropped.
 
-use crate::common::{GltfFile, out_dir, render_films_with, render_scene, whitted};
+use crate::common::{GltfFile, caustic, out_dir, render_films_with, render_scene, whitted};
 use caustic::camera::Camera;
 use caustic::desc::{LightShape, MaterialDesc};
 use caustic::error::Loc;
@@ -155,14 +155,10 @@ fn camera_and_point_light_follow_the_file_in_blender_units() {
     );
 }
 
-/// An emissive quad is an area light: a floor lit by a glTF panel of radiance L renders as
-/// the one lit by `gr.area_light` of the same square and `rgb = L·A/π`, and the camera sees
-/// the panel's radiance.
-#[test]
-fn an_emissive_quad_lights_as_the_area_light_of_its_shape() {
-    let dir = out_dir("gltf-scene-emitter");
+/// Writes `dir/panel.glb`: a 0.5 × 0.5 quad at the origin in the plane y = 0, counter-clockwise
+/// seen from below (it faces down), as mesh 0, with `rest` of the JSON (nodes, materials, meshes).
+fn write_panel(dir: &Path, rest: &str) {
     let mut f = GltfFile::default();
-    // A 0.5 × 0.5 panel at the origin, counter-clockwise seen from below (it faces down).
     f.floats(
         "VEC3",
         &[
@@ -170,15 +166,29 @@ fn an_emissive_quad_lights_as_the_area_light_of_its_shape() {
         ],
     );
     f.indices(5125, &[0, 1, 2, 0, 2, 3]);
+    f.write_glb(dir, "panel", rest);
+}
+
+/// An emissive quad is an area light: a floor lit by a glTF panel of radiance L renders as
+/// the one lit by `gr.area_light` of the same square and `rgb = L·A/π`, and the camera sees
+/// the panel's radiance.
+#[test]
+fn an_emissive_quad_lights_as_the_area_light_of_its_shape() {
+    let dir = out_dir("gltf-scene-emitter");
     let rest = r#""nodes":[{"mesh":0}],
         "extensionsUsed":["KHR_materials_emissive_strength"],
         "materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0,0,0,1]},
           "emissiveFactor":[1,0.8,0.6],
           "extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":8}}}],
         "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}]"#;
-    f.write_glb(&dir, "panel", rest);
+    write_panel(&dir, rest);
     let data = caustic::io::gltf::load_gltf(&dir.join("panel.glb")).unwrap();
-    assert!(data.triangles.is_empty(), "an emitter is not geometry");
+    // A surface as well as a light: it hides what is behind it and reflects by its material.
+    assert_eq!(
+        data.triangles.len(),
+        2,
+        "an emissive surface is still geometry"
+    );
     assert_eq!(data.emitters.len(), 1);
     assert_eq!(data.emitters[0].radiance, vec3(8.0, 6.4, 4.8));
     let render = |lamp: &str| {
@@ -225,6 +235,89 @@ fn an_emissive_quad_lights_as_the_area_light_of_its_shape() {
         ((a - b) / b).abs().max_element() < 0.01,
         "floor under the glTF panel {a} against the area light {b}"
     );
+}
+
+/// An emissive surface is a surface too (glTF's and Mitsuba's model): a black emissive panel
+/// between a point light and the floor shades the floor under it, which then receives the
+/// panel's light alone, as if the point light were off (within 0.5%). Before, the panel was a
+/// light only and the point light shone through it.
+#[test]
+fn an_emissive_panel_casts_the_shadow_of_the_surface_it_is() {
+    let dir = out_dir("gltf-scene-emitter-shadow");
+    let rest = r#""nodes":[{"mesh":0}],
+        "materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0,0,0,1],"metallicFactor":0},
+          "emissiveFactor":[1,1,1]}],
+        "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}]"#;
+    write_panel(&dir, rest);
+    let render = |point: f32| {
+        // The camera sits under the panel looking straight down at the floor's middle, all of
+        // it in the panel's shadow from the point light above.
+        let script = format!(
+            r#"
+            matte = gr.material({{0.6, 0.6, 0.6}}, {{0, 0, 0}}, 0)
+            root = gr.node('root')
+            floor = gr.cube('floor'); floor:set_material(matte)
+            floor:scale(40, 0.1, 40); floor:translate(-20, -1.1, -20); root:add_child(floor)
+            panel = gr.mesh('panel', 'panel.glb'); panel:translate(0, 0.5, 0); root:add_child(panel)
+            gr.render(root, 'x.png', 8, 8, {{0, 0, 0}}, {{0, -1, 0}}, {{0, 0, -1}}, 20,
+                      {{0, 0, 0}}, {{gr.light({{0, 2, 0}}, {{{point}, {point}, {point}}}, {{0, 0, 1}})}})
+        "#
+        );
+        let mut settings = whitted();
+        settings.light_samples = 64;
+        let films = render_films_with(script.as_bytes(), "shadow.lua", &dir, &settings).unwrap();
+        let film = &films.into_iter().next().unwrap().2;
+        film.pixels.iter().map(|p| p.x).sum::<f32>() / film.pixels.len() as f32
+    };
+    let (lit, panel_only) = (render(5.0), render(0.0));
+    // The point light alone would add kd·I·cos/d² = 0.6·5/9 = 0.33 under it.
+    assert!(
+        panel_only > 0.01,
+        "the panel lights the floor: {panel_only}"
+    );
+    assert!(
+        (lit / panel_only - 1.0).abs() < 0.005,
+        "under the panel with the point light on {lit}, off {panel_only}"
+    );
+}
+
+/// `export-mitsuba` writes an emissive surface as Mitsuba has one: its shape, with its BSDF
+/// and an `area` emitter of its radiance (`emissiveFactor × emissiveStrength`), once; no
+/// second, coincident light shape over the same triangles.
+#[test]
+fn an_emissive_surface_exports_as_one_emitting_shape() {
+    let dir = out_dir("gltf-scene-emitter-export");
+    let rest = r#""nodes":[{"mesh":0}],
+        "extensionsUsed":["KHR_materials_emissive_strength"],
+        "materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0,0,0,1],"metallicFactor":0,
+          "roughnessFactor":1},
+          "emissiveFactor":[1,0.5,0.25],
+          "extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":4}}}],
+        "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}]"#;
+    write_panel(&dir, rest);
+    let out = caustic()
+        .current_dir(&dir)
+        .args(["export-mitsuba", "panel.glb", "-o", "panel.xml"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let xml = std::fs::read_to_string(dir.join("panel.xml")).unwrap();
+    assert_eq!(xml.matches("<emitter type=\"area\">").count(), 1, "{xml}");
+    let shape = xml
+        .lines()
+        .find(|l| l.contains("<emitter type=\"area\">"))
+        .unwrap();
+    assert!(
+        shape.contains("<rgb name=\"radiance\" value=\"4, 2, 1\"/>")
+            && shape.contains("panel_mesh0_material")
+            && shape.contains("roughconductor"),
+        "the panel's shape, BSDF and radiance: {shape}"
+    );
+    assert!(!xml.contains("_light"), "no separate light shape: {xml}");
 }
 
 /// What caustic cannot honour is listed, one line each, and a file without any light is lit

@@ -182,6 +182,7 @@ fn materials_map_metal_roughness_transmission_ior_and_texture() {
         absorption: glam::Vec3::ZERO,
         roughness: 0.0,
         texture: None,
+        emission: Vec3::ZERO,
     };
     assert_eq!(*metal, expected);
     // The glTF default material (white, metallic 1, roughness 1) is a white conductor of
@@ -419,6 +420,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         absorption: glam::Vec3::ZERO,
         roughness: 0.0,
         texture: Some(dir.join("tex/red.png")),
+        emission: Vec3::ZERO,
     };
     let glass = MeshMaterial {
         name: "glass".to_owned(),
@@ -430,6 +432,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         absorption: glam::Vec3::ZERO,
         roughness: 0.0,
         texture: None,
+        emission: Vec3::ZERO,
     };
     let grey = MeshMaterial {
         name: "(no usemtl)".to_owned(),
@@ -441,6 +444,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         absorption: glam::Vec3::ZERO,
         roughness: 0.0,
         texture: None,
+        emission: Vec3::ZERO,
     };
     assert_eq!(mesh.materials, [red, glass, grey]);
 

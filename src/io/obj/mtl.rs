@@ -183,6 +183,7 @@ pub(super) fn mesh_material(m: &tobj::Material) -> MeshMaterial {
         absorption: Vec3::ZERO,
         roughness: 0.0,
         texture: m.diffuse_texture.as_ref().map(PathBuf::from),
+        emission: Vec3::ZERO,
     }
 }
 
@@ -198,6 +199,7 @@ pub(super) fn default_material() -> MeshMaterial {
         absorption: Vec3::ZERO,
         roughness: 0.0,
         texture: None,
+        emission: Vec3::ZERO,
     }
 }
 

@@ -13,7 +13,8 @@ With --equal-time, Mitsuba also renders at caustic's CPU time and both errors ar
 
 With --gltf, the scenes are glTF files rendered as whole scenes instead (by default
 scenes/gltf/{copper_bowl,frosted_sphere,glass_of_water}.glb, or --scenes), at --scale 0.25
-(200x150) for both the export and caustic's render, with their regions from
+(200x150) for both the export and caustic's render (with the full-size render's photon counts,
+--photon-scale 16, unless --caustic-args sets them), with their regions from
 scenes/validate/gltf_regions.txt (lines `SCENE REGION x0 y0 x1 y1`), and the table goes to
 docs/validation/gltf.md (a section to merge into docs/validation.md, which is left alone):
 
@@ -63,15 +64,19 @@ GLTF_REGIONS = os.path.join(ROOT, "scenes", "validate", "gltf_regions.txt")
 
 
 def sidecar_regions(path, name):
-    """The regions of scene NAME in a sidecar file of lines `SCENE REGION x0 y0 x1 y1` (fractions
-    of the image; `#` starts a comment), in file order."""
+    """The regions of scene NAME in a sidecar file of lines `SCENE REGION x0 y0 x1 y1 [ptracer]`
+    (fractions of the image; `#` starts a comment), in file order. `ptracer` marks a region of
+    diffuse surfaces seen directly that a point light reaches through glass: a path tracer
+    cannot sample that light (it would have to hit the point), so the region is compared with
+    Mitsuba's particle tracer, which traces from the lights and is complete on such surfaces."""
     out = []
     for line in open(path):
         f = line.split("#", 1)[0].split()
-        if len(f) == 6 and f[0] == name:
-            out.append((f[1], tuple(float(v) for v in f[2:])))
-        elif f and len(f) != 6:
-            sys.exit(f"validate: {path}: expected SCENE REGION x0 y0 x1 y1, got {line.strip()!r}")
+        if len(f) in (6, 7) and f[0] == name and (len(f) == 6 or f[6] == "ptracer"):
+            out.append((f[1] + (" (ptracer)" if len(f) == 7 else ""),
+                        tuple(float(v) for v in f[2:6])))
+        elif f and (len(f) not in (6, 7) or (len(f) == 7 and f[6] != "ptracer")):
+            sys.exit(f"validate: {path}: expected SCENE REGION x0 y0 x1 y1 [ptracer], got {line.strip()!r}")
     return out
 
 
@@ -203,6 +208,15 @@ def main():
         scenes = sorted(glob.glob(a.scenes)) if a.scenes else GLTF_SCENES
         a.regions = a.regions or GLTF_REGIONS
         a.scale = 0.25 if a.scale is None else a.scale
+        # The scenes render at a quarter of their size only so that 4096-spp references take
+        # minutes; the photon counts are those of the full-size render a user gets at the
+        # defaults (a --scale preview traces fewer, a preview's convenience, not what is
+        # validated): a photon map's bias is set by the photons' density on the surfaces, which
+        # the image size does not change.
+        if "--photon-scale" not in a.caustic_args and "--photons" not in a.caustic_args:
+            a.caustic_args = (a.caustic_args + f" --photon-scale {1 / (a.scale * a.scale):g}").strip()
+            if a.label == "caustic defaults":
+                a.label = "caustic defaults with the full-size render's photon counts"
         a.out = a.out or os.path.join(PICS, "gltf.md")
     else:
         scenes = sorted(glob.glob(a.scenes or os.path.join(ROOT, "scenes", "validate", "*.lua")))
@@ -231,6 +245,16 @@ def main():
         info = json.load(open(side))
         r1, r2 = load(ref), load(second)
         own = sidecar_regions(a.regions, name) if a.regions else regions(scene)
+        particle = None
+        if any(reg.endswith("(ptracer)") for reg, _ in own):
+            pt_xml = os.path.join(tmp, name + ".ptracer.xml")
+            text = open(xml).read().replace('<integrator type="path">', '<integrator type="ptracer">')
+            open(pt_xml, "w").write(text)
+            pt1, pt2 = (os.path.join(REFS, name + s) for s in (".ptracer.exr", ".ptracer.second.exr"))
+            if a.render_refs or not os.path.exists(pt1) or not os.path.exists(pt2):
+                render_mitsuba(pt_xml, a.ref_spp, 1, pt1)
+                render_mitsuba(pt_xml, a.ref_spp, 2, pt2)
+            particle = (load(pt1), load(pt2))
         regs = [("image", (0, 0, 1, 1))] + own
         out = os.path.join(tmp, name + ".exr")
         args = a.caustic_args.split() + scale_args
@@ -243,7 +267,8 @@ def main():
             c2 = load(out2)
         picture(c, 0.5 * (r1 + r2), os.path.join(PICS, name + ".png"))
         for reg, box in regs:
-            rows.append((name, reg, metrics(c, r1, r2, box, c2), ref_noise(r1, r2, box)))
+            q1, q2 = particle if reg.endswith("(ptracer)") else (r1, r2)
+            rows.append((name, reg, metrics(c, q1, q2, box, c2), ref_noise(q1, q2, box)))
         if a.equal_time:
             spp = max(1, int(round(info["spp"] * cpu / max(info["cpu_s"], 1e-9))))
             eq = os.path.join(tmp, name + "_eq.exr")

@@ -1,5 +1,6 @@
 //! Image textures: colour maps that replace `kd`, and bump maps (RGB normal maps or grey height
-//! maps) that bend the shading normal.
+//! maps) that bend the shading normal; the decoding of image files and of images embedded in
+//! mesh files, whose size the decoder bounds.
 //!
 //! ```lua
 //! brick = gr.material({0.1, 0.7, 0.1}, {0, 0, 0}, 0, 0, 0, 0, 'Assets/brick.png', 'Assets/brick_norm.png')
@@ -9,17 +10,26 @@
 //! - `(u, v)` in [0, 1]² with `v = 0` at the image's top row (the original project's convention);
 //!   coordinates outside wrap around (repeat).
 //! - Lookups are bilinear between the four nearest texel centres.
-//! - Texel bytes are used as linear values `c/255`, exactly as the course uses colours (no gamma).
+//! - Texel bytes are used as linear values `c/255`, exactly as the course uses colours (no gamma)
+//!   ([`Texture::colour`]); glTF's colour textures are sRGB-encoded and read through the sRGB
+//!   curve instead ([`Texture::srgb_colour`]), each texel decoded before the filter blends them.
 //! - A normal map stores a tangent-space normal: red along +u, green along "up" in the image
 //!   (towards decreasing v), blue along the surface normal, each byte decoded as `(c − 128)/127`
 //!   so that (128, 128, 255) is exactly the unperturbed normal.
 //! - A bump image whose texels are all grey is a height map instead: its slopes (central
 //!   differences, one texel apart) tilt the normal, a rise of 1/8 of full scale per texel giving
 //!   45°.
+//! - A glTF normal texture ([`BumpMap::Scaled`]) decodes a byte as `2c/255 − 1`, as glTF
+//!   defines it, with x and y multiplied by the texture's `scale`.
+//! - Decoding ([`Texture::load`], [`Texture::decode`]) keeps the image crate's default limits: it
+//!   refuses an image whose decoded pixels would take more than 512 MiB. The caller charges the
+//!   memory budget from the header's size first ([`header_size`]).
 
 use crate::error::{Error, Loc, Result};
 use glam::{Vec2, Vec3A};
+use std::io::{BufRead, Seek};
 use std::path::Path;
+use std::sync::{Arc, LazyLock};
 
 /// An 8-bit RGB image kept in memory for lookups.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,6 +47,8 @@ pub enum BumpMap {
     Normal(Texture),
     /// A grey height map.
     Height(Texture),
+    /// A glTF normal texture: tangent-space normals coded `2c/255 − 1`, x and y times `scale`.
+    Scaled { texture: Arc<Texture>, scale: f32 },
 }
 
 /// Slope multiplier of height maps: a full-scale rise over 8 texels tilts the normal by 45°.
@@ -57,17 +69,31 @@ impl Texture {
                 )
             })?
             .to_rgb8();
-        if img.width() == 0 || img.height() == 0 {
-            return Err(Error::at(
-                loc,
-                format!("texture {} is empty", path.display()),
-            ));
-        }
-        Ok(Texture::from_rgb(
-            img.width(),
-            img.height(),
-            img.pixels().map(|p| p.0).collect(),
-        ))
+        Texture::from_image(img)
+            .ok_or_else(|| Error::at(loc, format!("texture {} is empty", path.display())))
+    }
+
+    /// Decodes encoded PNG or JPEG `bytes` (an image embedded in a mesh file); the error says
+    /// what is wrong, for the caller to prefix with the file and the image.
+    pub fn decode(bytes: &[u8]) -> std::result::Result<Texture, String> {
+        let img = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| format!("cannot read: {e}"))?
+            .decode()
+            .map_err(|e| format!("cannot decode: {e}"))?
+            .to_rgb8();
+        Texture::from_image(img).ok_or_else(|| "the image is empty".to_owned())
+    }
+
+    /// Returns the texture of a decoded RGB image, or `None` when it has no pixels.
+    fn from_image(img: image::RgbImage) -> Option<Texture> {
+        (img.width() > 0 && img.height() > 0).then(|| {
+            Texture::from_rgb(
+                img.width(),
+                img.height(),
+                img.pixels().map(|p| p.0).collect(),
+            )
+        })
     }
 
     /// Returns a texture from row-major RGB texels (`width × height` of them, both non-zero).
@@ -92,6 +118,13 @@ impl Texture {
     /// made this function 8% of the final scene's photon-pass samples. A huge `uv`, whose
     /// floor saturates at `i64::MAX`, no longer overflows adding one.
     fn bilinear_bytes(&self, uv: Vec2) -> Vec3A {
+        self.bilinear(uv, |[r, g, b]| Vec3A::new(r as f32, g as f32, b as f32))
+    }
+
+    /// Returns the bilinear blend at `uv` of the four nearest texels, each read by `texel`
+    /// (see [`Texture::bilinear_bytes`] for the wrapping).
+    #[inline]
+    fn bilinear(&self, uv: Vec2, texel: impl Fn([u8; 3]) -> Vec3A) -> Vec3A {
         let x = uv.x * self.width as f32 - 0.5;
         let y = uv.y * self.height as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
@@ -100,10 +133,8 @@ impl Texture {
         let (x0, y0) = ((x0 as i64).rem_euclid(w), (y0 as i64).rem_euclid(h));
         let next = |c: i64, n: i64| if c + 1 == n { 0 } else { c + 1 };
         let (x1, y1) = (next(x0, w), next(y0, h));
-        let texel = |x: i64, y: i64| {
-            let [r, g, b] = self.texels[y as usize * self.width as usize + x as usize];
-            Vec3A::new(r as f32, g as f32, b as f32)
-        };
+        let texel =
+            |x: i64, y: i64| texel(self.texels[y as usize * self.width as usize + x as usize]);
         let top = texel(x0, y0) * (1.0 - fx) + texel(x1, y0) * fx;
         let bottom = texel(x0, y1) * (1.0 - fx) + texel(x1, y1) * fx;
         top * (1.0 - fy) + bottom * fy
@@ -112,6 +143,26 @@ impl Texture {
     /// Returns the colour at `uv` in [0, 1] per channel.
     pub fn colour(&self, uv: Vec2) -> Vec3A {
         self.bilinear_bytes(uv) / 255.0
+    }
+
+    /// Returns the colour at `uv` of an sRGB-encoded image, decoded to linear values in
+    /// `[0, 1]`: each texel through the sRGB curve ([`srgb_to_linear`]), then the filter.
+    pub fn srgb_colour(&self, uv: Vec2) -> Vec3A {
+        let table = &*SRGB_TABLE;
+        self.bilinear(uv, |[r, g, b]| {
+            Vec3A::new(table[r as usize], table[g as usize], table[b as usize])
+        })
+    }
+
+    /// Returns the mean over the texels of an sRGB-encoded image, decoded to linear values.
+    pub fn srgb_mean(&self) -> Vec3A {
+        let table = &*SRGB_TABLE;
+        let sum: glam::DVec3 = self
+            .texels
+            .iter()
+            .map(|t| glam::DVec3::from_array(t.map(|c| f64::from(table[c as usize]))))
+            .sum();
+        (sum / self.texels.len() as f64).as_vec3a()
     }
 
     /// Returns true when every texel is grey (R = G = B).
@@ -138,6 +189,10 @@ impl BumpMap {
                     .clamp(Vec3A::splat(-1.0), Vec3A::ONE);
                 c.normalize_or(Vec3A::Z)
             }
+            BumpMap::Scaled { texture, scale } => {
+                let c = texture.bilinear_bytes(uv) * (2.0 / 255.0) - Vec3A::ONE;
+                (c * Vec3A::new(*scale, *scale, 1.0)).normalize_or(Vec3A::Z)
+            }
             BumpMap::Height(t) => {
                 let (du, dv) = (1.0 / t.width as f32, 1.0 / t.height as f32);
                 let h = |u: f32, v: f32| t.bilinear_bytes(Vec2::new(u, v)).x / 255.0;
@@ -148,6 +203,30 @@ impl BumpMap {
             }
         }
     }
+}
+
+/// Returns the linear value of an sRGB-encoded one in `[0, 1]` (IEC 61966-2-1).
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.040_45 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The linear value of each sRGB byte.
+static SRGB_TABLE: LazyLock<[f32; 256]> =
+    LazyLock::new(|| std::array::from_fn(|c| srgb_to_linear(c as f32 / 255.0)));
+
+/// Returns the width and height an encoded image's header gives, and the bytes decoding it
+/// takes: its decoded pixels and the RGB copy kept; `None` when the header cannot be read
+/// (decoding then fails with the reason).
+pub fn header_size<R: BufRead + Seek>(reader: image::ImageReader<R>) -> Option<(u32, u32, u64)> {
+    use image::ImageDecoder;
+    let decoder = reader.with_guessed_format().ok()?.into_decoder().ok()?;
+    let (w, h) = decoder.dimensions();
+    let rgb = u64::from(w) * u64::from(h) * 3;
+    Some((w, h, decoder.total_bytes().saturating_add(rgb)))
 }
 
 /// Returns `n` bent by the tangent-space normal `ts`, in the frame built from the surface's
@@ -270,6 +349,37 @@ mod tests {
         assert!(matches!(ramp, BumpMap::Height(_)));
         let n = ramp.tangent_normal(Vec2::new(0.5, 0.5));
         assert!(n.x < -0.5 && n.y.abs() < 1e-6, "{n}");
+    }
+
+    /// sRGB bytes decode by the standard curve before the filter blends them, and their mean
+    /// is the linear mean; a glTF normal map decodes `2c/255 − 1` and scales x and y.
+    #[test]
+    fn srgb_colours_and_scaled_normal_maps_decode_as_gltf_defines() {
+        assert!((srgb_to_linear(188.0 / 255.0) - 0.502_886).abs() < 1e-6);
+        assert_eq!(srgb_to_linear(0.0), 0.0);
+        assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-6);
+        let t = Texture::from_rgb(2, 1, vec![[255, 188, 0], [0, 188, 0]]);
+        // Half-way between the texels: the mean of the decoded values, not the decoded mean.
+        let mid = t.srgb_colour(Vec2::new(0.5, 0.5));
+        assert!(
+            (mid - Vec3A::new(0.5, 0.502_886, 0.0)).length() < 1e-6,
+            "{mid}"
+        );
+        assert!((t.srgb_mean() - mid).length() < 1e-6);
+        let map = |scale: f32| BumpMap::Scaled {
+            texture: Arc::new(Texture::from_rgb(1, 1, vec![[255, 0, 255]])),
+            scale,
+        };
+        let n = map(1.0).tangent_normal(Vec2::ZERO);
+        assert!(
+            (n - Vec3A::new(1.0, -1.0, 1.0).normalize()).length() < 1e-6,
+            "{n}"
+        );
+        let n = map(0.5).tangent_normal(Vec2::ZERO);
+        assert!(
+            (n - Vec3A::new(0.5, -0.5, 1.0).normalize()).length() < 1e-6,
+            "{n}"
+        );
     }
 
     #[test]

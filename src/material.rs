@@ -14,17 +14,23 @@
 //!   [`Material::absorption`] `σ = −ln(colour)/distance`;
 //! - `s`: Perlin-noise bending of the shading normal ([`perlin`]);
 //! - `bump`: an RGB tangent-space normal map or a grey height map ([`texture::BumpMap`]).
+//!
+//! A glTF mesh's material may carry textures of glTF's own model instead ([`pbr`]): base colour,
+//! metallic and roughness looked up per hit, which give `kd`, `ks` and the roughness there
+//! ([`Material::reflectance`]); its normal texture is a `bump` map.
 
 pub mod bsdf;
 pub mod fresnel;
 pub mod medium;
 pub mod microfacet;
+pub mod pbr;
 pub mod perlin;
 pub mod texture;
 
 use crate::desc::MaterialDesc;
 use crate::geometry::mesh::MeshMaterial;
 use glam::{Vec2, Vec3A};
+use pbr::{MetalRough, Reflectance};
 use std::sync::Arc;
 use texture::{BumpMap, Texture};
 
@@ -66,6 +72,10 @@ pub struct Material {
     pub perlin_scale: f32,
     /// Colour map replacing `kd`.
     pub texture: Option<Arc<Texture>>,
+    /// glTF base colour and metallic-roughness textures: where present, `kd`, `ks` and
+    /// `roughness` at a hit come from them ([`MetalRough::at`]), and the fields above hold the
+    /// factors' values.
+    pub metal_rough: Option<Arc<MetalRough>>,
     /// Normal or height map.
     pub bump: Option<Arc<BumpMap>>,
     /// Radiance the surface emits (a glTF emissive material; zero otherwise). Its light is a
@@ -91,12 +101,14 @@ impl Material {
             roughness: d.roughness,
             perlin_scale: d.perlin_scale,
             texture,
+            metal_rough: None,
             bump,
             emission: Vec3A::ZERO,
         }
     }
 
-    /// Returns the material a mesh file defined, with its texture already loaded (or `None`).
+    /// Returns the material a mesh file defined, with its `kd` texture already loaded (or
+    /// `None`); the caller adds the glTF textures ([`Material::metal_rough`], `bump`).
     pub fn from_mesh(m: &MeshMaterial, texture: Option<Arc<Texture>>) -> Material {
         Material {
             kd: m.kd.into(),
@@ -108,6 +120,7 @@ impl Material {
             roughness: m.roughness,
             perlin_scale: 0.0,
             texture,
+            metal_rough: None,
             bump: None,
             emission: m.emission.into(),
         }
@@ -125,40 +138,53 @@ impl Material {
             roughness: 0.0,
             perlin_scale: 0.0,
             texture: None,
+            metal_rough: None,
             bump: None,
             emission: Vec3A::ZERO,
         }
     }
 
-    /// Returns true when the surface reflects like a mirror (any `ks` channel above 0).
+    /// Returns true when the surface can reflect like a mirror: any `ks` channel above 0, or
+    /// glTF textures, whose texels give `ks` at each hit.
     pub fn is_reflective(&self) -> bool {
-        self.ks.max_element() > 0.0
+        self.ks.max_element() > 0.0 || self.metal_rough.is_some()
     }
 
-    /// Returns the diffuse reflectance at texture coordinates `uv`.
-    pub fn diffuse(&self, uv: Vec2) -> Vec3A {
-        match &self.texture {
-            Some(t) => t.colour(uv),
-            None => self.kd,
+    /// Returns true when a texture varies the surface's colours ([`Material::reflectance`]).
+    pub fn is_textured(&self) -> bool {
+        self.texture.is_some() || self.metal_rough.is_some()
+    }
+
+    /// Returns `kd`, `ks` and the roughness at texture coordinates `uv`: the glTF textures'
+    /// ([`MetalRough::at`]), else the colour map in place of `kd`, else the material's own.
+    pub fn reflectance(&self, uv: Vec2) -> Reflectance {
+        if let Some(p) = &self.metal_rough {
+            return p.at(uv);
+        }
+        Reflectance {
+            kd: self.texture.as_ref().map_or(self.kd, |t| t.colour(uv)),
+            ks: self.ks,
+            roughness: self.roughness,
         }
     }
 
     /// Returns the weights of the material's three behaviours for a surface of diffuse colour
-    /// `kd`: Lambertian `(1 − t)·kd`, mirror `(1 − t)·ks` and dielectric `t` (Fresnel then splits
-    /// the last into reflection and refraction). Eye rays weight their terms by these, and photons
-    /// choose among them with these probabilities.
-    pub fn lobes(&self, kd: Vec3A) -> Lobes {
+    /// `kd` and mirror colour `ks` (the material's, or its textures' at a hit): Lambertian
+    /// `(1 − t)·kd`, mirror `(1 − t)·ks` and dielectric `t` (Fresnel then splits the last into
+    /// reflection and refraction). Eye rays weight their terms by these, and photons choose
+    /// among them with these probabilities.
+    pub fn lobes(&self, kd: Vec3A, ks: Vec3A) -> Lobes {
         let opaque = 1.0 - self.transparency;
         Lobes {
             diffuse: kd * opaque,
-            mirror: self.ks * opaque,
+            mirror: ks * opaque,
             dielectric: self.transparency,
         }
     }
 
     /// Returns true when the surface can scatter light specularly (a caustic caster).
     pub fn is_specular(&self) -> bool {
-        self.transparency > 0.0 || (self.transparency < 1.0 && self.ks.max_element() > 0.0)
+        self.transparency > 0.0 || (self.transparency < 1.0 && self.is_reflective())
     }
 
     /// Returns the shading normal at a hit: `ns` bent by the bump map (in the frame of `dpdu`)

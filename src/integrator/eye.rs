@@ -418,16 +418,17 @@ impl Tracer<'_> {
                 }
             }
         }
-        if !mat.is_reflective() {
+        // The mirror colour at this hit: the material's, or its glTF textures'.
+        if bsdf.ks.max_element() <= 0.0 {
             return colour;
         }
         let splits = state.splits(self.scene.features.specular_depth);
         // Beyond the splitting depth a mirror brighter than white (ks above 1) is followed at
         // ks over its largest channel: a closed box of such mirrors keeps the path's weight
         // over its thousand bounces instead of multiplying it by ks at each.
-        let ks = match mat.ks.max_element() {
-            largest if !splits && largest > 1.0 => mat.ks / largest,
-            _ => mat.ks,
+        let ks = match bsdf.ks.max_element() {
+            largest if !splits && largest > 1.0 => bsdf.ks / largest,
+            _ => bsdf.ks,
         };
         let weight = ks.max_element();
         let (q, gain, share) = if splits {
@@ -441,19 +442,14 @@ impl Tracer<'_> {
             (state.roulette(weight, rng, counts), 1.0, state.share)
         };
         // A rough material's mirror lobe is a rough conductor: one direction drawn from it.
-        let drawn = q.and_then(|q| {
-            Some((
-                q,
-                bsdf.mirror_sample(crate::material::bsdf::glossy_numbers(mat, rng))?,
-            ))
-        });
+        let drawn = q.and_then(|q| Some((q, bsdf.mirror_sample(bsdf.glossy_numbers(rng))?)));
         if let Some((q, (wr, glossy))) = drawn {
             let ray = Ray::new(offset_ray_origin(p, bsdf.ng, wr), wr);
             counts.secondary += 1;
             let mut child = state.child(weight * glossy / q, state.media).shared(share);
             // A Phong highlight (or a rough lobe, which `direct` evaluates for every light)
             // already reflects the lights; the mirror image would count them twice.
-            child.sees_emitters &= mat.shininess <= 0.0 && mat.roughness <= 0.0;
+            child.sees_emitters &= mat.shininess <= 0.0 && bsdf.roughness <= 0.0;
             colour += gain * ks / q * glossy * self.radiance(&ray, child, rng, counts);
         }
         colour
@@ -469,10 +465,9 @@ impl Tracer<'_> {
         counts: &mut RayCounts,
     ) -> Vec3A {
         let (p, ng, state) = (at.p(), at.bsdf().ng, at.state);
-        let mat = at.bsdf().material;
         let split = at
             .bsdf()
-            .dielectric(crossing, crate::material::bsdf::glossy_numbers(mat, rng));
+            .dielectric(crossing, at.bsdf().glossy_numbers(rng));
         let f = split.f;
         if !state.splits(self.scene.features.specular_depth) {
             return self.dielectric_lobe(at, crossing, &split, rng, counts);

@@ -353,7 +353,7 @@ pub fn plan_with(scene: &Scene, mode: GiMode, overrides: &Overrides, gather: boo
     let textures = d.material_effect(
         Effect::Textures,
         &materials,
-        |m| m.texture.is_some(),
+        |m| m.is_textured(),
         "no material has a texture: the general kernel looks for one and finds none",
     );
     let normal_maps = d.material_effect(

@@ -17,8 +17,10 @@
 //! - [`Bsdf::n`] and [`Bsdf::ng`] are the shading and geometric normals turned to `wo`'s side, so
 //!   both sides of a surface shade alike; [`Bsdf::front`] says whether `wo` is on the side the
 //!   shape's normal points to (outside a solid).
-//! - Building the BSDF applies what bends the surface: the texture replaces `kd`, and the bump map
-//!   and Perlin noise bend the shading normal ([`Material::shading_normal`]).
+//! - Building the BSDF applies what varies over the surface: the texture replaces `kd` (glTF's
+//!   textures give `kd`, `ks` and the roughness, [`Material::reflectance`]), and the bump map
+//!   and Perlin noise bend the shading normal ([`Material::shading_normal`]). Everything after
+//!   reads [`Bsdf::kd`], [`Bsdf::ks`] and [`Bsdf::roughness`], never the material's fields.
 //! - Mirror and dielectric lobes are deltas: they report directions, not densities.
 //!
 //! # Sampling
@@ -43,6 +45,7 @@
 
 use super::medium::{Crossing, MediumStack};
 use super::microfacet::{Frame, Ggx, RoughConductor, RoughDielectric};
+use super::pbr::Reflectance;
 use super::{Lobes, Material, fresnel};
 use crate::geometry::hit::SurfaceHit;
 use crate::range::MAX_ALBEDO;
@@ -58,6 +61,12 @@ pub struct Bsdf<'a> {
     pub material_id: u32,
     /// Diffuse reflectance at the hit (the texture's colour, or `kd`), before the `1 − t` weight.
     pub kd: Vec3A,
+    /// Mirror colour at the hit (the material's `ks`, or its glTF textures'), before the
+    /// `1 − t` weight.
+    pub ks: Vec3A,
+    /// GGX roughness at the hit (the material's, or its glTF textures'): 0 is a smooth mirror
+    /// and a smooth interface.
+    pub roughness: f32,
     /// Unit direction towards where the ray came from.
     pub wo: Vec3A,
     /// Whether `wo` lies on the side the shape's geometric normal points to.
@@ -151,10 +160,14 @@ impl<'a> Bsdf<'a> {
         surf: &SurfaceHit,
         wo: Vec3A,
     ) -> Bsdf<'a> {
-        let kd = if TEX {
-            material.diffuse(surf.uv)
+        let Reflectance { kd, ks, roughness } = if TEX {
+            material.reflectance(surf.uv)
         } else {
-            material.kd
+            Reflectance {
+                kd: material.kd,
+                ks: material.ks,
+                roughness: material.roughness,
+            }
         };
         let bends = (BUMP && material.bump.is_some()) || (NOISE && material.perlin_scale > 0.0);
         let ns = if bends {
@@ -173,6 +186,8 @@ impl<'a> Bsdf<'a> {
             material,
             material_id: surf.material,
             kd,
+            ks,
+            roughness,
             wo,
             front,
             n,
@@ -183,7 +198,7 @@ impl<'a> Bsdf<'a> {
 
     /// Returns the weights of the material's lobes at this hit.
     pub fn lobes(&self) -> Lobes {
-        self.material.lobes(self.kd)
+        self.material.lobes(self.kd, self.ks)
     }
 
     /// Returns the crossing of this surface for a path in `media`, or `None` for an opaque
@@ -224,11 +239,11 @@ impl<'a> Bsdf<'a> {
             // The rough conductor's BRDF in the course's units: a light of colour `rgb` has
             // intensity `π·rgb`, so the term is `π·f·cos θ` (as `kd·cos θ` is `π·(kd/π)·cos θ`).
             let f = lobe.eval(frame.to_local(self.wo), frame.to_local(wi));
-            return self.kd * cos + m.ks * (std::f32::consts::PI * f * cos);
+            return self.kd * cos + self.ks * (std::f32::consts::PI * f * cos);
         }
         let rv = fresnel::reflect(wi, self.n).dot(self.wo);
         let spec = if rv > 0.0 && m.shininess > 0.0 {
-            m.ks * rv.powf(m.shininess)
+            self.ks * rv.powf(m.shininess)
         } else {
             Vec3A::ZERO
         };
@@ -243,10 +258,10 @@ impl<'a> Bsdf<'a> {
     /// Returns the rough conductor that replaces the mirror lobe and the Phong highlight of a
     /// material with roughness, with its frame around the shading normal; `None` when smooth.
     pub fn glossy(&self) -> Option<(RoughConductor, Frame)> {
-        (self.material.roughness > 0.0).then(|| {
+        (self.roughness > 0.0).then(|| {
             (
                 RoughConductor {
-                    ggx: Ggx::from_roughness(self.material.roughness),
+                    ggx: Ggx::from_roughness(self.roughness),
                 },
                 Frame::around(self.n),
             )
@@ -273,7 +288,7 @@ impl<'a> Bsdf<'a> {
     /// a smooth one ignores `u`.
     pub fn dielectric(&self, crossing: &Crossing, u: (f32, f32)) -> Split {
         let eta = crossing.n_from / crossing.n_to;
-        if self.material.roughness > 0.0 {
+        if self.roughness > 0.0 {
             return self.rough_dielectric(eta, u);
         }
         let f = fresnel::dielectric(self.n.dot(self.wo).max(0.0), eta);
@@ -290,10 +305,10 @@ impl<'a> Bsdf<'a> {
     /// Returns the rough dielectric a rough material's interface is for a ray crossing by
     /// `crossing`, with its frame around the shading normal; `None` when the interface is smooth.
     pub fn rough_interface(&self, crossing: &Crossing) -> Option<(RoughDielectric, Frame)> {
-        (self.material.roughness > 0.0).then(|| {
+        (self.roughness > 0.0).then(|| {
             (
                 RoughDielectric {
-                    ggx: Ggx::from_roughness(self.material.roughness),
+                    ggx: Ggx::from_roughness(self.roughness),
                     eta: crossing.n_from / crossing.n_to,
                 },
                 Frame::around(self.n),
@@ -304,7 +319,7 @@ impl<'a> Bsdf<'a> {
     /// [`Bsdf::dielectric`] for a rough interface of relative index `eta`.
     fn rough_dielectric(&self, eta: f32, u: (f32, f32)) -> Split {
         let frame = Frame::around(self.n);
-        let ggx = Ggx::from_roughness(self.material.roughness);
+        let ggx = Ggx::from_roughness(self.roughness);
         let wo = frame.to_local(self.wo);
         let h = ggx.sample_visible(wo, u);
         let f = fresnel::dielectric(wo.dot(h).max(0.0), eta);
@@ -395,7 +410,7 @@ impl<'a> Bsdf<'a> {
     ) -> Option<Sample> {
         let p = choice.p;
         if xi < p[0] + p[1] {
-            let (dir, glossy) = self.mirror_sample(glossy_numbers(self.material, rng))?;
+            let (dir, glossy) = self.mirror_sample(self.glossy_numbers(rng))?;
             Some(Sample {
                 dir,
                 weight: lobes.mirror / choice.divisor[1] * glossy,
@@ -405,7 +420,7 @@ impl<'a> Bsdf<'a> {
             })
         } else if xi < p[0] + p[1] + p[2] {
             let c = crossing?;
-            if self.material.roughness > 0.0 {
+            if self.roughness > 0.0 {
                 return self.rough_dielectric_sample(c, lobes.dielectric / choice.divisor[2], rng);
             }
             let eta = c.n_from / c.n_to;
@@ -436,7 +451,7 @@ impl Bsdf<'_> {
     /// probability `F` or refraction, the chosen branch's weight `G2/G1` on top of `weight`
     /// (the lobe's over its probability).
     fn rough_dielectric_sample(&self, c: &Crossing, weight: f32, rng: &mut Rng) -> Option<Sample> {
-        let split = self.dielectric(c, glossy_numbers(self.material, rng));
+        let split = self.dielectric(c, self.glossy_numbers(rng));
         let refract = split.refracted.filter(|_| rng.next_f32() >= split.f);
         let (dir, w, media, radiance_scale) = match refract {
             Some(wt) => (
@@ -485,13 +500,16 @@ impl Choice {
     }
 }
 
-/// Returns the two numbers a rough mirror lobe draws its direction from; a smooth one draws
-/// none, so smooth scenes keep their random streams (and images) bit for bit.
-pub fn glossy_numbers(mat: &Material, rng: &mut Rng) -> (f32, f32) {
-    if mat.roughness > 0.0 {
-        (rng.next_f32(), rng.next_f32())
-    } else {
-        (0.0, 0.0)
+impl Bsdf<'_> {
+    /// Returns the two numbers a rough mirror lobe or interface draws its direction from; a
+    /// smooth one draws none, so smooth scenes keep their random streams (and images) bit for
+    /// bit.
+    pub fn glossy_numbers(&self, rng: &mut Rng) -> (f32, f32) {
+        if self.roughness > 0.0 {
+            (rng.next_f32(), rng.next_f32())
+        } else {
+            (0.0, 0.0)
+        }
     }
 }
 

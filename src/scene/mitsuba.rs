@@ -279,7 +279,7 @@ fn sensor(s: &mut String, r: &RenderDesc, (width, height): (u32, u32), spp: u32,
 
 /// Returns the Mitsuba BSDF of `m`, or why it is outside the subset.
 fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
-    if m.texture.is_some() || m.bump.is_some() || m.perlin_scale > 0.0 {
+    if m.is_textured() || m.bump.is_some() || m.perlin_scale > 0.0 {
         return Err("textures, normal maps and Perlin noise are outside the Mitsuba subset".into());
     }
     let rgb = |v: Vec3A| format!("{}, {}, {}", v.x, v.y, v.z);

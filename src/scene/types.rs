@@ -115,7 +115,7 @@ pub struct Scene {
 /// that is off is not reached at all, rather than skipped by a check at every ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Features {
-    /// Colour maps replace `kd`.
+    /// Colour maps replace `kd`, and glTF textures give `kd`, `ks` and the roughness.
     pub textures: bool,
     /// Bump and normal maps bend the shading normal.
     pub normal_maps: bool,
@@ -157,6 +157,7 @@ impl Scene {
         for m in &mut self.materials {
             if !features.textures {
                 m.texture = None;
+                m.metal_rough = None;
             }
             if !features.normal_maps {
                 m.bump = None;

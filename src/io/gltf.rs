@@ -15,7 +15,9 @@
 //! draws nothing and is skipped. Primitives in `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN`
 //! mode are read, indexed (`u8`, `u16`, `u32`) or not; `POINTS` and `LINE*` primitives are
 //! skipped. Surplus indices of a `TRIANGLES` primitive (a count not divisible by 3) are ignored.
-//! As in the OBJ loader, normals and uvs (`TEXCOORD_0`) are all-or-nothing over the merged mesh.
+//! As in the OBJ loader, normals are all-or-nothing over the merged mesh. Texture coordinates
+//! (`TEXCOORD_0`) are kept when any primitive has them, the vertices of those without at
+//! (0, 0): a textured box in an untextured room keeps its texture's layout.
 //! Positions, in the file and after the node transforms, must lie within the renderer's range
 //! ([`crate::range::MAX_COORDINATE`]); the error names the accessor or node and the vertex.
 //! Sparse accessors, accessors without a buffer view, node cycles and nodes with two parents are
@@ -497,7 +499,7 @@ fn merge(
     path: &Path,
 ) -> Result<MeshData, String> {
     let has_normals = parts.iter().all(|p| p.normals.is_some());
-    let has_uvs = parts.iter().all(|p| p.uvs.is_some());
+    let has_uvs = parts.iter().any(|p| p.uvs.is_some());
     let has_materials = parts.iter().any(|p| p.material.is_some());
     let default_index = doc.materials().len();
     let mut mesh = MeshData {
@@ -515,7 +517,12 @@ fn merge(
             mesh.normals.extend(part.normals.iter().flatten());
         }
         if has_uvs {
-            mesh.uvs.extend(part.uvs.iter().flatten());
+            match &part.uvs {
+                Some(uvs) => mesh.uvs.extend(uvs),
+                None => mesh
+                    .uvs
+                    .extend(std::iter::repeat_n(Vec2::ZERO, part.positions.len())),
+            }
         }
         mesh.triangles
             .extend(part.triangles.iter().map(|t| t.map(|i| base + i)));

@@ -98,6 +98,23 @@ fn textured_quad(f: &mut GltfFile) -> String {
         .to_owned()
 }
 
+/// Texture coordinates survive a primitive without them: a textured quad beside an
+/// untextured one (Blender's textured box in a plain room) keeps its own, and the other's
+/// vertices sit at (0, 0), rather than every triangle falling back to the whole texture.
+#[test]
+fn texture_coordinates_survive_a_primitive_without_them() {
+    let dir = out_dir("gltf-partial-uvs");
+    let mut f = GltfFile::default();
+    let _ = textured_quad(&mut f);
+    let rest = r#""nodes":[{"mesh":0}],"meshes":[{"primitives":[
+        {"attributes":{"POSITION":0,"NORMAL":1},"indices":3},
+        {"attributes":{"POSITION":0,"NORMAL":1,"TEXCOORD_0":2},"indices":3}]}]"#;
+    let mesh = load_gltf(&f.write_glb(&dir, "partial", rest)).unwrap();
+    assert_eq!(mesh.uvs.len(), mesh.positions.len());
+    assert_eq!(mesh.uvs[..4], [Vec2::ZERO; 4]);
+    assert_eq!(mesh.uvs[4..], [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]);
+}
+
 #[test]
 fn embedded_external_and_glb_files_give_identical_meshes() {
     let dir = out_dir("gltf-containers");

@@ -1,5 +1,5 @@
 //! Triangle meshes as plain data in object space ([`MeshData`]), with the materials a mesh file
-//! carries ([`MeshMaterial`]).
+//! carries ([`MeshMaterial`]) and the images those name or embed ([`ImageSource`]).
 //!
 //! `MeshData` lives here, among the shapes, because three floors meet on it and all sit above
 //! geometry: the loaders in `io` produce it, generators such as [`super::water`] make it, and the
@@ -10,6 +10,7 @@
 
 use glam::{Vec2, Vec3};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// A triangle mesh as loaded from a file, in the object space of its node.
 #[derive(Clone, Debug, Default)]
@@ -66,11 +67,65 @@ pub struct MeshMaterial {
     /// GGX roughness of the mirror lobe and the dielectric interface in `[0, 1]` (glTF
     /// `roughnessFactor`, `alpha = roughness²`; OBJ: 0, Phong's exponent stands in).
     pub roughness: f32,
-    /// Texture replacing `kd` (OBJ `map_Kd`, glTF base colour texture), resolved to a path.
+    /// Texture replacing `kd` (OBJ `map_Kd`), resolved to a path; glTF's textures are in `pbr`.
     pub texture: Option<PathBuf>,
     /// Radiance emitted (glTF `emissiveFactor × KHR_materials_emissive_strength`; zero for
     /// OBJ): the primitive is also one of [`MeshData::emitters`].
     pub emission: Vec3,
+    /// glTF's textures and the factors they scale, looked up per hit; `None` for OBJ materials
+    /// and glTF materials without a texture caustic reads.
+    pub pbr: Option<MeshPbr>,
+}
+
+/// A glTF material's textures with the factors they multiply: what the scene build turns into
+/// per-hit lookups ([`crate::material::pbr`]). `kd`, `ks` and `roughness` of the material hold
+/// the factors' values, which shading uses wherever a texture is absent or turned off.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshPbr {
+    /// `baseColorFactor` (RGB), clamped to `[0, 1]`.
+    pub base_colour: Vec3,
+    /// `metallicFactor` in `[0, 1]`.
+    pub metallic: f32,
+    /// `roughnessFactor` in `[0, 1]`.
+    pub roughness: f32,
+    /// `baseColorTexture`: sRGB-encoded, multiplied by `base_colour`.
+    pub base_colour_texture: Option<ImageSource>,
+    /// `metallicRoughnessTexture`: linear; blue is metallic, green roughness, each multiplied
+    /// by its factor.
+    pub metallic_roughness_texture: Option<ImageSource>,
+    /// `normalTexture`: a linear tangent-space normal map.
+    pub normal_texture: Option<ImageSource>,
+    /// `normalTexture.scale`: what the map's x and y are multiplied by.
+    pub normal_scale: f32,
+}
+
+/// Where a mesh file's image is: a file beside it, or encoded bytes inside it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImageSource {
+    /// An image file (glTF `uri`), resolved against the mesh file's folder.
+    File(PathBuf),
+    /// Encoded PNG or JPEG bytes the mesh file carries (a GLB buffer view, a buffer, a `data:`
+    /// URI): image `image` of `file`.
+    Embedded {
+        /// The mesh file, for messages.
+        file: PathBuf,
+        /// The image's index in the file.
+        image: usize,
+        /// The encoded bytes, shared by every material that uses the image.
+        bytes: Arc<[u8]>,
+    },
+}
+
+impl ImageSource {
+    /// Returns the image's name for messages: its path, or "FILE image N".
+    pub fn describe(&self) -> String {
+        match self {
+            ImageSource::File(path) => path.display().to_string(),
+            ImageSource::Embedded { file, image, .. } => {
+                format!("{} image {image}", file.display())
+            }
+        }
+    }
 }
 
 impl MeshData {

@@ -38,33 +38,63 @@
 //!
 //! The glTF default material (white, fully metallic and rough) thus becomes a white conductor
 //! of roughness 1, as glTF defines it. Factors are clamped to their glTF ranges (`ior` to at
-//! least 1). The base colour texture's image is carried as a path when it is an external URI
-//! (resolved against the file's folder); embedded images (buffer views, data URIs) leave
-//! `texture` as `None`. Alpha and every other texture are ignored (a whole-scene render lists
-//! them, [`scene`]). When no primitive has a material, the mesh carries none; otherwise
-//! primitives without one get the glTF default material.
+//! least 1). When no primitive has a material, the mesh carries none; otherwise primitives
+//! without one get the glTF default material.
+//!
+//! # Textures
+//! A material's base colour, metallic-roughness and normal textures are carried in
+//! [`MeshMaterial::pbr`] with their factors, each image as an
+//! [`ImageSource`](crate::geometry::mesh::ImageSource): a file (an
+//! external URI, resolved against the file's folder; read by the scene build if it lies in the
+//! scene's folders, a warning if it cannot be read) or the encoded PNG or JPEG bytes the file
+//! embeds (a buffer view of the GLB binary chunk or of any buffer, or a base64 `data:` URI),
+//! copied once per image and charged to the load's account. A buffer view outside its buffer
+//! and a `data:` URI that is not valid base64 are errors naming the file, the material, the
+//! texture and the image index; so, when the scene build decodes it, is an embedded image that
+//! is corrupt, truncated, or larger than the decoder allows ([`crate::scene::images`]).
+//! Shading looks them up at every hit ([`crate::material::pbr`]), all per texel:
+//! - base colour: sRGB-decoded, times `baseColorFactor`;
+//! - metallic (blue) and roughness (green): linear, times their factors; with the base colour
+//!   they give `kd = base·(1 − metallic)`, `ks = mix(0.04, base, metallic)` and the GGX
+//!   roughness at the hit, as above;
+//! - normal: a tangent-space map, `2c/255 − 1` with x and y times `scale`, in the frame of the
+//!   triangle's `∂p/∂u` from its texture coordinates (+u the tangent, `n × tangent` the image's
+//!   "up"; glTF's `TANGENT` attribute is not read, so where a texture is laid out mirrored its
+//!   normals' y is flipped).
+//!
+//! Every texture is looked up with `TEXCOORD_0`, bilinearly, repeating, whatever its sampler
+//! and `texCoord` say. Alpha and the occlusion and transmission textures are ignored. A
+//! whole-scene render lists each of these, and the emissive stand-in below ([`scene`]).
 //!
 //! # Emission
-//! A primitive whose material emits (`emissiveFactor × KHR_materials_emissive_strength`, the
-//! emissive texture not read) is a surface like any other (it reflects by its base colour and
-//! hides what is behind it, as glTF and every path tracer have it) and also a light: its
-//! triangles, under its node's transform, are one of [`MeshData::emitters`], which the scene
-//! build turns into a light where the mesh is placed ([`crate::scene::emitters`]). The radiance must lie within a light's range
-//! ([`crate::range`]), and a file carries at most [`MAX_EMITTER_TRIANGLES`] emissive triangles.
+//! A primitive whose material emits (`emissiveFactor × KHR_materials_emissive_strength`) is a
+//! surface like any other (it reflects by its material and hides what is behind it, as glTF
+//! and every path tracer have it) and also a light: its triangles, under its node's transform,
+//! are one of [`MeshData::emitters`], which the scene build turns into a light where the mesh
+//! is placed ([`crate::scene::emitters`]). Such a light has one radiance over its triangles, so
+//! an emissive texture stands in by its mean colour: the factors times the image's mean texel,
+//! sRGB-decoded (its pattern is not drawn). The image is decoded for that and dropped; an
+//! embedded one that cannot be decoded is an error, an image file that cannot be read a
+//! warning (the factors alone then make the radiance). The radiance must lie within a light's
+//! range ([`crate::range`]), and a file carries at most [`MAX_EMITTER_TRIANGLES`] emissive
+//! triangles.
 
 mod buffer;
+mod images;
 pub mod scene;
 mod write;
 
 pub use write::write_gltf;
 
 use crate::budget::Account;
-use crate::geometry::mesh::{MeshData, MeshEmitter, MeshMaterial};
-use buffer::{load_buffers, read_indices, read_uvs, read_vec3, split_glb, uri_path};
+use crate::geometry::mesh::{MeshData, MeshEmitter, MeshMaterial, MeshPbr};
+use crate::material::pbr::Reflectance;
+use buffer::{load_buffers, read_indices, read_uvs, read_vec3, split_glb};
 use glam::{DAffine3, DMat3, DQuat, DVec3, Vec2, Vec3};
 use gltf::json::validation::Checked;
 use gltf::mesh::Mode;
 use gltf::{Document, Semantic};
+use images::Images;
 use std::io;
 use std::path::{Path, PathBuf};
 
@@ -139,6 +169,7 @@ pub fn parse_gltf_with(
     let (doc, bin) = open_document(bytes, path)?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let buffers = load_buffers(&doc, bin, dir, account.read_scope()).map_err(invalid)?;
+    let mut images = Images::new(&doc, &buffers, path, dir, account);
     let mut parts = Vec::new();
     let (mut emitters, mut emitted) = (Vec::new(), 0);
     let mut default_material = None;
@@ -168,7 +199,7 @@ pub fn parse_gltf_with(
             };
             bake(&mut part, &world)
                 .map_err(|e| invalid(format!("{at} under node {}: {e}", node.index())))?;
-            if let Some(emitter) = emitter(&prim.material(), &part).map_err(invalid)? {
+            if let Some(emitter) = emitter(&prim.material(), &part, &mut images).map_err(invalid)? {
                 emitted += emitter.triangles.len();
                 if emitted > MAX_EMITTER_TRIANGLES {
                     return Err(GltfError::Unsupported {
@@ -183,25 +214,39 @@ pub fn parse_gltf_with(
                 emitters.push(emitter);
             }
             if part.material.is_none() && default_material.is_none() {
-                default_material = Some(material(&prim.material(), &doc, dir).map_err(invalid)?);
+                default_material = Some(material(&prim.material(), &mut images).map_err(invalid)?);
             }
             parts.push(part);
         }
     }
-    let mut mesh = merge(parts, default_material, &doc, dir, path).map_err(invalid)?;
+    let mut mesh = merge(parts, default_material, &doc, &mut images, path).map_err(invalid)?;
     mesh.emitters = emitters;
     Ok(mesh)
 }
 
 /// Returns the emitter a primitive's triangles make when its material emits, or `None` when
-/// it does not: radiance `emissiveFactor × emissiveStrength` (the emissive texture is not read).
-fn emitter(m: &gltf::Material, part: &Part) -> Result<Option<MeshEmitter>, String> {
+/// it does not: radiance `emissiveFactor × emissiveStrength`, times the emissive texture's mean
+/// colour where it has one (an emitter has one radiance; the texture's pattern is not drawn).
+fn emitter(
+    m: &gltf::Material,
+    part: &Part,
+    images: &mut Images,
+) -> Result<Option<MeshEmitter>, String> {
     let strength = m.emissive_strength().unwrap_or(1.0);
-    let radiance = Vec3::from(m.emissive_factor()) * strength;
+    let mut radiance = Vec3::from(m.emissive_factor()) * strength;
     if radiance == Vec3::ZERO {
         return Ok(None);
     }
     let name = material_name(m);
+    if let Some(info) = m.emissive_texture() {
+        let mean = images
+            .srgb_mean(&info.texture())
+            .map_err(|e| format!("{name}: emissive texture: {e}"))?;
+        radiance *= mean.unwrap_or(Vec3::ONE);
+        if radiance == Vec3::ZERO {
+            return Ok(None);
+        }
+    }
     let what = format!("{name}: emitted radiance");
     crate::range::within(&radiance.to_array(), &what, crate::range::MAX_INTENSITY)?;
     let triangles = part
@@ -495,7 +540,7 @@ fn merge(
     parts: Vec<Part>,
     default_material: Option<MeshMaterial>,
     doc: &Document,
-    dir: &Path,
+    images: &mut Images,
     path: &Path,
 ) -> Result<MeshData, String> {
     let has_normals = parts.iter().all(|p| p.normals.is_some());
@@ -535,7 +580,7 @@ fn merge(
     }
     if has_materials {
         for m in doc.materials() {
-            mesh.materials.push(material(&m, doc, dir)?);
+            mesh.materials.push(material(&m, images)?);
         }
         mesh.materials.extend(default_material);
     }
@@ -543,7 +588,7 @@ fn merge(
 }
 
 /// Returns the mesh material a glTF material maps to (the mapping is in the module doc).
-fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMaterial, String> {
+fn material(m: &gltf::Material, images: &mut Images) -> Result<MeshMaterial, String> {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
@@ -577,23 +622,48 @@ fn material(m: &gltf::Material, doc: &Document, dir: &Path) -> Result<MeshMateri
     let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
     let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
     let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
-    let f0 = Vec3::splat(0.04).lerp(base, metallic);
-    let texture = pbr.base_color_texture().and_then(|info| {
-        let image = info.texture().source().index();
-        let uri = doc.as_json().images.get(image)?.uri.as_deref()?;
-        uri_path(uri, dir)
+    let surface = Reflectance::metallic(base.into(), metallic, roughness);
+    let mut texture = |info: Option<gltf::Texture>, slot: &str| {
+        info.map(|t| images.source(&t))
+            .transpose()
+            .map_err(|e| format!("{name}: {slot} texture: {e}"))
+    };
+    let base_colour_texture =
+        texture(pbr.base_color_texture().map(|i| i.texture()), "base colour")?;
+    let metallic_roughness_texture = texture(
+        pbr.metallic_roughness_texture().map(|i| i.texture()),
+        "metallic-roughness",
+    )?;
+    let normal = m.normal_texture();
+    let normal_texture = texture(normal.as_ref().map(|n| n.texture()), "normal")?;
+    let normal_scale = normal.as_ref().map_or(1.0, |n| n.scale());
+    if !normal_scale.is_finite() {
+        return Err(format!("{name} has a non-finite normal texture scale"));
+    }
+    let textured = base_colour_texture.is_some()
+        || metallic_roughness_texture.is_some()
+        || normal_texture.is_some();
+    let pbr = textured.then_some(MeshPbr {
+        base_colour: base,
+        metallic,
+        roughness,
+        base_colour_texture,
+        metallic_roughness_texture,
+        normal_texture,
+        normal_scale,
     });
     Ok(MeshMaterial {
         name,
-        kd: base * (1.0 - metallic),
-        ks: f0,
+        kd: surface.kd.into(),
+        ks: surface.ks.into(),
         // Unused above roughness 0 (the GGX lobe replaces Phong); a perfect mirror at 0.
         shininess: MAX_SHININESS,
         transparency: transmission.clamp(0.0, 1.0),
         ior: ior.clamp(1.0, crate::range::MAX_IOR as f32),
         absorption: crate::material::absorption(attenuation, distance),
         roughness,
-        texture,
+        texture: None,
+        pbr,
         // Validated where the primitive becomes a light (`emitter`); kept only when it can be.
         emission: Some(Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0))
             .filter(|e| e.is_finite() && e.min_element() >= 0.0)

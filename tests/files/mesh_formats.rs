@@ -3,7 +3,7 @@
 //! mesh through OBJ and glTF. Every file is written by the test itself under `target/`.
 
 use crate::common::{GltfFile, assert_same_mesh, out_dir};
-use caustic::geometry::mesh::MeshMaterial;
+use caustic::geometry::mesh::{ImageSource, MeshMaterial, MeshPbr};
 use caustic::io::gltf::{load_gltf, parse_gltf};
 use caustic::scene::meshes::load_meshes;
 use glam::{Vec2, Vec3, vec3};
@@ -186,9 +186,19 @@ fn materials_map_metal_roughness_transmission_ior_and_texture() {
         (water.roughness, water.transparency, water.ior),
         (0.5, 0.9, 1.33)
     );
-    assert_eq!(water.texture, Some(dir.join("water ripples.png")));
+    // The base colour texture is carried with the factors it scales, the image a file beside
+    // the glTF file.
+    let pbr = water.pbr.as_ref().expect("a textured material");
+    assert_eq!(
+        pbr.base_colour_texture,
+        Some(ImageSource::File(dir.join("water ripples.png")))
+    );
+    assert!(close(pbr.base_colour, vec3(0.2, 0.4, 0.6)));
+    assert_eq!((pbr.metallic, pbr.roughness), (0.0, 0.5));
+    assert_eq!(water.texture, None, "kd's own texture is OBJ's");
     let metal = &mesh.materials[1];
-    // A smooth metal mirrors its base colour and has no diffuse lobe; its image is embedded.
+    // A smooth metal mirrors its base colour and has no diffuse lobe; its image is embedded:
+    // the buffer view's bytes, decoded by the scene build.
     let expected = MeshMaterial {
         name: "material 1".to_owned(),
         kd: Vec3::ZERO,
@@ -200,6 +210,19 @@ fn materials_map_metal_roughness_transmission_ior_and_texture() {
         roughness: 0.0,
         texture: None,
         emission: Vec3::ZERO,
+        pbr: Some(MeshPbr {
+            base_colour: vec3(1.0, 0.5, 0.25),
+            metallic: 1.0,
+            roughness: 0.0,
+            base_colour_texture: Some(ImageSource::Embedded {
+                file: dir.join("materials.gltf"),
+                image: 1,
+                bytes: std::sync::Arc::from(&b"\x89PNG not really"[..]),
+            }),
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        }),
     };
     assert_eq!(*metal, expected);
     // The glTF default material (white, metallic 1, roughness 1) is a white conductor of
@@ -438,6 +461,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         roughness: 0.0,
         texture: Some(dir.join("tex/red.png")),
         emission: Vec3::ZERO,
+        pbr: None,
     };
     let glass = MeshMaterial {
         name: "glass".to_owned(),
@@ -450,6 +474,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         roughness: 0.0,
         texture: None,
         emission: Vec3::ZERO,
+        pbr: None,
     };
     let grey = MeshMaterial {
         name: "(no usemtl)".to_owned(),
@@ -462,6 +487,7 @@ fn obj_mtl_materials_fill_per_triangle_materials() {
         roughness: 0.0,
         texture: None,
         emission: Vec3::ZERO,
+        pbr: None,
     };
     assert_eq!(mesh.materials, [red, glass, grey]);
 

@@ -134,7 +134,7 @@ pub fn load_buffers(
 }
 
 /// Decodes the part of a `data:` URI after the scheme; only base64 payloads are accepted.
-fn decode_data_uri(data: &str) -> Result<Vec<u8>, String> {
+pub fn decode_data_uri(data: &str) -> Result<Vec<u8>, String> {
     let Some((_, payload)) = data.split_once(";base64,") else {
         return Err("data URI is not base64".to_owned());
     };

@@ -184,6 +184,7 @@ pub(super) fn mesh_material(m: &tobj::Material) -> MeshMaterial {
         roughness: 0.0,
         texture: m.diffuse_texture.as_ref().map(PathBuf::from),
         emission: Vec3::ZERO,
+        pbr: None,
     }
 }
 
@@ -200,6 +201,7 @@ pub(super) fn default_material() -> MeshMaterial {
         roughness: 0.0,
         texture: None,
         emission: Vec3::ZERO,
+        pbr: None,
     }
 }
 

@@ -31,9 +31,12 @@
 //!   bounds receives an irradiance of 1 W/m², and a warning says so.
 //!
 //! What caustic cannot honour (animations, skins, morph targets, orthographic cameras, spot and
-//! directional lights, alpha, vertex colours, textures other than the base colour, extensions it
-//! does not read) is listed in [`SceneDesc::warnings`], printed once by `caustic render` and
-//! `caustic info`: never silently dropped.
+//! directional lights, alpha, vertex colours, occlusion and transmission textures, extensions it
+//! does not read) and what it stands in for (an emissive texture's pattern by its mean colour,
+//! every sampler by bilinear repeating lookups, texture coordinate sets beyond the first by the
+//! first) is listed in [`SceneDesc::warnings`], printed once by `caustic render` and
+//! `caustic info`: never silently dropped. The base colour, metallic-roughness and normal
+//! textures, embedded or not, are read ([`super::load_gltf`]).
 
 use super::{GltfError, open_document, placements};
 use crate::budget::Budget;
@@ -368,7 +371,61 @@ fn point_light(
     }))
 }
 
-/// Returns what the file uses that caustic does not render, one line each.
+/// Returns the texture coordinate set of each texture a material's textures caustic reads use,
+/// with the texture's name.
+fn texture_sets(m: &gltf::Material) -> Vec<(&'static str, u32)> {
+    let pbr = m.pbr_metallic_roughness();
+    let mut out = Vec::new();
+    if let Some(t) = pbr.base_color_texture() {
+        out.push(("base colour", t.tex_coord()));
+    }
+    if let Some(t) = pbr.metallic_roughness_texture() {
+        out.push(("metallic-roughness", t.tex_coord()));
+    }
+    if let Some(t) = m.normal_texture() {
+        out.push(("normal", t.tex_coord()));
+    }
+    if let Some(t) = m.emissive_texture() {
+        out.push(("emissive", t.tex_coord()));
+    }
+    out
+}
+
+/// Returns the lines for samplers caustic stands in for: every texture is looked up bilinearly
+/// and repeats, whatever its sampler asks.
+fn samplers(doc: &Document) -> Vec<String> {
+    use gltf::texture::{MagFilter, WrappingMode};
+    let mut out = Vec::new();
+    let samplers: Vec<_> = doc.textures().map(|t| t.sampler()).collect();
+    let nearest = samplers
+        .iter()
+        .filter(|s| s.mag_filter() == Some(MagFilter::Nearest))
+        .count();
+    let textures = |n: usize| match n {
+        1 => "1 texture asks".to_owned(),
+        n => format!("{n} textures ask"),
+    };
+    if nearest > 0 {
+        out.push(format!(
+            "{} for nearest filtering: looked up bilinearly",
+            textures(nearest)
+        ));
+    }
+    let clamped = samplers
+        .iter()
+        .filter(|s| s.wrap_s() != WrappingMode::Repeat || s.wrap_t() != WrappingMode::Repeat)
+        .count();
+    if clamped > 0 {
+        out.push(format!(
+            "{} for clamped or mirrored wrapping: drawn repeating",
+            textures(clamped)
+        ));
+    }
+    out
+}
+
+/// Returns what the file uses that caustic does not render, or renders through a stand-in,
+/// one line each.
 fn unsupported(doc: &Document) -> Vec<String> {
     let mut out = Vec::new();
     let count = |n: usize, what: &str, effect: &str| {
@@ -410,35 +467,28 @@ fn unsupported(doc: &Document) -> Vec<String> {
         "orthographic camera",
         "caustic renders perspective cameras",
     ));
+    out.extend(samplers(doc));
     for m in doc.materials() {
         let name = m
             .name()
             .map_or(format!("material {}", m.index().unwrap_or(0)), |n| {
                 format!("material '{n}'")
             });
+        for (slot, set) in texture_sets(&m) {
+            if set != 0 {
+                out.push(format!(
+                    "{name}: {slot} texture uses TEXCOORD_{set}: looked up with TEXCOORD_0, \
+                     the one set caustic reads"
+                ));
+            }
+        }
+        if m.emissive_texture().is_some() && m.emissive_factor() != [0.0; 3] {
+            out.push(format!(
+                "{name}: emissive texture: its mean colour stands in (an emitter has one \
+                 radiance)"
+            ));
+        }
         let mut unread = Vec::new();
-        if m.normal_texture().is_some() {
-            unread.push("normal texture");
-        }
-        let embedded = |t: gltf::texture::Info| match t.texture().source().source() {
-            gltf::image::Source::View { .. } => true,
-            gltf::image::Source::Uri { uri, .. } => uri.starts_with("data:"),
-        };
-        if m.pbr_metallic_roughness()
-            .base_color_texture()
-            .is_some_and(embedded)
-        {
-            unread.push("embedded base colour image (its base colour factor stands in)");
-        }
-        if m.pbr_metallic_roughness()
-            .metallic_roughness_texture()
-            .is_some()
-        {
-            unread.push("metallic-roughness texture");
-        }
-        if m.emissive_texture().is_some() {
-            unread.push("emissive texture");
-        }
         if m.occlusion_texture().is_some() {
             unread.push("occlusion texture");
         }

@@ -229,6 +229,13 @@ impl GltfFile {
         self.views.len() - 1
     }
 
+    /// Appends a buffer view given as raw JSON (one that may lie outside the buffer); returns
+    /// its index.
+    pub fn raw_view(&mut self, json: &str) -> usize {
+        self.views.push(json.to_owned());
+        self.views.len() - 1
+    }
+
     /// Appends an accessor with raw JSON members over a new view of `bytes`; returns its index.
     pub fn accessor(&mut self, bytes: &[u8], members: &str) -> usize {
         let view = self.view(bytes);

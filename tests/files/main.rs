@@ -1,5 +1,6 @@
 //! Files and output: what caustic reads and writes. Parts: `image_formats` and `mesh_formats`
-//! (formats in and out), `input_quirks` (what real tools write, and numeric ranges),
+//! (formats in and out), `gltf_scenes` and `gltf_textures` (glTF files as scenes, their
+//! textures), `input_quirks` (what real tools write, and numeric ranges),
 //! `photon_map_files` (saved photon maps, and a photon pass in parts), `progressive_parts`
 //! (progressive passes rendered apart and merged), `mitsuba_export`, `stitch_tiles` (crafted tiles),
 //! `filesystem` (symlinks, permissions, special files, a process killed while writing),
@@ -17,6 +18,7 @@ mod common;
 
 mod filesystem;
 mod gltf_scenes;
+mod gltf_textures;
 mod hostile;
 mod image_formats;
 mod input_quirks;

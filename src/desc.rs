@@ -137,10 +137,23 @@ pub enum LightShape {
     Area { u: Vec3, v: Vec3 },
     /// `gr.sphere_light`.
     Sphere { radius: f32 },
+    /// `gr.spot_light`, glTF's `spot`: at the position, shining along `direction` (non-zero),
+    /// full within `inner` and dark beyond `outer` (radians, `0 ≤ inner ≤ outer ≤ π/2`), with
+    /// glTF's falloff between ([`crate::light::spot`]).
+    Spot {
+        direction: Vec3,
+        inner: f32,
+        outer: f32,
+    },
+    /// `gr.directional_light`, glTF's `directional`: light travelling along `direction`
+    /// (non-zero) from beyond the scene; the colour is its irradiance over π on a surface facing
+    /// it, and the position is not used ([`crate::light::directional`]).
+    Directional { direction: Vec3 },
 }
 
-/// A light as `gr.light(pos, rgb, falloff [, power [, num_photons]])`, `gr.area_light` or
-/// `gr.sphere_light` gives it.
+/// A light as `gr.light(pos, rgb, falloff [, power [, num_photons]])`, `gr.area_light`,
+/// `gr.sphere_light`, `gr.spot_light` or `gr.directional_light` gives it (or a glTF file's
+/// punctual light).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightDesc {
     pub shape: LightShape,

@@ -1,11 +1,13 @@
-//! Lights: point, one-sided parallelogram (area), sphere and triangle-mesh (emissive surface)
-//! lights, for direct lighting by shadow rays and for photon emission — one lighting model for
-//! both.
+//! Lights: point, spot, directional, one-sided parallelogram (area), sphere and triangle-mesh
+//! (emissive surface) lights, for direct lighting by shadow rays and for photon emission — one
+//! lighting model for both.
 //!
 //! ```lua
 //! gr.light({0, 0.5, 0}, {0.7, 0.5, 0.9}, {1, 0, 0}, 10000, 200000)          -- point
 //! gr.area_light({0, 0.49, 0}, {1, 1, 1}, {1, 0, 0}, nil, 100000, {0.2, 0, 0}, {0, 0, 0.2})
 //! gr.sphere_light({0, 0.4, 0}, {1, 1, 1}, {1, 0, 0}, nil, nil, 0.05)
+//! gr.spot_light({0, 0.5, 0}, {0, -1, 0}, {1, 1, 1}, 15, 20)                  -- spot
+//! gr.directional_light({-0.3, -1, -0.2}, {0.3, 0.3, 0.3})                   -- sun
 //! ```
 //!
 //! # The lighting model
@@ -37,12 +39,28 @@
 //!   counter-clockwise winding faces. It is an area light spread over triangles: its `rgb` is
 //!   `L·A/π`, so it is seen with radiance `π·rgb/A = L`, sheds `Φ = π·L·A`, and is sampled by
 //!   choosing a triangle by its area and a point uniformly on it ([`Light::mesh`]).
+//! - A spot light ([`Shape::Spot`]) is a point light whose intensity towards `ω` is
+//!   `I_phys·t²(ω)`, glTF's falloff between its inner and outer cones ([`spot`]): its flux is
+//!   `I_phys·∫ t² dω` (closed form, [`spot::SpotCone::solid_angle`]) and its photons leave in
+//!   proportion to `t²`, each carrying `Φ/n` (none beyond the outer cone).
+//! - A directional light ([`Shape::Directional`]) sends parallel light of irradiance
+//!   `E_phys = π·rgb` on a surface facing it, so a Lambertian surface shows `kd·rgb·cos θ`, as
+//!   under a point light: no distance and no falloff ([`Light::attenuation`] is 1). Its shadow
+//!   rays end where they leave the sphere holding the scene's geometry, its photons leave a disc
+//!   of that sphere's radius `R` facing it, and its flux is that disc's, `Φ = E_phys·πR²`
+//!   ([`directional`]).
 
+pub mod directional;
+pub mod spot;
+
+use crate::accel::Bounds;
 use crate::desc::{LightDesc, LightShape};
 use crate::geometry::Ray;
 use crate::geometry::triangle::{self, RayShear};
 use crate::sampling::{cosine_around, uniform_sphere};
+use directional::SceneSphere;
 use glam::Vec3A;
+use spot::SpotCone;
 use std::f32::consts::{PI, TAU};
 use std::sync::Arc;
 
@@ -145,6 +163,18 @@ pub enum Shape {
     Point {
         position: Vec3A,
     },
+    /// A point light shining about unit `axis` with glTF's falloff ([`spot`]).
+    Spot {
+        position: Vec3A,
+        axis: Vec3A,
+        cone: SpotCone,
+    },
+    /// Parallel light travelling along unit `dir` from beyond `sphere`, which holds the
+    /// scene's geometry ([`directional`]); the light's colour is its irradiance over π.
+    Directional {
+        dir: Vec3A,
+        sphere: SceneSphere,
+    },
     /// A parallelogram centred at `centre` with edges `u`, `v`, emitting on the side of `u × v`.
     Area {
         centre: Vec3A,
@@ -190,16 +220,31 @@ pub struct Emission {
     pub origin: Vec3A,
     /// Unit direction of travel.
     pub dir: Vec3A,
-    /// Normal of the emitting surface at `origin` (for ray offsets), or zero for point lights.
+    /// Normal of the emitting surface at `origin` (for ray offsets), or zero for point, spot
+    /// and directional lights (a directional light's disc lies outside the scene).
     pub normal: Vec3A,
 }
 
 impl Light {
-    /// Returns the light a script described.
-    pub fn from_desc(d: &LightDesc) -> Light {
+    /// Returns the light a script described, in a scene whose geometry `world` holds (the
+    /// union of its instances' boxes: where a directional light's photons must reach).
+    pub fn from_desc(d: &LightDesc, world: Bounds) -> Light {
         let shape = match d.shape {
             LightShape::Point => Shape::Point {
                 position: d.position.into(),
+            },
+            LightShape::Spot {
+                direction,
+                inner,
+                outer,
+            } => Shape::Spot {
+                position: d.position.into(),
+                axis: Vec3A::from(direction).normalize_or(Vec3A::NEG_Y),
+                cone: SpotCone::new(inner, outer),
+            },
+            LightShape::Directional { direction } => Shape::Directional {
+                dir: Vec3A::from(direction).normalize_or(Vec3A::NEG_Y),
+                sphere: SceneSphere::holding(world),
             },
             LightShape::Area { u, v } => {
                 let (u, v) = (Vec3A::from(u), Vec3A::from(v));
@@ -292,37 +337,57 @@ impl Light {
         })
     }
 
-    /// Returns the attenuation `1 / (c0 + c1·d + c2·d²)` at distance `d`.
+    /// Returns the attenuation `1 / (c0 + c1·d + c2·d²)` at distance `d`; 1 for a directional
+    /// light, whose light does not spread.
     pub fn attenuation(&self, d: f32) -> f32 {
+        if let Shape::Directional { .. } = self.shape {
+            return 1.0;
+        }
         let [c0, c1, c2] = self.falloff;
         1.0 / (c0 + c1 * d + c2 * d * d)
     }
 
-    /// Returns `g(d) = d² / (c0 + c1·d + c2·d²)`, the course's falloff relative to inverse square.
+    /// Returns `g(d) = d² / (c0 + c1·d + c2·d²)`, the course's falloff relative to inverse
+    /// square; 1 for a directional light, whose photons are parallel.
     pub fn falloff_ratio(&self, d: f32) -> f32 {
+        if let Shape::Directional { .. } = self.shape {
+            return 1.0;
+        }
         d * d * self.attenuation(d)
     }
 
     /// Returns true for lights with extent (soft shadows need several samples).
     pub fn is_area(&self) -> bool {
-        !matches!(self.shape, Shape::Point { .. })
+        matches!(
+            self.shape,
+            Shape::Area { .. } | Shape::Sphere { .. } | Shape::Mesh(_)
+        )
     }
 
-    /// Returns the total emitted flux `Φ` per channel (physical units: `I_phys = π·rgb`).
+    /// Returns the total emitted flux `Φ` per channel (physical units: `I_phys = π·rgb`); a
+    /// directional light's is the flux through its disc ([`directional`]).
     pub fn flux(&self) -> Vec3A {
         match self.shape {
             Shape::Area { .. } | Shape::Mesh(_) => PI * PI * self.colour,
             Shape::Point { .. } | Shape::Sphere { .. } => 2.0 * TAU * PI * self.colour,
+            Shape::Spot { cone, .. } => PI * cone.solid_angle() * self.colour,
+            Shape::Directional { sphere, .. } => {
+                PI * PI * sphere.radius * sphere.radius * self.colour
+            }
         }
     }
 
     /// Returns the light as a point at its centre seen from `p`, for hard shadows (the plan's
-    /// soft shadows off): a point light itself; an area light's centre with its cosine falloff;
-    /// a sphere light's centre with its intensity from afar (the mean of [`Light::sample`]); a
-    /// mesh light's area-weighted centroid with the cosine of its mean normal.
+    /// soft shadows off): a point, spot or directional light itself; an area light's centre
+    /// with its cosine falloff; a sphere light's centre with its intensity from afar (the mean
+    /// of [`Light::sample`]); a mesh light's area-weighted centroid with the cosine of its mean
+    /// normal.
     pub fn centre_sample(&self, p: Vec3A) -> LightSample {
         match &self.shape {
-            Shape::Point { .. } | Shape::Area { .. } => self.sample(p, (0.5, 0.5)),
+            Shape::Point { .. }
+            | Shape::Spot { .. }
+            | Shape::Directional { .. }
+            | Shape::Area { .. } => self.sample(p, (0.5, 0.5)),
             Shape::Sphere { centre, .. } => LightSample {
                 position: *centre,
                 intensity: self.colour,
@@ -340,10 +405,29 @@ impl Light {
     }
 
     /// Returns a sample of the light for shading point `p`, from a uniform pair `u` in [0, 1)².
+    /// A directional light's is where the shadow ray leaves the scene's sphere, with its
+    /// irradiance over π as the intensity (its attenuation is 1).
     pub fn sample(&self, p: Vec3A, u: (f32, f32)) -> LightSample {
         match self.shape {
             Shape::Point { position } => LightSample {
                 position,
+                intensity: self.colour,
+                normal: Vec3A::ZERO,
+            },
+            Shape::Spot {
+                position,
+                axis,
+                cone,
+            } => {
+                let cos = axis.dot((p - position).normalize_or_zero());
+                LightSample {
+                    position,
+                    intensity: self.colour * cone.falloff(cos),
+                    normal: Vec3A::ZERO,
+                }
+            }
+            Shape::Directional { dir, sphere } => LightSample {
+                position: sphere.exit(p, -dir),
                 intensity: self.colour,
                 normal: Vec3A::ZERO,
             },
@@ -389,10 +473,10 @@ impl Light {
 
     /// Returns where `ray` first meets the light's emitting surface within `(tmin, tmax)` and the
     /// radiance it sees there: `I_phys/A` (that is `π·rgb/A`) on the emitting side of an area
-    /// light and black on its back, `I_phys/(πR²)` (that is `rgb/R²`) on a sphere light. Point
-    /// lights are never seen; a mesh light is seen as an area light is, `π·rgb/A` on the front
-    /// of its triangles. The course's falloff does not apply to seen emitters: only the light
-    /// they shed on surfaces is attenuated.
+    /// light and black on its back, `I_phys/(πR²)` (that is `rgb/R²`) on a sphere light. Point,
+    /// spot and directional lights are never seen; a mesh light is seen as an area light is,
+    /// `π·rgb/A` on the front of its triangles. The course's falloff does not apply to seen
+    /// emitters: only the light they shed on surfaces is attenuated.
     pub fn seen_by(&self, ray: &Ray, tmax: f32) -> Option<(f32, Vec3A)> {
         self.seen(ray, tmax).map(|s| (s.t, s.radiance))
     }
@@ -400,7 +484,7 @@ impl Light {
     /// [`Light::seen_by`] with the emitting surface's unit normal where the ray meets it.
     pub fn seen(&self, ray: &Ray, tmax: f32) -> Option<Seen> {
         let (t, radiance, normal) = match self.shape {
-            Shape::Point { .. } => return None,
+            Shape::Point { .. } | Shape::Spot { .. } | Shape::Directional { .. } => return None,
             Shape::Mesh(ref m) => {
                 if !m.may_hit(ray, tmax) {
                     return None;
@@ -494,10 +578,13 @@ impl Light {
 
     /// Returns the density per steradian, seen from `from`, with which [`Light::sample`] draws
     /// the point `y` of normal `normal` on the light (uniform over its area, the whole sphere's
-    /// for a sphere light): `d² / (A·|cos θ_y|)`; infinite for a point light, which has no area.
+    /// for a sphere light): `d² / (A·|cos θ_y|)`; infinite for a point, spot or directional
+    /// light, which has no area.
     pub fn density_towards(&self, from: Vec3A, y: Vec3A, normal: Vec3A) -> f32 {
         let area = match &self.shape {
-            Shape::Point { .. } => return f32::INFINITY,
+            Shape::Point { .. } | Shape::Spot { .. } | Shape::Directional { .. } => {
+                return f32::INFINITY;
+            }
             Shape::Area { area, .. } => *area,
             Shape::Mesh(m) => m.area,
             Shape::Sphere { radius, .. } => 2.0 * TAU * radius * radius,
@@ -508,12 +595,27 @@ impl Light {
         d2 / (area * cos)
     }
 
-    /// Returns a photon's emission from four uniform numbers in [0, 1).
+    /// Returns a photon's emission from four uniform numbers in [0, 1): a spot's in proportion
+    /// to its falloff, a directional light's from a point uniform over its disc.
     pub fn emit(&self, u: [f32; 4]) -> Emission {
         match self.shape {
             Shape::Point { position } => Emission {
                 origin: position,
                 dir: uniform_sphere((u[0], u[1])),
+                normal: Vec3A::ZERO,
+            },
+            Shape::Spot {
+                position,
+                axis,
+                cone,
+            } => Emission {
+                origin: position,
+                dir: cone.sample(axis, (u[0], u[1])),
+                normal: Vec3A::ZERO,
+            },
+            Shape::Directional { dir, sphere } => Emission {
+                origin: sphere.disc_point(dir, (u[0], u[1])),
+                dir,
                 normal: Vec3A::ZERO,
             },
             Shape::Mesh(ref m) => {

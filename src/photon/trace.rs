@@ -5,8 +5,10 @@
 //!   point light's only through the directions that can meet the scene (its [`ProjectionMap`],
 //!   Jensen's projection map: a lamp over a small table in empty space sends three quarters of
 //!   its photons onto the table instead of 7%), and are stored at every surface with a diffuse
-//!   part. At each hit a photon takes one of the material's
-//!   behaviours ([`crate::material::Material::lobes`]) with probability equal to its weight
+//!   part. A spot's photons leave in proportion to its falloff, all of the same power, never
+//!   beyond its outer cone; a directional light's leave uniformly from a disc facing it that
+//!   covers the sphere round the scene ([`crate::light`]). At each hit a photon takes one of
+//!   the material's behaviours ([`crate::material::Material::lobes`]) with probability equal to its weight
 //!   (Russian roulette on albedo), or is absorbed; its power is divided by that probability, so
 //!   it stays an unbiased estimate. At a surface that reflects more than it receives (`kd`
 //!   above 1) the lobes are scaled to sum 1, and the photon keeps its power rather than
@@ -14,7 +16,10 @@
 //! - **Caustic photons** are aimed at the scene's specular objects (mirrors and dielectrics): each
 //!   is sent into a cone around one of their bounding spheres, chosen in proportion to the cones'
 //!   solid angles, and weighted by the inverse of the resulting direction density (a projection map
-//!   without the map). Only paths light → specular⁺ → diffuse are kept: the photon is stored at the
+//!   without the map), the power carrying the light's intensity that way (a spot's falloff: a
+//!   target outside its outer cone gets photons of no power, which are dropped). A directional
+//!   light's are parallel: each starts on the disc the target's sphere casts along the light,
+//!   chosen by area ([`parallel_to_targets`]). Only paths light → specular⁺ → diffuse are kept: the photon is stored at the
 //!   first diffuse surface after at least one specular bounce and stops there.
 //! - Power is flux in watts, already divided by the light's photon count, and multiplied once by the
 //!   light's falloff ratio `g(d)` at the first hit ([`Light::falloff_ratio`]).
@@ -473,7 +478,8 @@ fn split_target(t: &Target) -> Vec<Target> {
 }
 
 /// Returns the projection map of each light for global photons: point lights only (an area
-/// light's photons leave from every point of it, and it mostly faces the scene anyway).
+/// light's photons leave from every point of it, and it mostly faces the scene anyway; a
+/// spot's leave through its own cone, and a directional light's disc is the scene's shadow).
 pub fn projection_maps(scene: &Scene) -> Vec<Option<ProjectionMap>> {
     let whole = targets_where(scene, |inst| inst.bounds.is_finite());
     // A few objects: each box cut into up to 4 × 4 × 4 pieces along its long sides, whose
@@ -761,6 +767,9 @@ fn leave_light(pass: &LightPass, cones: &mut Vec<Cone>, rng: &mut Rng) -> Option
             None => (e.dir, light.flux() / n as f32),
         },
         MapKind::Caustic => {
+            if let crate::light::Shape::Directional { dir, sphere } = light.shape {
+                return parallel_to_targets(light, (dir, sphere), targets, n, rng);
+            }
             // Aim at one specular object's cone, chosen by solid angle; weight by 1 / density.
             if cones.is_empty() || light.is_area() {
                 cones.clear();
@@ -778,13 +787,8 @@ fn leave_light(pass: &LightPass, cones: &mut Vec<Cone>, rng: &mut Rng) -> Option
             let dir = cone.sample((rng.next_f32(), rng.next_f32()));
             let covering = cones.iter().filter(|c| c.contains(dir)).count().max(1) as f32;
             // Intensity towards dir: the light's emitted radiance integrated over its area, per
-            // steradian (see `Light::sample`, which uses the same definition).
+            // steradian (see `Light::sample`, which uses the same definition); a spot's falloff.
             let intensity = light.sample(e.origin + dir, (u[0], u[1])).intensity;
-            let intensity = if e.normal == Vec3A::ZERO {
-                light.colour
-            } else {
-                intensity
-            };
             // Physical intensity is π times the course's (see crate::light).
             (
                 dir,
@@ -801,6 +805,50 @@ fn leave_light(pass: &LightPass, cones: &mut Vec<Cone>, rng: &mut Rng) -> Option
         offset_ray_origin(e.origin, e.normal, dir)
     };
     Some((Ray::new(start, dir), power))
+}
+
+/// Returns the ray and power of a caustic photon of directional light `light` (travelling
+/// along `dir`, from beyond `sphere`), aimed at the specular `targets` of a pass of `n`
+/// photons: the parallel counterpart of the cones. Seen along `dir`, each target's bounding
+/// sphere is a disc of area `πr²`; a disc is chosen by its area and a point uniformly on it,
+/// moved back along `dir` to the plane the light's disc lies in. The point's density over that
+/// plane is `covering / Σ πr²` (the number of discs holding it), so the photon carries
+/// `E_phys·Σ πr² / (covering·n)`, and every line of the light that meets a target is drawn.
+fn parallel_to_targets(
+    light: &Light,
+    (dir, sphere): (Vec3A, crate::light::directional::SceneSphere),
+    targets: &[Target],
+    n: u64,
+    rng: &mut Rng,
+) -> Option<(Ray, Vec3A)> {
+    let area = |t: &Target| t.radius * t.radius;
+    let total: f32 = targets.iter().map(area).sum();
+    let mut pick = rng.next_f32() * total;
+    let target = targets
+        .iter()
+        .find(|t| {
+            pick -= area(t);
+            pick < 0.0
+        })
+        .or(targets.last())?;
+    let (u0, u1) = (rng.next_f32(), rng.next_f32());
+    let (r, phi) = (target.radius * u0.sqrt(), TAU * u1);
+    let t = dir.any_orthonormal_vector();
+    let b = dir.cross(t);
+    let q = target.centre + (t * phi.cos() + b * phi.sin()) * r;
+    let covering = targets
+        .iter()
+        .filter(|k| {
+            let rel = q - k.centre;
+            (rel - dir * rel.dot(dir)).length_squared() <= k.radius * k.radius
+        })
+        .count()
+        .max(1) as f32;
+    // Back along dir to the plane of the light's disc, outside the scene's sphere.
+    let origin = q + dir * ((sphere.centre - q).dot(dir) - sphere.radius);
+    let irradiance = std::f32::consts::PI * light.colour;
+    let power = irradiance * (std::f32::consts::PI * total / (covering * n as f32));
+    (power.max_element() > 0.0).then(|| (Ray::new(origin, dir), power))
 }
 
 /// Follows a photon of `pass` from `ray` with `power` through the scene by Russian roulette over

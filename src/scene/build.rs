@@ -114,15 +114,10 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
     stats.build_time = start.elapsed();
     let mut scene = Scene {
         instances,
+        lights: lights(desc, render, &b.bounds, b.mesh_lights),
         meshes: b.meshes,
         csgs: b.csgs,
         materials: b.materials,
-        lights: render
-            .lights
-            .iter()
-            .map(|l| Light::from_desc(&desc.lights[l.0 as usize]))
-            .chain(b.mesh_lights)
-            .collect(),
         ambient: render.ambient.into(),
         tlas,
         stats,
@@ -155,6 +150,24 @@ pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
     });
     find_media(desc, render, &mut scene);
     Ok(scene)
+}
+
+/// Returns the lights of `render`, then the placed meshes' `mesh_lights`, in a scene of
+/// instances whose boxes are `boxes` (all of them are where a directional light's photons must
+/// reach).
+fn lights(
+    desc: &SceneDesc,
+    render: &RenderDesc,
+    boxes: &[Bounds],
+    mesh_lights: Vec<Light>,
+) -> Vec<Light> {
+    let world = boxes.iter().fold(Bounds::EMPTY, |a, &x| a.union(x));
+    render
+        .lights
+        .iter()
+        .map(|l| Light::from_desc(&desc.lights[l.0 as usize], world))
+        .chain(mesh_lights)
+        .collect()
 }
 
 /// Finds whether any medium absorbs and the media the camera and each light are in
@@ -315,11 +328,14 @@ fn tlas_builder(boxes: &[Bounds]) -> accel::Builder {
     }
 }
 
-/// Returns a box holding every point of `light` (an area light's with room to spare).
+/// Returns a box holding every point of `light` (an area light's with room to spare); a
+/// directional light's is the centre of the disc its photons leave, outside the sphere that
+/// holds every instance (so it is in no medium).
 fn light_bounds(light: &Light) -> Bounds {
     use crate::light::Shape;
     let (centre, half) = match light.shape {
-        Shape::Point { position } => (position, Vec3A::ZERO),
+        Shape::Point { position } | Shape::Spot { position, .. } => (position, Vec3A::ZERO),
+        Shape::Directional { dir, sphere } => (sphere.centre - dir * sphere.radius, Vec3A::ZERO),
         Shape::Area { centre, u, v, .. } => (centre, u.abs() + v.abs()),
         Shape::Sphere { centre, radius } => (centre, Vec3A::splat(radius)),
         Shape::Mesh(ref m) => ((m.min + m.max) / 2.0, (m.max - m.min) / 2.0),

@@ -21,7 +21,16 @@
 //!   an emitting `rectangle` of radiance `π·rgb/A` on the side of `u × v`, black behind; sphere
 //!   → an emitting `sphere` of radiance `rgb/R²` (see [`crate::light`] for why those are the
 //!   same lights); an emissive surface (a glTF emissive material, whose mesh light covers its
-//!   triangles) → its shape with its BSDF and an `area` emitter of its radiance.
+//!   triangles) → its shape with its BSDF and an `area` emitter of its radiance; directional →
+//!   `directional` of irradiance `π·rgb` along the light's direction of travel.
+//! - A spot → `spot` of intensity `π·rgb` aimed along its axis, `cutoff_angle` its outer and
+//!   `beam_width` its inner angle. **Not the same falloff**: Mitsuba's ramps linearly in the
+//!   angle, `(outer − θ)/(outer − inner)`, where glTF's (caustic's, [`crate::light::spot`]) is
+//!   the square of a ramp in the cosine, `((cos θ − cos outer)/(cos inner − cos outer))²`,
+//!   which is darker through the penumbra (at its middle about a quarter against a half). The
+//!   two agree within the inner cone and beyond the outer one, so only a spot whose inner angle
+//!   is (nearly) its outer one, a hard cone, is the same light in both renderers; the exporter
+//!   writes the others all the same, and the difference is the penumbra's, never elsewhere.
 //! - The camera: `perspective` with the vertical field of view, a box pixel filter, an HDR film.
 //!   The integrator: `path`, unbounded depth with Russian roulette.
 //!
@@ -435,6 +444,33 @@ fn emitter(s: &mut String, light: &Light) -> std::result::Result<(), String> {
                 s,
                 "  <emitter type=\"point\"><point name=\"position\" value=\"{}\"/><rgb name=\"intensity\" value=\"{}\"/></emitter>",
                 rgb(position),
+                rgb(pi * light.colour)
+            );
+        }
+        LightShape::Spot {
+            position,
+            axis,
+            cone,
+        } => {
+            // Mitsuba's falloff is linear in angle, not glTF's: see the module doc.
+            let _ = writeln!(
+                s,
+                "  <emitter type=\"spot\"><transform name=\"to_world\"><lookat origin=\"{}\" target=\"{}\" up=\"{}\"/></transform>\
+                 <rgb name=\"intensity\" value=\"{}\"/><float name=\"cutoff_angle\" value=\"{}\"/>\
+                 <float name=\"beam_width\" value=\"{}\"/></emitter>",
+                rgb(position),
+                rgb(position + axis),
+                rgb(axis.any_orthonormal_vector()),
+                rgb(pi * light.colour),
+                cone.outer.to_degrees(),
+                cone.inner.to_degrees()
+            );
+        }
+        LightShape::Directional { dir, .. } => {
+            let _ = writeln!(
+                s,
+                "  <emitter type=\"directional\"><vector name=\"direction\" value=\"{}\"/><rgb name=\"irradiance\" value=\"{}\"/></emitter>",
+                rgb(dir),
                 rgb(pi * light.colour)
             );
         }

@@ -15,6 +15,7 @@
 //! | glTF emitted radiance `emissiveFactor × emissiveStrength`, per channel; a mesh light's `rgb = L·A/π` after placing | `[0, 1e8]` ([`MAX_INTENSITY`]) | a mesh light is an area light spread over triangles: the same bounds as a light's colour |
 //! | light `power` | `[0, 1e30]` ([`MAX_POWER`]) | only a weight among lights: the sum over many lights must stay finite |
 //! | sphere-light radius, area-light size `√|u × v|` | `≥ 1e-6` ([`MIN_LIGHT_SIZE`]) | an emitter's radiance is `rgb/R²` (`π·rgb/area`): a radius of `1e-30` was infinite |
+//! | spot cone angles (`gr.spot_light` in degrees, glTF `innerConeAngle`, `outerConeAngle` in radians); spot and directional directions | `0 ≤ inner ≤ outer ≤ 90°`; a direction not zero | glTF's range: beyond 90° the cone's falloff is no longer one ramp in the cosine; a zero direction has no axis |
 //! | photons one light emits for one map (`num_photons`, its share of `--photons`, times `--photon-scale`) | `≤ 1e9` ([`MAX_PHOTONS`]) | 10^9 stored photons would need 20 GB |
 //!
 //! A reflectance above 1 amplifies light at every bounce: a path between two facing mirrors of

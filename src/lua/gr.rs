@@ -19,11 +19,11 @@
 //! functions that exist.
 
 use super::legacy::{self, Sign};
-use super::{MAX_PIXELS, State};
+use super::{MAX_PIXELS, State, lights};
 use crate::budget::At;
 use crate::desc::{
-    CameraDesc, CsgOp, LightDesc, LightId, LightShape, MaterialDesc, MaterialId, MeshDesc,
-    MeshFormat, MeshId, MeshSource, NodeDesc, NodeId, NodeKind, RenderDesc,
+    CameraDesc, CsgOp, LightId, MaterialDesc, MaterialId, MeshDesc, MeshFormat, MeshId, MeshSource,
+    NodeDesc, NodeId, NodeKind, RenderDesc,
 };
 use crate::error::{Error, Fault};
 use crate::lua::args::{Args, LightRef, MaterialRef, NodeRef, caller_loc, lua_err};
@@ -76,9 +76,15 @@ const GR: &[(&str, Call, GrFn)] = &[
     ("material", Call::Function, gr_material),
     ("absorption", Call::Function, gr_absorption),
     ("roughness", Call::Function, gr_roughness),
-    ("light", Call::Function, gr_light),
-    ("area_light", Call::Function, gr_area_light),
-    ("sphere_light", Call::Function, gr_sphere_light),
+    ("light", Call::Function, lights::gr_light),
+    ("area_light", Call::Function, lights::gr_area_light),
+    ("sphere_light", Call::Function, lights::gr_sphere_light),
+    ("spot_light", Call::Function, lights::gr_spot_light),
+    (
+        "directional_light",
+        Call::Function,
+        lights::gr_directional_light,
+    ),
     ("settings", Call::Function, |_, s, a| {
         super::settings::settings(s, a).map(|()| Value::Nil)
     }),
@@ -393,99 +399,6 @@ fn gr_roughness(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     }
     s.desc.materials[material.0 as usize].roughness = roughness as f32;
     Ok(Value::Nil)
-}
-
-fn gr_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
-    new_light(lua, s, a, LightShape::Point)
-}
-
-/// `gr.area_light(pos, rgb, falloff, power, num_photons, u, v)`: power and num_photons may be nil.
-fn gr_area_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
-    let (u, v) = (a.point(6)?, a.point(7)?);
-    let min_area = crate::range::MIN_LIGHT_SIZE * crate::range::MIN_LIGHT_SIZE;
-    if u.cross(v).length() < min_area {
-        return Err(a.bad(
-            7,
-            format!("the edges u and v must span a parallelogram of area at least {min_area:e} (not zero or parallel)"),
-        ));
-    }
-    let (u, v) = (u.as_vec3(), v.as_vec3());
-    new_light(lua, s, a, LightShape::Area { u, v })
-}
-
-/// `gr.sphere_light(pos, rgb, falloff, power, num_photons, radius)`.
-fn gr_sphere_light(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
-    let radius = a.length(6, "radius")?;
-    if radius < crate::range::MIN_LIGHT_SIZE {
-        let min = crate::range::MIN_LIGHT_SIZE;
-        return Err(a.bad(6, format!("radius {radius:e} is smaller than {min:e}")));
-    }
-    let radius = radius as f32;
-    new_light(lua, s, a, LightShape::Sphere { radius })
-}
-
-fn new_light(lua: &Lua, s: &mut State, a: &Args, shape: LightShape) -> mlua::Result<Value> {
-    let position = a.point(1)?.as_vec3();
-    let colour = a.intensity(2)?;
-    let falloff64 = a.dvec3(3)?;
-    let falloff = falloff64.as_vec3();
-    let (min, max) = (crate::range::MIN_FALLOFF, crate::range::MAX_FALLOFF);
-    if let Some(c) = falloff64
-        .to_array()
-        .into_iter()
-        .find(|&c| c != 0.0 && !(min..=max).contains(&c))
-    {
-        return Err(a.bad(
-            3,
-            format!("falloff coefficient {c:e} must be 0 or in [{min:e}, {max:e}]"),
-        ));
-    }
-    if falloff.min_element() < 0.0 || falloff.max_element() <= 0.0 {
-        return Err(a.bad(
-            3,
-            format!(
-                "falloff {{c0, c1, c2}} must be >= 0 and not all 0, got {{{}, {}, {}}}",
-                falloff.x, falloff.y, falloff.z
-            ),
-        ));
-    }
-    let power = a.opt_number(4)?;
-    if let Some(p) = power
-        && !(0.0..=crate::range::MAX_POWER).contains(&p)
-    {
-        let max = crate::range::MAX_POWER;
-        return Err(a.bad(
-            4,
-            format!(
-                "power must be in [0, {max:e}], got {}",
-                crate::range::show(p)
-            ),
-        ));
-    }
-    let photons = a.opt_number(5)?;
-    if let Some(n) = photons
-        && !(0.0..=crate::range::MAX_PHOTONS as f64).contains(&n)
-    {
-        return Err(a.bad(
-            5,
-            format!(
-                "photon count must be in [0, {}], got {n}",
-                crate::range::MAX_PHOTONS
-            ),
-        ));
-    }
-    charge(s, a, size_of::<LightDesc>(), "a light")?;
-    let id = LightId(s.desc.lights.len() as u32);
-    s.desc.lights.push(LightDesc {
-        shape,
-        position,
-        colour,
-        falloff: falloff.to_array(),
-        power: power.map(|p| p as f32),
-        photons: photons.map(|n| n as u64),
-        loc: a.loc.clone(),
-    });
-    Ok(Value::UserData(lua.create_userdata(LightRef(id))?))
 }
 
 fn gr_render(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {

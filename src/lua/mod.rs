@@ -41,6 +41,7 @@ pub mod globals;
 mod gr;
 mod inline;
 mod legacy;
+mod lights;
 pub mod sandbox;
 pub mod settings;
 

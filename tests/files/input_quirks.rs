@@ -278,7 +278,9 @@ fn a_scene_at_the_edge_of_the_coordinate_range_renders_finite_pixels() {
     let lights = "gr.light({1e8, 1e8, 1e8}, {1e8, 1e8, 1e8}, {1e-6, 0, 0}, 1e30, 2000),\n\
                   gr.light({-1e8, 1e8, 0}, {1e8, 1e8, 1e8}, {0, 0, 1e-6}, 1e30, 2000),\n\
                   gr.area_light({0, 1e8, -5e7}, {1e8, 1e8, 1e8}, {0, 1e-6, 0}, nil, 2000, {1e8, 0, 0}, {0, 0, 1e8}),\n\
-                  gr.sphere_light({-1e8, -1e8, 1e8}, {1e8, 1e8, 1e8}, {1e6, 1e6, 1e6}, nil, 2000, 1e8)";
+                  gr.sphere_light({-1e8, -1e8, 1e8}, {1e8, 1e8, 1e8}, {1e6, 1e6, 1e6}, nil, 2000, 1e8),\n\
+                  gr.spot_light({1e8, -1e8, 1e8}, {-1, 1, -1}, {1e8, 1e8, 1e8}, 0, 90, 1e30, 2000),\n\
+                  gr.directional_light({1e-30, -1e30, 1}, {1e8, 1e8, 1e8}, 1e30, 2000)";
     assert_renders_finite(&ranged_scene(
         body,
         lights,
@@ -296,7 +298,9 @@ fn a_scene_at_the_edge_of_the_light_ranges_renders_finite_pixels() {
                 ball = gr.sphere('ball'); ball:set_material(edge); ball:scale(0.5, 0.5, 0.5); root:add_child(ball)";
     let lights = "gr.light({0, 1, 0.6}, {1e8, 1e8, 1e8}, {1e-6, 0, 0}, 1e30, 2000),\n\
                   gr.sphere_light({0.5, 0.5, 1}, {1e8, 1e8, 1e8}, {1e-6, 0, 1e-6}, 1, 2000, 1e-6),\n\
-                  gr.area_light({-0.5, 0.5, 1}, {1e8, 1e8, 1e8}, {1e-6, 1e-6, 0}, 1, 2000, {1e-6, 0, 0}, {0, 0, 1e-6})";
+                  gr.area_light({-0.5, 0.5, 1}, {1e8, 1e8, 1e8}, {1e-6, 1e-6, 0}, 1, 2000, {1e-6, 0, 0}, {0, 0, 1e-6}),\n\
+                  gr.spot_light({0, 0.6, 0}, {0, -1, 0}, {1e8, 1e8, 1e8}, 0, 0, 1, 2000),\n\
+                  gr.spot_light({0, 0.6, 0.1}, {0, -1, 0}, {1e8, 1e8, 1e8}, 1e-6, 1e-6, 1, 2000)";
     assert_renders_finite(&ranged_scene(body, lights, "{0, 0, 3}", "{1e8, 1e8, 1e8}"));
 }
 
@@ -339,6 +343,14 @@ fn script_values_outside_the_ranges_are_refused_at_their_line() {
         (
             light("{0, 0, 2e8}, {1, 1, 1}, {1, 0, 0}"),
             bad(1, 1, "light", "coordinate 2e8 is outside the renderer's range [-1e8, 1e8]"),
+        ),
+        (
+            "l = gr.spot_light({0, 0, 0}, {0, -1, 0}, {1e9, 1, 1}, 10, 20)".to_owned(),
+            bad(1, 3, "spot_light", "colour component 1e9 is outside [0, 1e8]"),
+        ),
+        (
+            "l = gr.directional_light({0, -1, 0}, {1, 1, 1}, 1e35)".to_owned(),
+            bad(1, 3, "directional_light", "power must be in [0, 1e30], got 1e35"),
         ),
         (
             "l = gr.sphere_light({0, 0, 0}, {1, 1, 1}, {1, 0, 0}, nil, nil, 1e-30)".to_owned(),

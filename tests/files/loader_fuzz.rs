@@ -65,6 +65,8 @@ fn gr_call() -> impl Strategy<Value = String> {
         "light",
         "area_light",
         "sphere_light",
+        "spot_light",
+        "directional_light",
         "nh_sphere",
         "nh_box",
         "cylinder",

@@ -5,7 +5,7 @@ use crate::common;
 
 use crate::common::{lua_error, out_dir, run_lua, run_lua_in};
 use caustic::Fault;
-use caustic::desc::{CsgOp, NodeKind};
+use caustic::desc::{CsgOp, LightShape, NodeKind};
 use caustic::scene::build::{build_scene, count_placements};
 use caustic::scene::meshes::load_meshes;
 use glam::DVec3;
@@ -130,6 +130,82 @@ fn extended_arguments_are_optional_and_stored() {
         }
     ));
     assert_eq!(d.nodes[3].kind, NodeKind::Group, "a joint is a plain node");
+}
+
+/// `gr.spot_light(pos, dir, rgb, inner, outer [, power [, num_photons]])` and
+/// `gr.directional_light(dir, rgb [, power [, num_photons]])`: angles in degrees stored in
+/// radians, directions normalised, physical falloff; bad angles, zero directions and NaN are
+/// errors at the line, numbered like lauxlib's.
+#[test]
+fn spot_and_directional_lights_are_described_and_checked() {
+    let d = run_lua(
+        "s = gr.spot_light({0, 2, 0}, {0, -3, 0}, {1, 0.5, 0.25}, 15, 20)\n\
+         t = gr.spot_light({0, 2, 0}, {1, 0, 0}, {1, 1, 1}, 0, 90, 7, 1000)\n\
+         u = gr.directional_light({0, 0, -2}, {0.3, 0.3, 0.3})\n\
+         v = gr.directional_light({1, -1, 0}, {0.3, 0.3, 0.3}, nil, 500)",
+    )
+    .unwrap();
+    let l = &d.lights;
+    assert_eq!(
+        l[0].shape,
+        LightShape::Spot {
+            direction: glam::Vec3::NEG_Y,
+            inner: 15f64.to_radians() as f32,
+            outer: 20f64.to_radians() as f32,
+        }
+    );
+    assert_eq!(
+        (l[0].position, l[0].falloff, l[0].power, l[0].photons),
+        (glam::vec3(0.0, 2.0, 0.0), [0.0, 0.0, 1.0], None, None)
+    );
+    assert_eq!((l[1].power, l[1].photons), (Some(7.0), Some(1000)));
+    assert_eq!(
+        l[2].shape,
+        LightShape::Directional {
+            direction: glam::Vec3::NEG_Z
+        }
+    );
+    assert_eq!(l[2].colour, glam::Vec3::splat(0.3));
+    assert_eq!(
+        (l[3].power, l[3].photons, l[3].loc.line),
+        (None, Some(500), 4)
+    );
+    for (script, want) in [
+        (
+            "s = gr.spot_light({0, 2, 0}, {0, -1, 0}, {1, 1, 1}, 30, 20)",
+            "test.lua:1: bad argument #5 to 'spot_light' (spot angles must satisfy 0 <= inner <= outer <= 90 degrees, got inner 30 and outer 20)",
+        ),
+        (
+            "s = gr.spot_light({0, 2, 0}, {0, -1, 0}, {1, 1, 1}, 10, 95)",
+            "test.lua:1: bad argument #5 to 'spot_light' (spot angles must satisfy 0 <= inner <= outer <= 90 degrees, got inner 10 and outer 95)",
+        ),
+        (
+            "s = gr.spot_light({0, 2, 0}, {0, -1, 0}, {1, 1, 1}, -1, 20)",
+            "test.lua:1: bad argument #5 to 'spot_light' (spot angles must satisfy 0 <= inner <= outer <= 90 degrees, got inner -1 and outer 20)",
+        ),
+        (
+            "s = gr.spot_light({0, 2, 0}, {0, -1, 0}, {1, 1, 1}, 0/0, 20)",
+            "test.lua:1: bad argument #4 to 'spot_light' (finite number expected, got NaN)",
+        ),
+        (
+            "s = gr.spot_light({0, 2, 0}, {0, 0, 0}, {1, 1, 1}, 10, 20)",
+            "test.lua:1: bad argument #2 to 'spot_light' (direction must not be zero)",
+        ),
+        (
+            "s = gr.directional_light({0, 0/0, 0}, {1, 1, 1})",
+            "test.lua:1: bad argument #1 to 'directional_light' (entry 2: finite number expected, got NaN)",
+        ),
+        (
+            "s = gr.directional_light({0, 0, 0}, {1, 1, 1})",
+            "test.lua:1: bad argument #1 to 'directional_light' (direction must not be zero)",
+        ),
+        (
+            "s = gr.directional_light({0, -1, 0}, {-1, 1, 1})",
+            "test.lua:1: bad argument #2 to 'directional_light' (colour components must be >= 0, got {-1, 1, 1})",
+        ),
+    ] {
+        assert_eq!(lua_error(script), want, "{script}");
+    }
 }
 
 #[test]
@@ -419,7 +495,7 @@ fn unknown_gr_functions_list_the_functions_that_exist() {
         "test.lua:2: unknown function gr.spere (caustic has gr.node, gr.joint, gr.sphere, gr.cube, \
          gr.cylinder, gr.cone, gr.nh_sphere, gr.nh_box, gr.mesh, gr.water_mesh, gr.union, \
          gr.intersection, gr.difference, gr.material, gr.absorption, gr.roughness, gr.light, gr.area_light, gr.sphere_light, \
-         gr.settings, gr.render)"
+         gr.spot_light, gr.directional_light, gr.settings, gr.render)"
     );
     assert_eq!(
         lua_error("s = gr.nh_sphere('s', {0, 0, 0})"),

@@ -88,6 +88,14 @@ fn statement() -> impl Strategy<Value = String> {
         1 => ((0usize..3), triple(), colour(), number()).prop_map(|(i, p, c, r)| {
             format!("l{i} = gr.sphere_light({p}, {c}, {{1, 0, 0}}, 1, {r})")
         }),
+        1 => ((0usize..3), triple(), triple(), colour(), number(), number()).prop_map(
+            |(i, p, d, c, inner, outer)| {
+                format!("l{i} = gr.spot_light({p}, {d}, {c}, {inner}, {outer}, 1)")
+            }
+        ),
+        1 => ((0usize..3), triple(), colour()).prop_map(|(i, d, c)| {
+            format!("l{i} = gr.directional_light({d}, {c}, 1)")
+        }),
         // Repetition: the DAGs and counts a five-line script can make.
         1 => (node_ref(), node_ref(), 1u32..200_000).prop_map(|(a, b, n)| {
             format!("for _ = 1, {n} do {a}:add_child({b}) end")

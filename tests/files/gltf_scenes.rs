@@ -318,6 +318,221 @@ fn an_emissive_surface_exports_as_one_emitting_shape() {
         "the panel's shape, BSDF and radiance: {shape}"
     );
     assert!(!xml.contains("_light"), "no separate light shape: {xml}");
+/// Renders the floor of `desc` (made matte, kd 0.5) seen from the file's camera at 96 × 96,
+/// one ray through each pixel's centre, course's renderer; returns each pixel that sees the
+/// floor well inside its edges, with the point it sees and its value.
+fn floor_pixels(desc: &mut caustic::desc::SceneDesc) -> Vec<(Vec3, Vec3)> {
+    matte(desc, 0.5);
+    let mut r = desc.renders[0].clone();
+    (r.width, r.height) = (96, 96);
+    let mut scene = build_scene(desc, &r).unwrap();
+    let camera = Camera::new(&r.camera, r.width, r.height);
+    let film = render_scene(&mut scene, &camera, r.width, r.height, &whitted());
+    let mut out = Vec::new();
+    for y in 0..r.height {
+        for x in 0..r.width {
+            let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+            let p = Vec3::from(ray.at(-ray.origin.y / ray.dir.y));
+            if ray.dir.y < 0.0 && p.x.abs() < 1.95 && p.z.abs() < 1.95 {
+                out.push((p, Vec3::from(film.get(x, y))));
+            }
+        }
+    }
+    out
+}
+
+/// A file's spot light in Blender's units: `intensity` cd is `intensity/683` W/sr down its
+/// node's −Z, with glTF's cone falloff (`t = clamp((cos θ − cos outer)/(cos inner − cos
+/// outer), 0, 1)`, intensity times `t²`). On a matte floor of kd 0.5 every pixel is the closed
+/// form `kd/π · I/683 · t² · cos θ / d²` to 1% on the axis and in the ramp between the cones,
+/// and exactly 0 beyond the outer cone.
+#[test]
+fn a_spot_light_lights_the_floor_as_the_closed_form_and_nothing_beyond_its_cone() {
+    let dir = out_dir("gltf-scene-spot");
+    let f = floor();
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    // The camera 4 above the floor and the spot 1.5 above (0.3, 0, −0.2), both looking down
+    // (−90° about x); the spot's I/683 is π W/sr, so its rgb is its colour.
+    let (inner, outer) = (0.35f64, 0.5f64);
+    let rest = format!(
+        r#""nodes":[{{"mesh":0}},
+          {{"camera":0,"translation":[0,4,0],"rotation":[{m},0,0,{s}]}},
+          {{"translation":[0.3,1.5,-0.2],"rotation":[{m},0,0,{s}],
+            "extensions":{{"KHR_lights_punctual":{{"light":0}}}}}}],
+        "cameras":[{{"type":"perspective","perspective":{{"yfov":1.2,"znear":0.1}}}}],
+        "extensionsUsed":["KHR_lights_punctual"],
+        "extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"spot","name":"Lamp",
+          "color":[1,0.5,0.25],"intensity":{i},
+          "spot":{{"innerConeAngle":{inner},"outerConeAngle":{outer}}}}}]}}}},
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}]"#,
+        m = -s,
+        i = 683.0 * std::f64::consts::PI,
+    );
+    let path = f.write_glb(&dir, "spot", &rest);
+    let mut desc = describe(&path, &view());
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let light = &desc.lights[0];
+    let LightShape::Spot {
+        direction,
+        inner: i,
+        outer: o,
+    } = light.shape
+    else {
+        panic!("not a spot: {:?}", light.shape)
+    };
+    assert!(
+        (direction - vec3(0.0, -1.0, 0.0)).length() < 1e-6,
+        "{direction}"
+    );
+    assert_eq!((i, o), (inner as f32, outer as f32));
+    assert!((light.colour - vec3(1.0, 0.5, 0.25)).length() < 1e-5);
+    // The spot's photon share is its flux: π·rgb·∫t² dω, summed over the channels.
+    let w = inner.cos() - outer.cos();
+    let weighted = std::f64::consts::TAU * (1.0 - outer.cos() - 2.0 * w / 3.0);
+    let flux = std::f64::consts::PI * weighted * 1.75;
+    assert!((f64::from(light.power.unwrap()) / flux - 1.0).abs() < 1e-5);
+
+    let spot = vec3(0.3, 1.5, -0.2);
+    let (mut on_axis, mut ramp, mut dark) = (0, 0, 0);
+    for (p, got) in floor_pixels(&mut desc) {
+        let to = spot - p;
+        let d = f64::from(to.length());
+        let cos = f64::from(to.y) / d;
+        let t = ((cos - outer.cos()) / w).clamp(0.0, 1.0);
+        let want = vec3(1.0, 0.5, 0.25) * (0.5 * t * t * cos / (d * d)) as f32;
+        if cos < outer.cos() - 1e-4 {
+            assert_eq!(got, Vec3::ZERO, "{p}: beyond the outer cone");
+            dark += 1;
+        } else if cos > outer.cos() + 1e-4 {
+            assert!(
+                (got - want).abs().max_element() <= 0.01 * want.max_element(),
+                "{p} (cos θ {cos}): {got} against {want}"
+            );
+            if cos > inner.cos() {
+                on_axis += 1;
+            } else {
+                ramp += 1;
+            }
+        }
+    }
+    assert!(
+        on_axis > 100 && ramp > 100 && dark > 1000,
+        "{on_axis} on the axis, {ramp} in the ramp, {dark} dark"
+    );
+}
+
+/// A file's directional light in Blender's units: `intensity` lx is `intensity/683` W/m²
+/// travelling down its node's −Z, with no falloff: a matte floor of kd 0.5 is `kd/π · E ·
+/// cos θ` everywhere, and the photon share is the flux through the disc over the file.
+#[test]
+fn a_directional_light_lights_the_floor_as_e_kd_over_pi_cos() {
+    let dir = out_dir("gltf-scene-sun");
+    let f = floor();
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    // −60° about x: the light travels along (0, −cos 30°, −sin 30°); E/683 = π·colour.
+    let rest = format!(
+        r#""nodes":[{{"mesh":0}},
+          {{"camera":0,"translation":[0,4,0],"rotation":[{m},0,0,{s}]}},
+          {{"translation":[5,5,5],"rotation":[-0.5,0,0,0.8660254037844386],
+            "extensions":{{"KHR_lights_punctual":{{"light":0}}}}}}],
+        "cameras":[{{"type":"perspective","perspective":{{"yfov":1.2,"znear":0.1}}}}],
+        "extensionsUsed":["KHR_lights_punctual"],
+        "extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"directional",
+          "color":[0.2,0.4,0.6],"intensity":{i}}}]}}}},
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}]"#,
+        m = -s,
+        i = 683.0 * std::f64::consts::PI,
+    );
+    let path = f.write_glb(&dir, "sun", &rest);
+    let mut desc = describe(&path, &view());
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let light = &desc.lights[0];
+    let LightShape::Directional { direction } = light.shape else {
+        panic!("not directional: {:?}", light.shape)
+    };
+    let cos = 30f32.to_radians().cos();
+    assert!(
+        (direction - vec3(0.0, -cos, -0.5)).length() < 1e-6,
+        "{direction}"
+    );
+    assert!((light.colour - vec3(0.2, 0.4, 0.6)).length() < 1e-6);
+    // The flux through the disc over the 4 × 4 floor's sphere (radius √8 and a hundredth):
+    // E·πR², E = π·rgb.
+    let r = 8f32.sqrt() * 1.01;
+    let pi = std::f32::consts::PI;
+    let flux = pi * pi * r * r * 1.2;
+    assert!((light.power.unwrap() / flux - 1.0).abs() < 1e-3, "{flux}");
+    let pixels = floor_pixels(&mut desc);
+    assert!(pixels.len() > 4000, "{}", pixels.len());
+    let want = vec3(0.2, 0.4, 0.6) * 0.5 * cos;
+    for (p, got) in pixels {
+        assert!(
+            (got - want).abs().max_element() < 1e-5,
+            "{p}: {got} against {want}"
+        );
+    }
+}
+
+/// A spot's cone angles out of glTF's range (inner above outer, beyond π/2, negative,
+/// infinite), an intensity that overflows to infinity, and a spot or sun whose node gives it
+/// no direction are errors naming the file and the light.
+#[test]
+fn bad_spot_and_directional_lights_are_errors_naming_the_light() {
+    let dir = out_dir("gltf-scene-bad-lights");
+    let f = floor();
+    let file = |name: &str, light: &str, node: &str| {
+        let rest = format!(
+            r#""nodes":[{{"mesh":0}},{{{node}"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}}],
+               "extensionsUsed":["KHR_lights_punctual"],
+               "extensions":{{"KHR_lights_punctual":{{"lights":[{light}]}}}},
+               "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}]"#
+        );
+        f.write_glb(&dir, name, &rest)
+    };
+    let spot = |inner: &str, outer: &str| {
+        format!(
+            r#"{{"type":"spot","name":"Lamp","spot":{{"innerConeAngle":{inner},"outerConeAngle":{outer}}}}}"#
+        )
+    };
+    for (name, inner, outer) in [
+        ("inner_above_outer", "0.6", "0.5"),
+        ("beyond_right_angle", "0.1", "1.6"),
+        ("negative", "-0.1", "0.5"),
+        ("infinite", "0.1", "1e39"),
+    ] {
+        let err = describe_err(&file(name, &spot(inner, outer), ""), None);
+        assert!(
+            err.contains(&format!("{name}.glb"))
+                && err.contains("light 'Lamp'")
+                && err.contains("0 ≤ inner ≤ outer ≤ π/2"),
+            "{err}"
+        );
+    }
+    let err = describe_err(
+        &file(
+            "overflowing",
+            r#"{"type":"directional","intensity":1e39}"#,
+            "",
+        ),
+        None,
+    );
+    assert!(
+        err.contains("overflowing.glb") && err.contains("light 0"),
+        "{err}"
+    );
+    for (name, light) in [
+        ("flat_spot", spot("0.1", "0.5")),
+        (
+            "flat_sun",
+            r#"{"type":"directional","name":"Sun"}"#.to_owned(),
+        ),
+    ] {
+        let err = describe_err(&file(name, &light, r#""scale":[0,0,0],"#), None);
+        assert!(
+            err.contains(&format!("{name}.glb")) && err.contains("no direction"),
+            "{err}"
+        );
+    }
 }
 
 /// What caustic cannot honour is listed, one line each, and a file without any light is lit
@@ -326,13 +541,8 @@ fn an_emissive_surface_exports_as_one_emitting_shape() {
 fn what_the_scene_uses_and_caustic_ignores_is_listed() {
     let dir = out_dir("gltf-scene-ignored");
     let f = floor();
-    let rest = r#""nodes":[{"mesh":0},
-          {"extensions":{"KHR_lights_punctual":{"light":0}}},
-          {"extensions":{"KHR_lights_punctual":{"light":1}}}],
-        "extensionsUsed":["KHR_lights_punctual","KHR_materials_clearcoat"],
-        "extensions":{"KHR_lights_punctual":{"lights":[
-          {"type":"spot","name":"Spot","spot":{"outerConeAngle":0.5}},
-          {"type":"directional","name":"Sun","intensity":3}]}},
+    let rest = r#""nodes":[{"mesh":0}],
+        "extensionsUsed":["KHR_materials_clearcoat"],
         "materials":[{"name":"Coated","normalTexture":{"index":0},"alphaMode":"BLEND"}],
         "textures":[{"source":0}],"images":[{"uri":"n.png"}],
         "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}]"#;
@@ -340,8 +550,6 @@ fn what_the_scene_uses_and_caustic_ignores_is_listed() {
     let desc = describe(&path, &view());
     let all = desc.warnings.join("\n");
     for want in [
-        "light 'Spot': spot lights are not rendered yet",
-        "light 'Sun': directional lights are not rendered yet",
         "extension KHR_materials_clearcoat is not read",
         "material 'Coated': alpha (drawn opaque) not read",
         "the file has no light caustic renders",
@@ -445,7 +653,7 @@ fn bad_views_and_emitters_are_errors_naming_the_file() {
         1024
     );
     let err = describe_err(&lights("too_many_lights", "1", 1025), None);
-    assert!(err.contains("more than 1024 point lights"), "{err}");
+    assert!(err.contains("more than 1024 punctual lights"), "{err}");
 
     // An emitter of radiance 1e9: over the range of a light's intensity.
     let bright = f.write_glb(
@@ -486,7 +694,7 @@ fn bad_views_and_emitters_are_errors_naming_the_file() {
 
 /// The Blender-exported scenes in `scenes/gltf/` (`tools/gltf_scenes`) render through the one
 /// frame call at the default settings, photon maps and all, to finite images in which the
-/// emissive panel or the point light lights something: the path `caustic render scene.glb`
+/// emissive panel or the punctual lights light something: the path `caustic render scene.glb`
 /// takes. (Their agreement with Mitsuba 3 is `tools/validate`'s, in docs/validation.md.)
 #[test]
 fn blender_scenes_render_at_the_defaults() {
@@ -496,6 +704,7 @@ fn blender_scenes_render_at_the_defaults() {
         "copper_bowl",
         "frosted_sphere",
         "textured_box",
+        "spot_and_sun",
     ] {
         let path = dir.join(format!("{name}.glb"));
         let desc = describe(&path, &view());

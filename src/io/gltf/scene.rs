@@ -16,22 +16,36 @@
 //!   node's −Z with +Y up; `yfov` is the vertical field of view. The image is `--size` pixels, or
 //!   [`DEFAULT_WIDTH`] wide at the camera's `aspectRatio` (4:3 without one). A file without a
 //!   camera is framed from the front (+Z), a little above, its bounds filling the view.
-//! - **Punctual lights** (`KHR_lights_punctual`) in the units Blender's exporter writes: a point
-//!   light of `intensity` candela is `intensity / 683` W/sr (683 lm/W, as Blender converts its
-//!   watts), so that lights and emissive surfaces, whose `emissiveFactor × emissiveStrength`
-//!   Blender writes as the radiance Cycles renders, agree. In caustic's terms (the course's
-//!   `rgb` is a physical intensity over π, [`crate::light`]) `rgb = color · intensity /
-//!   (683 π)`, with physical (inverse-square) falloff. Lights and emitters are physical: each
-//!   has a `power` (its flux), so photon mapping is on and shares the photons by flux.
+//! - **Punctual lights** (`KHR_lights_punctual`) in the units Blender's exporter writes, all
+//!   at 683 lm/W, as Blender converts its watts, so that lights and emissive surfaces (whose
+//!   `emissiveFactor × emissiveStrength` Blender writes as the radiance Cycles renders) agree.
+//!   In caustic's terms (the course's `rgb` is a physical quantity over π, [`crate::light`])
+//!   every kind is `rgb = color · intensity / (683 π)`:
+//!   - a **point** light of `intensity` cd is `intensity / 683` W/sr, with physical
+//!     (inverse-square) falloff;
+//!   - a **spot** is that point light shining down its node's −Z, times glTF's angular falloff
+//!     between `innerConeAngle` and `outerConeAngle` ([`crate::light::spot`]: the
+//!     specification's squared ramp in the cosine, exactly 0 beyond the outer cone). Its flux is
+//!     `intensity/683 · ∫ t² dω`, less than a point light's: Blender writes a spot of P watts
+//!     as the point light of P watts, whose cone then cuts it;
+//!   - a **directional** light of `intensity` lx is an irradiance of `intensity / 683` W/m² on
+//!     a surface facing it, travelling down its node's −Z from beyond the scene
+//!     ([`crate::light::directional`]); a surface of reflectance `kd` at angle θ to it shows
+//!     `kd/π · E · cos θ`.
+//!
+//!   Lights and emitters are physical: each has a `power` (its flux summed over the channels;
+//!   a directional light's through the disc that covers the file's bounds), so photon mapping
+//!   is on and shares the photons by flux.
 //! - **Bounds**: a light's `color × intensity / (683 π)` must lie within a light colour's range
-//!   ([`crate::range::MAX_INTENSITY`]) and its position within the coordinate range, else the
-//!   file is refused; so is a file placing more than [`MAX_LIGHTS`] point lights.
+//!   ([`crate::range::MAX_INTENSITY`]), its position within the coordinate range, a spot's cone
+//!   angles within `0 ≤ inner ≤ outer ≤ π/2`, and a spot's or directional light's node must
+//!   give it a direction; else the file is refused, with the light named (by its name, or
+//!   `light N` by its index). So is a file placing more than [`MAX_LIGHTS`] punctual lights.
 //! - **A file with no light at all** (no punctual light and no emissive material, as many
 //!   sample models) gets a point light at the camera, bright enough that the middle of its
 //!   bounds receives an irradiance of 1 W/m², and a warning says so.
 //!
-//! What caustic cannot honour (animations, skins, morph targets, orthographic cameras, spot and
-//! directional lights, alpha, vertex colours, occlusion and transmission textures, extensions it
+//! What caustic cannot honour (animations, skins, morph targets, orthographic cameras, alpha, vertex colours, occlusion and transmission textures, extensions it
 //! does not read) and what it stands in for (an emissive texture's pattern by its mean colour,
 //! every sampler by bilinear repeating lookups, texture coordinate sets beyond the first by the
 //! first) is listed in [`SceneDesc::warnings`], printed once by `caustic render` and
@@ -126,14 +140,12 @@ pub fn describe_scene(path: &Path, view: &View, budget: Budget) -> Result<SceneD
     let mut warnings = unsupported(&doc);
     for (node, world) in &placed {
         let Some(light) = node.light() else { continue };
-        let Some(d) = point_light(&light, world, &loc, &mut warnings).map_err(invalid)? else {
-            continue;
-        };
+        let d = punctual_light(&light, world, bounds, &loc).map_err(invalid)?;
         if desc.lights.len() == MAX_LIGHTS {
             return Err(GltfError::Unsupported {
                 path: path.to_owned(),
                 message: format!(
-                    "more than {MAX_LIGHTS} point lights (node {}); caustic samples every \
+                    "more than {MAX_LIGHTS} punctual lights (node {}); caustic samples every \
                      light at every shaded point",
                     node.index()
                 ),
@@ -321,33 +333,26 @@ fn framing((lo, hi): (DVec3, DVec3)) -> CameraDesc {
     }
 }
 
-/// Returns the light a punctual light at `world` makes, or `None` (with a line in `warnings`)
-/// for a kind caustic does not render yet; a colour, intensity or position out of range is an
-/// error.
-fn point_light(
+/// Returns the light a punctual light at `world` makes, in a file whose geometry lies in
+/// `bounds`; a colour, intensity, position, direction or cone angle out of range is an error
+/// naming the light.
+///
+/// The units: a point or spot light of `intensity` cd is `intensity/683` W/sr, a directional
+/// light of `intensity` lx is `intensity/683` W/m², and either is `rgb = color·intensity /
+/// (683 π)` in caustic's terms (see the module doc). Spots and directional lights shine down
+/// their node's −Z.
+fn punctual_light(
     light: &gltf::khr_lights_punctual::Light,
     world: &DAffine3,
+    bounds: (DVec3, DVec3),
     loc: &Loc,
-    warnings: &mut Vec<String>,
-) -> Result<Option<LightDesc>, String> {
+) -> Result<LightDesc, String> {
     use gltf::khr_lights_punctual::Kind;
     let name = light
         .name()
         .map_or(format!("light {}", light.index()), |n| {
             format!("light '{n}'")
         });
-    match light.kind() {
-        Kind::Point => {}
-        Kind::Spot { .. } | Kind::Directional => {
-            let kind = if matches!(light.kind(), Kind::Spot { .. }) {
-                "spot"
-            } else {
-                "directional"
-            };
-            warnings.push(format!("{name}: {kind} lights are not rendered yet"));
-            return Ok(None);
-        }
-    }
     let colour =
         Vec3::from(light.color()) * light.intensity() / (LUMENS_PER_WATT * std::f32::consts::PI);
     crate::range::within(
@@ -357,18 +362,56 @@ fn point_light(
     )?;
     let position = world.translation.as_vec3();
     crate::range::coordinate(position.to_array()).map_err(|e| format!("{name}: {e}"))?;
-    // A physical light: it takes part in photon mapping, its share of photons by its flux
-    // (4π · π·rgb per channel).
-    let flux = 4.0 * std::f32::consts::PI * std::f32::consts::PI * colour.element_sum();
-    Ok(Some(LightDesc {
-        shape: LightShape::Point,
+    let direction = || {
+        let d = world.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
+        if d == DVec3::ZERO || !d.is_finite() {
+            Err(format!(
+                "{name}: its node's transform gives it no direction"
+            ))
+        } else {
+            Ok(d.as_vec3())
+        }
+    };
+    let shape = match light.kind() {
+        Kind::Point => LightShape::Point,
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => {
+            crate::light::spot::check_angles(inner_cone_angle, outer_cone_angle)
+                .map_err(|e| format!("{name}: {e}"))?;
+            LightShape::Spot {
+                direction: direction()?,
+                inner: inner_cone_angle,
+                outer: outer_cone_angle,
+            }
+        }
+        Kind::Directional => LightShape::Directional {
+            direction: direction()?,
+        },
+    };
+    let mut d = LightDesc {
+        shape,
         position,
         colour,
         falloff: [0.0, 0.0, 1.0],
-        power: Some(flux),
+        power: None,
         photons: None,
         loc: loc.clone(),
-    }))
+    };
+    // A physical light: it takes part in photon mapping, its share of photons by its flux
+    // summed over the channels (a directional light's through the disc over the file's bounds,
+    // which the build's bounds of the placed geometry match).
+    let world_box = crate::accel::Bounds {
+        min: bounds.0.as_vec3().into(),
+        max: bounds.1.as_vec3().into(),
+    };
+    d.power = Some(
+        crate::light::Light::from_desc(&d, world_box)
+            .flux()
+            .element_sum(),
+    );
+    Ok(d)
 }
 
 /// Returns the texture coordinate set of each texture a material's textures caustic reads use,

@@ -5,8 +5,8 @@
 //! closed walls), `deep_paths` (Russian roulette past any fixed depth), `shadow_media` (no
 //! shadow rays from inside transparent solids), `weak_branches` (weak reflections shared by a
 //! pixel's samples), `progressive` (the progressive integrator), `effect_plan` (the effects
-//! decided before the passes), `pixel_sampling` (determinism, crops, tiles, adaptive sampling)
-//! and `final_scene`.
+//! decided before the passes), `pixel_sampling` (determinism, crops, tiles, adaptive sampling),
+//! `spot_and_directional` (those lights' shadows and photons) and `final_scene`.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -24,4 +24,5 @@ mod pixel_sampling;
 mod progressive;
 mod shading;
 mod shadow_media;
+mod spot_and_directional;
 mod weak_branches;

@@ -88,6 +88,58 @@ fn lights_map_to_mitsuba_units() {
     );
 }
 
+/// A spot exports as Mitsuba's `spot` of intensity `π·rgb` aimed along its axis, its outer
+/// angle the `cutoff_angle` and its inner the `beam_width` (whose falloff between differs from
+/// glTF's, `src/scene/mitsuba.rs`), and a sun as a `directional` emitter of irradiance `π·rgb`
+/// along its direction of travel.
+#[test]
+fn spot_and_directional_lights_map_to_mitsuba_emitters() {
+    let dir = out_dir("export-spot-sun");
+    let src = format!(
+        "{BOX}{}",
+        render_line(
+            "{gr.spot_light({0, 0.9, 0}, {0, -2, 0}, {1, 2, 3}, 15, 20), gr.directional_light({0, 0, -3}, {0.5, 0.5, 0.5})}"
+        )
+    );
+    let out = export(&dir, &src);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let xml = std::fs::read_to_string(dir.join("s.xml")).unwrap();
+    let pi = std::f32::consts::PI;
+    let spot = xml
+        .lines()
+        .find(|l| l.contains("<emitter type=\"spot\">"))
+        .unwrap_or_else(|| panic!("no spot in {xml}"));
+    for want in [
+        "<lookat origin=\"0, 0.9, 0\" target=\"0, -0.100000024, 0\"".to_owned(),
+        format!(
+            "<rgb name=\"intensity\" value=\"{}, {}, {}\"/>",
+            pi,
+            2.0 * pi,
+            3.0 * pi
+        ),
+        format!(
+            "<float name=\"cutoff_angle\" value=\"{}\"/>",
+            20f32.to_radians().to_degrees()
+        ),
+        format!(
+            "<float name=\"beam_width\" value=\"{}\"/>",
+            15f32.to_radians().to_degrees()
+        ),
+    ] {
+        assert!(spot.contains(&want), "{want} not in {spot}");
+    }
+    let sun = format!(
+        "<emitter type=\"directional\"><vector name=\"direction\" value=\"0, 0, -1\"/>\
+         <rgb name=\"irradiance\" value=\"{0}, {0}, {0}\"/></emitter>",
+        0.5 * pi
+    );
+    assert!(xml.contains(&sun), "{sun} not in {xml}");
+}
+
 #[test]
 fn anything_outside_the_subset_is_refused_with_its_line() {
     let dir = out_dir("export-refused");

@@ -18,9 +18,10 @@
 //!   solid angles, and weighted by the inverse of the resulting direction density (a projection map
 //!   without the map), the power carrying the light's intensity that way (a spot's falloff: a
 //!   target outside its outer cone gets photons of no power, which are dropped). A directional
-//!   light's are parallel: each starts on the disc the target's sphere casts along the light,
-//!   chosen by area ([`parallel_to_targets`]). Only paths light → specular⁺ → diffuse are kept: the photon is stored at the
-//!   first diffuse surface after at least one specular bounce and stops there.
+//!   light's are parallel: each starts on the disc a target's sphere casts along the light,
+//!   the disc chosen by area and weighted by how many discs cover the point. Only paths
+//!   light → specular⁺ → diffuse are kept: the photon is stored at the first diffuse surface
+//!   after at least one specular bounce and stops there.
 //! - Power is flux in watts, already divided by the light's photon count, and multiplied once by the
 //!   light's falloff ratio `g(d)` at the first hit ([`Light::falloff_ratio`]).
 //! - Media are tracked as for eye rays ([`MediumStack`]); false interfaces are crossed unchanged.

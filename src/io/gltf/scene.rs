@@ -169,7 +169,7 @@ pub fn describe_scene(path: &Path, view: &View, budget: Budget) -> Result<SceneD
             loc: loc.clone(),
         });
         warnings.push(
-            "the file has no light caustic renders (no punctual point light, no emissive \
+            "the file has no light caustic renders (no punctual light, no emissive \
              material): it is lit by a point light at the camera"
                 .to_owned(),
         );

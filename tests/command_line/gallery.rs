@@ -387,3 +387,33 @@ fn coloured_glass_tints_what_passes_through_it() {
     let (a, b) = (mean_luminance(&with, spot), mean_luminance(&without, spot));
     assert!(a > 1.5 * b, "the spot is {a} with caustics, {b} without");
 }
+
+/// The spot lights only its cone and the sun everything facing it: without the sun the floor
+/// far from the spot (the bottom corners) is dark and the pool under the spot bright; with it
+/// the corners are the sun's closed form `kd·rgb·cos θ` (0.7 × the colour's mean 0.683 ×
+/// cos θ = 0.531) to 3%, indirect light and noise included.
+#[test]
+fn spot_and_sun_light_the_cone_and_everything_facing_the_sun() {
+    let dir = out_dir("gallery-spot-and-sun");
+    let script = std::fs::read_to_string(gallery().join("spot_and_sun.lua")).unwrap();
+    let lights = "{spot, sun})";
+    assert!(script.contains(lights), "spot_and_sun.lua's lights changed");
+    let lua = dir.join("no_sun.lua");
+    std::fs::write(&lua, script.replace(lights, "{spot})")).unwrap();
+    let spot = render_file(&lua, &dir.join("no_sun.exr"), &dir, &[]).image;
+    let both = render("spot_and_sun", &dir).image;
+    let corners = [[0.0, 0.15, 0.85, 1.0], [0.85, 1.0, 0.85, 1.0]];
+    let pool = [0.36, 0.42, 0.5, 0.6];
+    let cos = 0.7 / (1.0f32 + 0.49 + 0.25).sqrt();
+    let sun = 0.7 * (0.6 + 0.65 + 0.8) / 3.0 * cos;
+    for c in corners {
+        let (dark, lit) = (mean_luminance(&spot, c), mean_luminance(&both, c));
+        assert!(dark < 0.01, "corner {c:?} without the sun: {dark}");
+        assert!(
+            (lit / sun - 1.0).abs() < 0.03,
+            "corner {c:?} in the sun: {lit}, closed form {sun}"
+        );
+    }
+    let lit = mean_luminance(&spot, pool);
+    assert!(lit > 0.3, "the pool under the spot: {lit}");
+}

@@ -318,6 +318,8 @@ fn an_emissive_surface_exports_as_one_emitting_shape() {
         "the panel's shape, BSDF and radiance: {shape}"
     );
     assert!(!xml.contains("_light"), "no separate light shape: {xml}");
+}
+
 /// Renders the floor of `desc` (made matte, kd 0.5) seen from the file's camera at 96 × 96,
 /// one ray through each pixel's centre, course's renderer; returns each pixel that sees the
 /// floor well inside its edges, with the point it sees and its value.

@@ -16,9 +16,9 @@
 //!   radiance seen ([`Mis::weight`]), the path carrying its vertex and `p_b` ([`Mis`]).
 //!
 //! `p_b` is the density of the branch the path follows: the eye splits every visible normal
-//! into a reflected and a refracted branch, each drawn with [`RoughDielectric::side_pdf`]; beyond
-//! the splitting depth it chooses one by `F`, with [`RoughDielectric::pdf`]. The two weights sum
-//! to one for every direction, so the sum is unbiased whatever the split.
+//! into a reflected and a refracted branch, each drawn with [`RoughDielectric::side_pdf`];
+//! beyond the splitting depth it chooses one by `F`, with [`RoughDielectric::pdf`]. The two
+//! weights sum to one for every direction, so the sum is unbiased whatever the split.
 //!
 //! Only lights with extent and the physical falloff take part ([`Light::weighs_by_mis`]): the
 //! course's falloff dims a shadow-ray estimate but not the light a path sees, so for those the
@@ -26,6 +26,8 @@
 //! are sampled at their centres, a different estimate: then too the draw alone counts.
 //!
 //! [`direct`]: super::eye::Tracer::direct
+//! [`RoughDielectric::side_pdf`]: crate::material::microfacet::RoughDielectric::side_pdf
+//! [`RoughDielectric::pdf`]: crate::material::microfacet::RoughDielectric::pdf
 
 use super::eye::{ShadingPoint, Tracer};
 use crate::geometry::Ray;

@@ -45,8 +45,8 @@
 //!   sample models) gets a point light at the camera, bright enough that the middle of its
 //!   bounds receives an irradiance of 1 W/m², and a warning says so.
 //!
-//! What caustic cannot honour (animations, skins, morph targets, orthographic cameras, alpha, vertex colours, occlusion and transmission textures, extensions it
-//! does not read) and what it stands in for (an emissive texture's pattern by its mean colour,
+//! What caustic cannot honour (animations, skins, morph targets, orthographic cameras, alpha,
+//! vertex colours, occlusion and transmission textures, extensions it does not read) and what it stands in for (an emissive texture's pattern by its mean colour,
 //! every sampler by bilinear repeating lookups, texture coordinate sets beyond the first by the
 //! first) is listed in [`SceneDesc::warnings`], printed once by `caustic render` and
 //! `caustic info`: never silently dropped. The base colour, metallic-roughness and normal

@@ -417,3 +417,23 @@ fn spot_and_sun_light_the_cone_and_everything_facing_the_sun() {
     let lit = mean_luminance(&spot, pool);
     assert!(lit > 0.3, "the pool under the spot: {lit}");
 }
+
+/// Rough metal and frosted glass: the copper ball is copper-coloured (red above green by a
+/// fifth), the frosted ball shows the blue wall behind it blurred (blue above red), and the
+/// frosted ball's soft caustic lights the floor under it more than four times as much as the
+/// floor under the metal ball, which reflects the lamp back up and only shades the floor.
+#[test]
+fn rough_metal_is_copper_and_frosted_glass_casts_a_soft_caustic() {
+    let dir = out_dir("gallery-rough-materials");
+    let img = render("rough_materials", &dir).image;
+    let copper = mean_rgb(&img, [0.25, 0.4, 0.35, 0.6]);
+    assert!(copper[0] > 1.2 * copper[1], "the copper ball is {copper:?}");
+    let frosted = mean_rgb(&img, [0.6, 0.75, 0.35, 0.6]);
+    assert!(frosted[2] > frosted[0], "the frosted ball is {frosted:?}");
+    let under_metal = mean_luminance(&img, [0.25, 0.4, 0.68, 0.74]);
+    let under_glass = mean_luminance(&img, [0.6, 0.75, 0.68, 0.74]);
+    assert!(
+        under_glass > 4.0 * under_metal,
+        "under the frosted ball {under_glass}, under the metal ball {under_metal}"
+    );
+}

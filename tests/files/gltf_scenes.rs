@@ -745,6 +745,48 @@ fn blender_scenes_render_at_the_defaults() {
     }
 }
 
+/// The Khronos sample models that carry their buffers inline (`scenes/gltf/khronos/`, the
+/// `glTF-Embedded` variants) render as whole scenes at the defaults without error and without
+/// NaN. Box.gltf (COLLADA2GLTF's, a Y-up root matrix, the glTF default metal of base colour
+/// (0.8, 0, 0)) has no light, so the one thing said of it is that a point light at the camera
+/// stands in; the box is framed from +Z, fills the middle of the image and shows red only.
+#[test]
+fn khronos_embedded_samples_render_without_nan() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/gltf/khronos/Box.gltf");
+    let desc = describe(&path, &view());
+    assert_eq!(desc.warnings.len(), 1, "{:?}", desc.warnings);
+    assert!(desc.warnings[0].contains("lit by a point light at the camera"));
+    let settings = caustic::integrator::Settings::default();
+    let frame = caustic::frame::render_desc(
+        &desc,
+        &desc.renders[0],
+        0.1,
+        None,
+        &settings,
+        &caustic::progress::NoProgress,
+    )
+    .unwrap();
+    let film = &frame.film;
+    let (w, h) = (film.width, film.height);
+    let mut red = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let p = film.get(x, y);
+            assert!(p.is_finite(), "pixel ({x}, {y}) is {p}");
+            let centre =
+                (x as f32 / w as f32 - 0.5).abs() < 0.1 && (y as f32 / h as f32 - 0.5).abs() < 0.1;
+            if centre {
+                assert!(
+                    p.x > 0.0 && p.y == 0.0 && p.z == 0.0,
+                    "the box at ({x}, {y}) is {p}"
+                );
+                red += 1;
+            }
+        }
+    }
+    assert!(red > 0);
+}
+
 /// A script cannot multiply a small emitter past the scene's bound by instancing it: 2048
 /// placements of a two-triangle panel (4096 triangles) build, one more is an error naming
 /// the node that placed it.

@@ -202,6 +202,9 @@ pub enum MeshSource {
         /// `given` resolved to a readable file (working directory first, then the script's folder).
         path: PathBuf,
         format: MeshFormat,
+        /// `gr.gltf`: the one glTF mesh (its index in the file) read alone, in its own frame;
+        /// `None`: the whole file, every node's transform baked in (`gr.mesh`).
+        part: Option<u32>,
     },
     /// The legacy form `gr.mesh(name, {{x,y,z}, …}, {{i,j,k,…}, …})`.
     Inline {

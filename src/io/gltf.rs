@@ -80,6 +80,7 @@
 //! triangles.
 
 mod buffer;
+pub mod hierarchy;
 mod images;
 pub mod scene;
 mod write;
@@ -162,6 +163,33 @@ pub fn parse_gltf_with(
     path: &Path,
     account: &Account,
 ) -> Result<MeshData, GltfError> {
+    parse_part(bytes, path, account, None)
+}
+
+/// Reads glTF mesh `mesh` of the file at `path` alone, in the mesh's own frame (no node
+/// transform), with the file's materials and emitters as [`load_gltf`] gives them: what
+/// `gr.gltf` places under each node that holds it; `None` reads the whole file as
+/// [`load_gltf_with`] does.
+pub fn load_gltf_mesh_with(
+    path: &Path,
+    mesh: Option<u32>,
+    account: &Account,
+) -> Result<MeshData, GltfError> {
+    let bytes = crate::files::read_regular(path).map_err(|error| GltfError::Read {
+        path: path.to_owned(),
+        error,
+    })?;
+    parse_part(&bytes, path, account, mesh)
+}
+
+/// Reads the file's default scene with every node's transform baked in (`only` is `None`), or
+/// glTF mesh `only` alone in its own frame.
+fn parse_part(
+    bytes: &[u8],
+    path: &Path,
+    account: &Account,
+    only: Option<u32>,
+) -> Result<MeshData, GltfError> {
     let invalid = |message: String| GltfError::Invalid {
         path: path.to_owned(),
         message,
@@ -173,19 +201,34 @@ pub fn parse_gltf_with(
     let mut parts = Vec::new();
     let (mut emitters, mut emitted) = (Vec::new(), 0);
     let mut default_material = None;
-    for (node, world) in placements(&doc).map_err(invalid)? {
-        let Some(mesh) = node.mesh() else { continue };
+    // Each mesh to read, with its transform and where it is placed, for messages.
+    let placed: Vec<(gltf::Mesh, DAffine3, String)> = match only {
+        None => placements(&doc)
+            .map_err(invalid)?
+            .into_iter()
+            .filter_map(|(node, world)| {
+                let at = format!(" under node {}", node.index());
+                node.mesh().map(|m| (m, world, at))
+            })
+            .collect(),
+        Some(m) => {
+            let mesh = doc.meshes().nth(m as usize).ok_or_else(|| {
+                invalid(format!(
+                    "mesh {m} does not exist (the file has {})",
+                    doc.meshes().len()
+                ))
+            })?;
+            vec![(mesh, DAffine3::IDENTITY, String::new())]
+        }
+    };
+    for (mesh, world, under) in placed {
         let det = world.matrix3.determinant();
         if det == 0.0 || !det.is_finite() {
             continue;
         }
         for prim in mesh.primitives() {
             let at = format!("mesh {} primitive {}", mesh.index(), prim.index());
-            let what = format!(
-                "{at} under node {}: {}",
-                node.index(),
-                primitive_size(&prim)
-            );
+            let what = format!("{at}{under}: {}", primitive_size(&prim));
             account
                 .try_charge(primitive_bytes(&prim), what)
                 .map_err(|e| invalid(e.to_string()))?;
@@ -197,8 +240,7 @@ pub fn parse_gltf_with(
             else {
                 continue;
             };
-            bake(&mut part, &world)
-                .map_err(|e| invalid(format!("{at} under node {}: {e}", node.index())))?;
+            bake(&mut part, &world).map_err(|e| invalid(format!("{at}{under}: {e}")))?;
             if let Some(emitter) = emitter(&prim.material(), &part, &mut images).map_err(invalid)? {
                 emitted += emitter.triangles.len();
                 if emitted > MAX_EMITTER_TRIANGLES {

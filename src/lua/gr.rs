@@ -34,6 +34,15 @@ use std::path::PathBuf;
 use std::rc::Rc;
 
 type GrFn = fn(&Lua, &mut State, &Args) -> mlua::Result<Value>;
+/// A `gr` function returning several values (`node, lights = gr.gltf(...)`).
+type GrMultiFn = fn(&Lua, &mut State, &Args) -> mlua::Result<MultiValue>;
+
+/// A `gr` function of either list.
+#[derive(Clone, Copy)]
+enum Body {
+    One(GrFn),
+    Many(GrMultiFn),
+}
 
 /// How a `gr` function is meant to be called.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -96,20 +105,28 @@ const GR: &[(&str, Call, GrFn)] = &[
     ("rotate", Call::Method, gr_rotate),
 ];
 
+/// The `gr` functions returning several values, listed after [`GR`]'s.
+const GR_MULTI: &[(&str, GrMultiFn)] = &[("gltf", super::gltf::gr_gltf)];
+
 /// Registry key of the `gr` table, which node values use as their method table.
 const GR_KEY: &str = "caustic.gr";
 
 /// Sets the global `gr` to a table of [`GR`]'s functions, each working on `state`.
 pub(super) fn install(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()> {
     let gr = lua.create_table()?;
-    for &(name, _, f) in GR {
+    let single = GR.iter().map(|&(name, _, f)| (name, Body::One(f)));
+    let multi = GR_MULTI.iter().map(|&(name, f)| (name, Body::Many(f)));
+    for (name, f) in single.chain(multi) {
         let st = Rc::clone(state);
         let func = lua.create_function(move |lua, vals: MultiValue| {
             let args = Args::new(lua, name, vals);
             let mut s = st
                 .try_borrow_mut()
                 .map_err(|_| args.fail(format!("gr.{name} called while a render is running")))?;
-            f(lua, &mut s, &args)
+            match f {
+                Body::Many(many) => many(lua, &mut s, &args),
+                Body::One(one) => one(lua, &mut s, &args).map(|v| MultiValue::from_iter([v])),
+            }
         })?;
         gr.raw_set(name, func)?;
     }
@@ -123,6 +140,7 @@ pub(super) fn install(lua: &Lua, state: &Rc<RefCell<State>>) -> mlua::Result<()>
                 .iter()
                 .filter(|(_, call, _)| *call == Call::Function)
                 .map(|(name, _, _)| *name)
+                .chain(GR_MULTI.iter().map(|(name, _)| *name))
                 .collect();
             Err(lua_err(Error::fault_at(
                 Fault::UnknownFunction,
@@ -236,7 +254,22 @@ pub(super) fn mesh_from_file(s: &mut State, a: &Args, given: &str) -> mlua::Resu
 /// Adds the mesh file at `path` (named `given` by the script, or made by caustic itself) to
 /// the description, once per file.
 pub(super) fn mesh_at(s: &mut State, a: &Args, given: &str, path: PathBuf) -> mlua::Result<MeshId> {
-    let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+    mesh_part_at(s, a, given, path, None)
+}
+
+/// [`mesh_at`] for glTF mesh `part` of the file read alone in its own frame (`gr.gltf`), or the
+/// whole file when `None`; each (file, part) is added once.
+pub(super) fn mesh_part_at(
+    s: &mut State,
+    a: &Args,
+    given: &str,
+    path: PathBuf,
+    part: Option<u32>,
+) -> mlua::Result<MeshId> {
+    let key = (
+        std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone()),
+        part,
+    );
     if let Some(&id) = s.mesh_cache.get(&key) {
         return Ok(id);
     }
@@ -258,6 +291,7 @@ pub(super) fn mesh_at(s: &mut State, a: &Args, given: &str, path: PathBuf) -> ml
             given: given.to_string(),
             path,
             format,
+            part,
         },
         loc: a.loc.clone(),
     });

@@ -9,6 +9,7 @@
 //! - `gr.rs`: the `gr` table, built from one list of (name, call kind, function);
 //! - `inline.rs`: the inline form of `gr.mesh`, its vertex and face tables checked element by
 //!   element;
+//! - `gltf.rs`: `gr.gltf`, a glTF file's node hierarchy rebuilt as `gr.node`s;
 //! - `generated.rs`: meshes a script generates (`gr.water_mesh`), cached as files;
 //! - [`settings`]: a scene's own render settings (`gr.settings`);
 //! - [`args`]: argument checks with lauxlib's messages and the calling script line;
@@ -23,7 +24,9 @@
 //! by path from anywhere; what they name must lie in the scene's folders
 //! ([`sandbox::Folders`]), and an image `gr.render` names must be written inside the script's
 //! folder or the working directory ([`check_scene_output`]). Files are only resolved here;
-//! the scene build reads them. Two legacy cases read files here: `readobj`, whose tables the
+//! the scene build reads them. `gr.gltf` reads a glTF file's JSON here (its node
+//! hierarchy, which the script gets back as nodes; buffers and images wait for the build). Two
+//! legacy cases read files here: `readobj`, whose tables the
 //! script needs at once, and the legacy warning's check, which reads mesh files' vertices for
 //! their boxes (once per run, only when the transform order matters).
 //!
@@ -38,6 +41,7 @@
 pub mod args;
 mod generated;
 pub mod globals;
+mod gltf;
 mod gr;
 mod inline;
 mod legacy;
@@ -267,8 +271,9 @@ struct State {
     /// The folders the scene may read.
     folders: Rc<sandbox::Folders>,
     hook: RenderHook,
-    /// Mesh files named so far, by canonical path.
-    mesh_cache: HashMap<PathBuf, MeshId>,
+    /// Mesh files named so far, by canonical path and the glTF mesh `gr.gltf` reads alone
+    /// (`None`: the whole file).
+    mesh_cache: HashMap<(PathBuf, Option<u32>), MeshId>,
     /// Missing images already warned about (`--missing-textures=warn`).
     warned_images: HashSet<String>,
     /// Script lines whose material was warned about for reflecting more than it receives (a

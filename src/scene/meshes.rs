@@ -27,7 +27,8 @@ use std::sync::Arc;
 #[derive(Default)]
 pub struct MeshCache {
     by_id: HashMap<MeshId, Arc<MeshData>>,
-    by_path: HashMap<PathBuf, Arc<MeshData>>,
+    /// Keyed by the file and the glTF mesh read alone (`None`: the whole file).
+    by_path: HashMap<(PathBuf, Option<u32>), Arc<MeshData>>,
     /// Where the loaders charge what they read; `None` draws on each description's budget.
     account: Option<Account>,
 }
@@ -58,11 +59,12 @@ impl MeshCache {
             .clone();
         let load_mesh = |mesh| load_mesh(mesh, &account);
         let data = match &mesh.source {
-            MeshSource::File { path, .. } => match self.by_path.get(path) {
+            MeshSource::File { path, part, .. } => match self.by_path.get(&(path.clone(), *part)) {
                 Some(data) => Arc::clone(data),
                 None => {
                     let data = Arc::new(load_mesh(mesh)?);
-                    self.by_path.insert(path.clone(), Arc::clone(&data));
+                    self.by_path
+                        .insert((path.clone(), *part), Arc::clone(&data));
                     data
                 }
             },
@@ -81,6 +83,7 @@ pub fn load_mesh(mesh: &MeshDesc, account: &Account) -> Result<MeshData> {
             given,
             path,
             format,
+            part,
         } => {
             let cannot = |e: &dyn std::fmt::Display| {
                 Error::fault_at(
@@ -91,7 +94,9 @@ pub fn load_mesh(mesh: &MeshDesc, account: &Account) -> Result<MeshData> {
             };
             match format {
                 MeshFormat::Obj => obj::load_obj_with(path, account).map_err(|e| cannot(&e)),
-                MeshFormat::Gltf => gltf::load_gltf_with(path, account).map_err(|e| cannot(&e)),
+                MeshFormat::Gltf => {
+                    gltf::load_gltf_mesh_with(path, *part, account).map_err(|e| cannot(&e))
+                }
             }
         }
         MeshSource::Inline { positions, faces } => {

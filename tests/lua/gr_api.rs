@@ -495,7 +495,7 @@ fn unknown_gr_functions_list_the_functions_that_exist() {
         "test.lua:2: unknown function gr.spere (caustic has gr.node, gr.joint, gr.sphere, gr.cube, \
          gr.cylinder, gr.cone, gr.nh_sphere, gr.nh_box, gr.mesh, gr.water_mesh, gr.union, \
          gr.intersection, gr.difference, gr.material, gr.absorption, gr.roughness, gr.light, gr.area_light, gr.sphere_light, \
-         gr.spot_light, gr.directional_light, gr.settings, gr.render)"
+         gr.spot_light, gr.directional_light, gr.settings, gr.render, gr.gltf)"
     );
     assert_eq!(
         lua_error("s = gr.nh_sphere('s', {0, 0, 0})"),

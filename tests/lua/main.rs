@@ -1,7 +1,8 @@
 //! Lua scenes: what a scene script may do and what it makes. Parts: `gr_api` (the `gr` API's
 //! semantics and errors), `sandbox` (what a script may not reach), `memory_limit` (a script
 //! that exhausts its Lua state's memory), `memory_budget` (what a scene creates, charged),
-//! `water_mesh_and_settings` (meshes and settings a scene generates), `legacy_dialect` and
+//! `water_mesh_and_settings` (meshes and settings a scene generates), `gltf_nodes`
+//! (`gr.gltf`: a glTF file's hierarchy as nodes), `legacy_dialect` and
 //! `legacy_detection` (scripts for the course's legacy API), and `script_fuzz` (scripts and glTF
 //! structures generated from the grammar; `tools/fuzz.sh` runs its properties).
 //!
@@ -12,6 +13,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod gltf_nodes;
 mod gr_api;
 mod legacy_detection;
 mod legacy_dialect;

@@ -123,6 +123,7 @@ pub fn describe_scene(path: &Path, view: &View, budget: Budget) -> Result<SceneD
             given: path.display().to_string(),
             path: path.to_owned(),
             format: MeshFormat::Gltf,
+            part: None,
         },
         loc: loc.clone(),
     });
@@ -193,7 +194,7 @@ pub fn describe_scene(path: &Path, view: &View, budget: Budget) -> Result<SceneD
 
 /// Returns the world bounds of the scene's mesh nodes from their POSITION accessors' `min` and
 /// `max` (which glTF requires), or the unit cube round the origin when none gives them.
-fn scene_bounds(placed: &[(gltf::Node, DAffine3)]) -> (DVec3, DVec3) {
+pub(super) fn scene_bounds(placed: &[(gltf::Node, DAffine3)]) -> (DVec3, DVec3) {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for (node, world) in placed {
@@ -341,7 +342,7 @@ fn framing((lo, hi): (DVec3, DVec3)) -> CameraDesc {
 /// light of `intensity` lx is `intensity/683` W/m², and either is `rgb = color·intensity /
 /// (683 π)` in caustic's terms (see the module doc). Spots and directional lights shine down
 /// their node's −Z.
-fn punctual_light(
+pub(super) fn punctual_light(
     light: &gltf::khr_lights_punctual::Light,
     world: &DAffine3,
     bounds: (DVec3, DVec3),

@@ -166,12 +166,16 @@ fn mesh_box(desc: &SceneDesc, id: MeshId, meshes: &mut MeshBoxes) -> Option<Aabb
     };
     let b = match &desc.meshes[id.0 as usize].source {
         MeshSource::Inline { positions, .. } => Some(of(&mut positions.iter().copied())),
-        MeshSource::File { path, format, .. } => {
+        MeshSource::File {
+            path, format, part, ..
+        } => {
             // Charged to the script's budget while the mesh is read, given back after.
             let account = desc.budget.account();
             let data = match format {
                 MeshFormat::Obj => crate::io::obj::load_obj_with(path, &account).ok(),
-                MeshFormat::Gltf => crate::io::gltf::load_gltf_with(path, &account).ok(),
+                MeshFormat::Gltf => {
+                    crate::io::gltf::load_gltf_mesh_with(path, *part, &account).ok()
+                }
             };
             data.map(|d| of(&mut d.positions.iter().map(|p| p.as_dvec3())))
         }

@@ -216,8 +216,8 @@ pub enum MeshSource {
     },
 }
 
-/// A mesh named by `gr.mesh`; files are deduplicated by canonical path, so nodes made from the
-/// same file share one.
+/// A mesh named by `gr.mesh` (or one glTF mesh of a file, by `gr.gltf`); files are deduplicated
+/// by canonical path and part, so nodes made from the same file share one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshDesc {
     pub source: MeshSource,

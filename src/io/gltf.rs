@@ -22,6 +22,9 @@
 //! ([`crate::range::MAX_COORDINATE`]); the error names the accessor or node and the vertex.
 //! Sparse accessors, accessors without a buffer view, node cycles and nodes with two parents are
 //! rejected, as are required extensions other than the two materials ones below.
+//! [`load_gltf_mesh_with`] reads one glTF mesh alone instead, in its own frame (no node
+//! transform), with the same materials and emitters: what `gr.gltf` places under each node that
+//! holds it, the hierarchy itself read by [`hierarchy`].
 //!
 //! # Materials
 //! glTF's metallic-roughness model maps onto the one BSDF's lobes ([`crate::material`]). With

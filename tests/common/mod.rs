@@ -457,10 +457,22 @@ pub fn guide_examples() -> Vec<String> {
 }
 
 /// Returns a fresh folder under `target/test-output/` holding the files the guide's examples
-/// name (`tri.obj`, `tiles.png`).
+/// name (`tri.obj`, `tiles.png`, `room.glb`).
 pub fn guide_dir(name: &str) -> PathBuf {
     let dir = out_dir(name);
     std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    // A triangle and a point light above it, each under its own node.
+    let mut room = GltfFile::default();
+    room.floats("VEC3", &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    room.write_glb(
+        &dir,
+        "room",
+        r#""scene":0,"scenes":[{"nodes":[0,1]}],
+        "nodes":[{"mesh":0},{"translation":[0,2,1],"extensions":{"KHR_lights_punctual":{"light":0}}}],
+        "extensionsUsed":["KHR_lights_punctual"],
+        "extensions":{"KHR_lights_punctual":{"lights":[{"type":"point","intensity":100}]}},
+        "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]"#,
+    );
     let tiles = image::RgbImage::from_fn(8, 8, |x, y| {
         if (x / 4 + y / 4) % 2 == 0 {
             image::Rgb([230, 230, 230])

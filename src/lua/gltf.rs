@@ -15,7 +15,9 @@
 //! (`MeshSource::File::part`), by the loader `gr.mesh` uses, so materials, textures, roughness,
 //! transmission, volume and emissive surfaces (lights wherever they are placed) are the same;
 //! nodes sharing a mesh share its triangles. Only the file's JSON is read here (its hierarchy,
-//! [`crate::io::gltf::hierarchy`]); buffers and images are read when a scene is built.
+//! [`crate::io::gltf::hierarchy`]); buffers and images are read when a scene is built. Since
+//! every mesh reads the whole file, the meshes times the file's bytes (buffers included) are
+//! bounded ([`MAX_REREAD_BYTES`]): past it the script line is an error that names `gr.mesh`.
 //!
 //! The node `gr.gltf` returns is a group: `set_material` on it is an error, as on any
 //! `gr.node`; the mesh children keep the file's materials.
@@ -36,6 +38,10 @@ use crate::io::gltf::hierarchy::read_tree;
 use crate::lua::args::{Args, LightRef, NodeRef};
 use mlua::{Lua, MultiValue, Value};
 
+/// Most bytes `gr.gltf` lets the scene build read for one file: its distinct meshes times what
+/// reading the file once takes (each mesh is read alone, the whole file each time).
+pub const MAX_REREAD_BYTES: u64 = 4 << 30;
+
 /// The option keys `gr.gltf` takes, in its message's order.
 const OPTIONS: &[&str] = &["lights"];
 
@@ -53,6 +59,26 @@ pub(super) fn gr_gltf(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<MultiV
     }
     let tree = read_tree(&path, lights, &a.loc)
         .map_err(|e| a.fault(Fault::MeshLoad, format!("cannot load glTF '{given}': {e}")))?;
+    // Each distinct mesh is read alone, the whole file each time: bound the work, so that a
+    // file of a thousand meshes over a large buffer cannot keep the scene build reading for
+    // hours.
+    let meshes: std::collections::BTreeSet<u32> = tree
+        .nodes
+        .iter()
+        .filter_map(|n| n.mesh.as_ref().map(|m| m.0))
+        .collect();
+    let work = (meshes.len() as u64).saturating_mul(tree.read_bytes);
+    if work > MAX_REREAD_BYTES {
+        return Err(a.fault(
+            Fault::MeshLoad,
+            format!(
+                "glTF '{given}': its {} meshes would each read the file's {} bytes again (over                  {} GiB in all); gr.mesh reads it once, with the node transforms baked in",
+                meshes.len(),
+                tree.read_bytes,
+                MAX_REREAD_BYTES >> 30
+            ),
+        ));
+    }
     let root = add_node(s, a, name, NodeKind::Group)?;
     let mut ids: Vec<NodeId> = Vec::with_capacity(tree.nodes.len());
     for node in &tree.nodes {

@@ -210,3 +210,36 @@ fn bad_options_and_missing_files_name_the_line() {
     let e = err("\n\nn = gr.gltf('g', 'bad.glb')");
     assert!(e.starts_with("test.lua:3:") && e.contains("bad.glb"), "{e}");
 }
+
+/// Each mesh gr.gltf places reads the whole file at the scene build, so a file of many meshes
+/// over a large buffer is refused at the script line, naming gr.mesh: three meshes over a
+/// declared 2 GB buffer (6 GB of reading, over the 4 GiB bound) are an error; the same file
+/// declaring a 1 kB buffer is read into nodes. The buffer is never opened at script time.
+#[test]
+fn many_meshes_over_a_large_buffer_are_refused() {
+    let dir = out_dir("gr-gltf-reread");
+    let file = |bytes: u64| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1,2]}}],
+            "nodes":[{{"mesh":0}},{{"mesh":1}},{{"mesh":2}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}},
+                      {{"primitives":[{{"attributes":{{"POSITION":0}}}}]}},
+                      {{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3",
+                           "min":[0,0,0],"max":[1,1,0]}}],
+            "bufferViews":[{{"buffer":0,"byteLength":36}}],
+            "buffers":[{{"byteLength":{bytes},"uri":"big.bin"}}]}}"#
+        )
+    };
+    std::fs::write(dir.join("huge.gltf"), file(2_000_000_000)).unwrap();
+    std::fs::write(dir.join("small.gltf"), file(1000)).unwrap();
+    let err = run_lua_in("n = gr.gltf('huge', 'huge.gltf')", &dir)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains(":1") && err.contains("huge.gltf") && err.contains("gr.mesh"),
+        "{err}"
+    );
+    let desc = run_lua_in("n = gr.gltf('small', 'small.gltf')", &dir).unwrap();
+    assert!(desc.nodes.iter().filter(|n| n.name == "mesh 2").count() == 1);
+}

@@ -41,6 +41,9 @@ pub struct FileTree {
     pub roots: Vec<usize>,
     /// The punctual lights the scene places, in the file's world space (empty unless asked).
     pub lights: Vec<LightDesc>,
+    /// What reading the file once takes, in bytes: the file and every buffer it declares (its
+    /// own binary chunk, external files and `data:` URIs alike, by their `byteLength`).
+    pub read_bytes: u64,
 }
 
 /// Reads the node hierarchy of the glTF file at `path`, and its punctual lights when `lights`
@@ -61,7 +64,11 @@ pub fn read_tree(path: &Path, lights: bool, loc: &Loc) -> Result<FileTree, GltfE
     for (k, (node, _)) in placed.iter().enumerate() {
         position[node.index()] = k;
     }
-    let mut tree = FileTree::default();
+    let mut tree = FileTree {
+        read_bytes: (bytes.len() as u64)
+            .saturating_add(doc.buffers().map(|b| b.length() as u64).sum::<u64>()),
+        ..FileTree::default()
+    };
     let mut is_child = vec![false; placed.len()];
     for (node, _) in &placed {
         let children: Vec<usize> = node.children().map(|c| position[c.index()]).collect();

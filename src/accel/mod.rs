@@ -411,6 +411,30 @@ impl Bvh {
     }
 }
 
+/// Stack of each worker thread: an eye path recurses once per bounce, up to
+/// [`crate::integrator::eye::MAX_PATH_DEPTH`] bounces between facing mirrors, which overflows
+/// the 2 MiB a thread gets by default (an abort, not an error). Reserved, not committed: only
+/// the pages a deep path touches are used.
+pub const WORKER_STACK_BYTES: usize = 16 << 20;
+
+/// Starts the process's worker threads with [`WORKER_STACK_BYTES`] of stack each (`threads` of
+/// them, one per core by default), unless something started them already: the command line
+/// starts them first ([`crate::cli`]), and a library caller gets them from the scene build.
+/// Returns whether this call started them.
+pub fn start_workers(threads: Option<usize>) -> Result<bool, rayon::ThreadPoolBuildError> {
+    static STARTED: std::sync::Mutex<bool> = std::sync::Mutex::new(false);
+    let mut started = STARTED.lock().unwrap_or_else(|e| e.into_inner());
+    if *started {
+        return Ok(false);
+    }
+    let mut builder = rayon::ThreadPoolBuilder::new().stack_size(WORKER_STACK_BYTES);
+    if let Some(n) = threads {
+        builder = builder.num_threads(n);
+    }
+    *started = true;
+    builder.build_global().map(|()| true)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

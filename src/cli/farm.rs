@@ -89,9 +89,7 @@ pub(super) fn merge_command(args: MergeArgs) -> Result<()> {
 pub(super) fn photons_command(args: PhotonsArgs) -> Result<()> {
     let a = &args.render;
     super::settings::check_scale(a.scale)?;
-    if let Some(n) = a.threads {
-        set_threads(n)?;
-    }
+    set_threads(a.threads)?;
     if a.photon_maps.is_some() {
         return Err(Error::Usage(
             "--photon-maps: caustic photons traces maps; it does not read them".into(),

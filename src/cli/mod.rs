@@ -162,18 +162,19 @@ pub fn run(cli: Cli) -> Result<()> {
     }
 }
 
-/// Starts `n` worker threads for the whole process (`--threads`), or returns a usage error
-/// when `n` is out of range.
-fn set_threads(n: usize) -> Result<()> {
-    if !(1..=MAX_THREADS).contains(&n) {
+/// Starts the worker threads for the whole process (`--threads`, else one per core), with
+/// stacks deep paths need, or returns a usage error when the count is out of range.
+fn set_threads(n: Option<usize>) -> Result<()> {
+    if let Some(n) = n
+        && !(1..=MAX_THREADS).contains(&n)
+    {
         return Err(Error::Usage(format!(
-            "--threads must be in [1, {MAX_THREADS}], got {n}"
+            "--threads must be in [1, {MAX_THREADS}], got {n:?}"
         )));
     }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build_global()
-        .map_err(|e| Error::Usage(format!("cannot start {n} threads: {e}")))
+    crate::accel::start_workers(n)
+        .map(|_| ())
+        .map_err(|e| Error::Usage(format!("cannot start the worker threads: {e}")))
 }
 
 /// Returns the window `--region x0,y0,x1,y1` names in a `width × height` image (the whole
@@ -251,9 +252,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     if args.stats || args.heatmap.is_some() {
         crate::accel::counters::enable();
     }
-    if let Some(n) = args.threads {
-        set_threads(n)?;
-    }
+    set_threads(args.threads)?;
     // The flags' own errors first, then the outputs, then the work.
     let job = RenderJob::from_args(&args)?;
     let view = gltf_view(&args)?;

@@ -65,9 +65,7 @@ pub fn study_command(args: StudyArgs) -> Result<()> {
             args.seeds
         )));
     }
-    if let Some(n) = args.threads {
-        super::set_threads(n)?;
-    }
+    super::set_threads(args.threads)?;
     let study = Study::prepare(&args)?;
     let mut done = false;
     let hook = Box::new(move |desc: &SceneDesc, r: &RenderDesc| -> Result<()> {

@@ -57,6 +57,8 @@ struct Placement {
 
 /// Builds the scene that `render` draws from `desc`.
 pub fn build_scene(desc: &SceneDesc, render: &RenderDesc) -> Result<Scene> {
+    // The worker threads with the stacks eye paths need, unless the caller started them.
+    let _ = crate::accel::start_workers(None);
     let start = Instant::now();
     // What the scene keeps is charged to `account`, given back when the scene is dropped; what
     // only the build uses (placements, the files' data) to `scratch`, given back on return.

@@ -31,7 +31,7 @@
 //! empty table.
 
 use super::State;
-use super::gr::{charge, input_fault, mesh_part_at};
+use super::gr::{charge, input_fault, link, mesh_part_at};
 use crate::desc::{LightDesc, LightId, MeshFormat, NodeDesc, NodeId, NodeKind};
 use crate::error::Fault;
 use crate::io::gltf::hierarchy::read_tree;
@@ -144,18 +144,4 @@ fn add_node(s: &mut State, a: &Args, name: String, kind: NodeKind) -> mlua::Resu
     let what = format!("a node named by {} bytes", name.len());
     charge(s, a, size_of::<NodeDesc>() + name.len(), &what)?;
     Ok(s.desc.add_node(name, kind, a.loc.clone()))
-}
-
-/// Makes `child` a child of `parent`, charged to the budget.
-fn link(s: &mut State, a: &Args, parent: NodeId, child: NodeId) -> mlua::Result<()> {
-    charge(
-        s,
-        a,
-        size_of::<(NodeId, crate::error::Loc)>(),
-        "a child entry",
-    )?;
-    s.desc.nodes[parent.0 as usize]
-        .children
-        .push((child, a.loc.clone()));
-    Ok(())
 }

@@ -509,6 +509,12 @@ fn gr_add_child(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     if parent == child {
         return Err(a.bad(2, "a node cannot be its own child"));
     }
+    link(s, a, parent, child)?;
+    Ok(Value::Nil)
+}
+
+/// Makes `child` a child of `parent` at the script line of `a`, charged to the budget.
+pub(super) fn link(s: &mut State, a: &Args, parent: NodeId, child: NodeId) -> mlua::Result<()> {
     charge(
         s,
         a,
@@ -518,7 +524,7 @@ fn gr_add_child(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {
     s.desc.nodes[parent.0 as usize]
         .children
         .push((child, a.loc.clone()));
-    Ok(Value::Nil)
+    Ok(())
 }
 
 fn gr_set_material(_lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<Value> {

@@ -13,8 +13,9 @@ Strength 10: written as emissiveFactor + KHR_materials_emissive_strength).
 
   glass_of_water.glb  a table (box) with a drinking glass (a closed lathed shell with 3 mm
                       walls; transmission 1, IOR 1.5, roughness 0) holding water (a lathed
-                      cylinder, transmission 1, IOR 1.33, roughness 0; 0.5 mm air gap to the
-                      glass so no two surfaces coincide). Both carry a glTF Material Output
+                      cylinder, transmission 1, IOR 1.33, roughness 0), standing on the
+                      table: 0.5 mm air gaps between table, glass and water, so no two
+                      surfaces coincide. Both carry a glTF Material Output
                       thickness, so the exporter writes KHR_materials_volume (solid, refracting
                       volumes, not thin-walled). Also one Blender point light (10 W, radius 0),
                       to exercise KHR_lights_punctual "point" and give a visible caustic.
@@ -261,13 +262,17 @@ def scene_glass_of_water():
     # Glass: closed shell revolved from its cross-section (outer wall, rim, inner wall, base).
     R, H, wall, base = 0.045, 0.13, 0.003, 0.008
     glass_profile = [(0.0, 0.0), (R, 0.0), (R, H), (R - wall, H), (R - wall, base), (0.0, base)]
+    # An air gap under the glass and between glass and water: no two surfaces coincide. A glass
+    # base lying exactly in the table's top is ill-posed (which of the two a ray meets first is
+    # floating-point rounding), and renderers resolve it differently: 10-18% apart over the
+    # base's pixels, which is no error of either.
+    gap = 0.0005
     link('drinking_glass', lathe_mesh('drinking_glass', glass_profile),
-         glass_material('glass', ior=1.5, thickness=wall), location=(0, 0, table_h))
-    gap = 0.0005  # air gap so water and glass surfaces never coincide
+         glass_material('glass', ior=1.5, thickness=wall), location=(0, 0, table_h + gap))
     r_w, z_w0, z_w1 = R - wall - gap, base + gap, 0.09
     water_profile = [(0.0, z_w0), (r_w, z_w0), (r_w, z_w1), (0.0, z_w1)]
     link('water', lathe_mesh('water', water_profile),
-         glass_material('water', ior=1.33, thickness=2 * r_w), location=(0, 0, table_h))
+         glass_material('water', ior=1.33, thickness=2 * r_w), location=(0, 0, table_h + gap))
     add_light('point_light', 'POINT', (0.4, -0.3, 1.6), energy=10.0)
     add_camera((0.0, -0.55, 0.86), (0.0, 0.0, table_h + 0.055), lens_mm=50.0)
 

@@ -14,7 +14,8 @@ With --equal-time, Mitsuba also renders at caustic's CPU time and both errors ar
 With --gltf, the scenes are glTF files rendered as whole scenes instead (by default
 scenes/gltf/{copper_bowl,frosted_sphere,glass_of_water}.glb, or --scenes), at --scale 0.25
 (200x150) for both the export and caustic's render (with the full-size render's photon counts,
---photon-scale 16, unless --caustic-args sets them), with their regions from
+--photon-scale 16, and its samples per image area, --spp 64, unless --caustic-args sets them),
+with their regions from
 scenes/validate/gltf_regions.txt (lines `SCENE REGION x0 y0 x1 y1`), and the table goes to
 docs/validation/gltf.md (a section to merge into docs/validation.md, which is left alone):
 
@@ -213,10 +214,19 @@ def main():
         # defaults (a --scale preview traces fewer, a preview's convenience, not what is
         # validated): a photon map's bias is set by the photons' density on the surfaces, which
         # the image size does not change.
+        # Likewise the samples: the default 4 a pixel at full size are 4 / scale^2 a pixel here,
+        # so that an 8x8 block of this image averages as many camera samples as the 32x32
+        # pixels of the full-size render it covers (a block error measured on fewer would be
+        # the preview's noise, 4x the full-size render's per block at 4 samples a pixel).
+        full_size = []
         if "--photon-scale" not in a.caustic_args and "--photons" not in a.caustic_args:
             a.caustic_args = (a.caustic_args + f" --photon-scale {1 / (a.scale * a.scale):g}").strip()
-            if a.label == "caustic defaults":
-                a.label = "caustic defaults with the full-size render's photon counts"
+            full_size.append("photon counts")
+        if "--spp" not in a.caustic_args:
+            a.caustic_args = (a.caustic_args + f" --spp {round(4 / (a.scale * a.scale))}").strip()
+            full_size.append("samples per image area")
+        if full_size and a.label == "caustic defaults":
+            a.label = "caustic defaults with the full-size render's " + " and ".join(full_size)
         a.out = a.out or os.path.join(PICS, "gltf.md")
     else:
         scenes = sorted(glob.glob(a.scenes or os.path.join(ROOT, "scenes", "validate", "*.lua")))

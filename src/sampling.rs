@@ -30,6 +30,9 @@ pub enum Pass {
     /// Which of a pixel's samples follows its weak branches ([`crate::render::Share`]), keyed
     /// by the pixel.
     Share = 5,
+    /// Noise-driven adaptive sampling's later rounds of a pixel, keyed by the pixel's index and
+    /// the round ([`crate::render::noise`]).
+    Refine = 6,
 }
 
 /// Returns the key of image-plane position `(x, y)` for [`Pass::Point`] streams.

@@ -33,6 +33,40 @@ pub struct RenderStats {
     /// With `heatmap`: each pixel's BVH nodes visited, triangles tested and nanoseconds of
     /// thread time while it was shaded (row-major, the window's size), for `--heatmap`.
     pub heat: Option<Vec<[f32; 3]>>,
+    /// With error estimates (noise sampling, `--error-map`): each pixel's standard error.
+    pub error: Option<PixelErrors>,
+}
+
+/// Each pixel's standard error estimated from its half-buffers and from its samples' variance
+/// ([`crate::render::noise`]), for the image's estimated error and `--error-map`.
+#[derive(Clone, Debug, Default)]
+pub struct PixelErrors {
+    /// From the half-buffers (unbiased: the image's estimate). Row-major, the window's size;
+    /// NaN where the pixel has no estimate (a dropped render row).
+    pub std_error: Vec<f32>,
+    /// From the samples' variance (steady: adaptive pixels' test and the error map), likewise.
+    pub sample_error: Vec<f32>,
+    /// The image's mean brightness `m` from the pilot, which the test normalises by.
+    pub image_mean: f32,
+}
+
+impl PixelErrors {
+    /// Returns the image's relative RMSE estimated from the pixels' errors: the root mean
+    /// square of their standard errors over the mean of `pixels` (the image they estimate, as
+    /// `caustic compare` divides by the reference's mean); `None` without estimates.
+    pub fn relative_rmse(&self, pixels: &[glam::Vec3A]) -> Option<f64> {
+        let (mut sq, mut n) = (0.0f64, 0usize);
+        for &e in self.std_error.iter().filter(|e| e.is_finite()) {
+            sq += (e as f64).powi(2);
+            n += 1;
+        }
+        let mean = pixels
+            .iter()
+            .map(|p| p.element_sum() as f64 / 3.0)
+            .sum::<f64>()
+            / pixels.len().max(1) as f64;
+        (n > 0 && mean > 0.0).then(|| (sq / n as f64).sqrt() / mean)
+    }
 }
 
 impl RenderStats {

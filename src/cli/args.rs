@@ -154,6 +154,18 @@ pub struct RenderArgs {
     /// Also write a grey image of how many camera rays each pixel took (white = most).
     #[arg(long, value_name = "OUT.png")]
     pub aa_map: Option<PathBuf>,
+    /// Adaptive pixels: after --spp samples (at least 2), double a pixel's samples while its
+    /// error, estimated from two half-buffers relative to the pixel's and the image's
+    /// brightness, is above E (0.05 = 5%), up to --max-spp. See docs/guide.md.
+    #[arg(long, value_name = "E")]
+    pub noise_target: Option<f32>,
+    /// Adaptive pixels: most samples a pixel takes [default: 64 times --spp, at most 65536].
+    #[arg(long, value_name = "N")]
+    pub max_spp: Option<u32>,
+    /// Also write each pixel's estimated relative error (from its two half-buffers; needs
+    /// --spp 2 or more): a colour-scaled picture with a legend (.png) or the values (.exr).
+    #[arg(long, value_name = "MAP.png|MAP.exr")]
+    pub error_map: Option<PathBuf>,
     /// Render only the window x0,y0,x1,y1 (pixels, end exclusive) of each image, as a tile for
     /// `caustic stitch`.
     #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop)]

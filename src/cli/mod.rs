@@ -11,14 +11,17 @@ pub mod study;
 
 use crate::desc::{RenderDesc, SceneDesc};
 use crate::error::{Error, Result};
+use crate::film::Film;
 use crate::frame;
 use crate::integrator::progressive::Stop;
 use crate::io::image::{Tonemap, write_image, write_sample_map};
 use crate::lua::{ScriptOptions, run_script_with};
 use crate::metrics::Region;
+use crate::render::Sampling;
 use crate::scene::build::build_scene;
 pub use args::*;
 use clap::Parser;
+use glam::Vec3A;
 use report::Bar;
 use settings::RenderJob;
 use std::cell::Cell;
@@ -347,6 +350,7 @@ fn check_render_outputs(
     for path in [
         Some(out),
         job.aa_map.as_deref(),
+        job.error_map.as_deref(),
         job.save_passes.as_deref(),
         heat.as_deref(),
         Some(&partial),
@@ -408,6 +412,12 @@ fn render_one(
     if let Some(map) = &job.aa_map {
         write_sample_map(&frame.film, map)?;
     }
+    if let Some(errors) = &frame.stats.render.error {
+        report_noise(&frame.film, errors, &job.settings.sampling);
+        if let Some(map) = &job.error_map {
+            write_error_map(&frame.film, errors, map)?;
+        }
+    }
     let traversal = crate::accel::counters::enabled().then(crate::accel::counters::collect);
     if let (Some(measure), Some(heat)) = (job.heatmap, &frame.stats.render.heat) {
         write_heatmap(out, measure, heat, frame.film.window.size())?;
@@ -436,6 +446,74 @@ fn render_one(
     }
     if job.stats {
         report::print_stats(&frame, r, out, traversal.as_ref());
+    }
+    Ok(())
+}
+
+/// Returns each pixel of `film`'s relative error as adaptive pixels test it
+/// ([`crate::render::noise::relative_error`]; 0 where the pixel has no estimate).
+fn relative_errors(film: &Film, errors: &crate::stats::PixelErrors) -> Vec<f32> {
+    use crate::render::noise::relative_error;
+    film.pixels
+        .iter()
+        .zip(&errors.sample_error)
+        .map(|(&p, &e)| match e.is_finite() {
+            true => relative_error(e, p, errors.image_mean),
+            false => 0.0,
+        })
+        .collect()
+}
+
+/// Prints the image's relative RMSE estimated from its pixels' half-buffers, and with
+/// `--noise-target` how the samples went.
+fn report_noise(film: &Film, errors: &crate::stats::PixelErrors, sampling: &Sampling) {
+    let estimate = errors
+        .relative_rmse(&film.pixels)
+        .map_or("none (a black image)".to_string(), |e| format!("{e:.4}"));
+    let mut line = format!("estimated relative RMSE {estimate} (from the pixels' half-buffers)");
+    if let Sampling::Noise {
+        spp,
+        max_spp,
+        target,
+    } = *sampling
+    {
+        let n = film.samples.len().max(1) as f64;
+        let mean = film.samples.iter().map(|&s| s as f64).sum::<f64>() / n;
+        let rel = relative_errors(film, errors);
+        let above = rel.iter().filter(|&&e| e > target).count() as f64 / n;
+        let capped = film.samples.iter().filter(|&&s| s >= max_spp).count() as f64 / n;
+        line += &format!(
+            "; adaptive pixels to {target}: {mean:.1} samples a pixel on average ({spp} to \
+             {max_spp}), {:.1}% of pixels at --max-spp, {:.1}% above the target",
+            100.0 * capped,
+            100.0 * above
+        );
+    }
+    eprintln!("{line}");
+}
+
+/// Writes each pixel's estimated relative error to `map`: a colour-scaled PNG with a legend,
+/// or an EXR of the values (the same in all three channels).
+fn write_error_map(
+    film: &Film,
+    errors: &crate::stats::PixelErrors,
+    map: &std::path::Path,
+) -> Result<()> {
+    let rel = relative_errors(film, errors);
+    let png = map
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if png {
+        let caption = |v: f32| ("estimated relative error per pixel", format!("{v:.3}"));
+        let (top, _) = crate::io::heatmap::write_values(map, rel, film.window.size(), caption)?;
+        eprintln!("wrote {} (top colour: {top:.3} and above)", map.display());
+    } else {
+        let values = Film {
+            pixels: rel.iter().map(|&e| Vec3A::splat(e)).collect(),
+            ..film.clone()
+        };
+        write_image(&values, map, Tonemap::Clamp)?;
+        eprintln!("wrote {}", map.display());
     }
     Ok(())
 }

@@ -53,6 +53,8 @@ pub struct RenderJob {
     pub tonemap: Tonemap,
     /// Where to write the camera-ray count image.
     pub aa_map: Option<PathBuf>,
+    /// Where to write each pixel's estimated relative error (`--error-map`).
+    pub error_map: Option<PathBuf>,
     /// Where to write a progressive render's pass sums (`--save-passes`).
     pub save_passes: Option<PathBuf>,
     /// What `--heatmap` shows.
@@ -76,6 +78,9 @@ impl RenderJob {
                 e.name()
             )));
         }
+        if let Some(map) = &a.error_map {
+            check_error_map(map, &sampling, progressive.is_some())?;
+        }
         if a.heatmap.is_some() && progressive.is_some() {
             return Err(Error::Usage(
                 "--heatmap: the progressive integrator has no single camera pass to measure".into(),
@@ -87,6 +92,7 @@ impl RenderJob {
             light_samples: a.light_samples,
             timing: a.stats,
             heatmap: a.heatmap.is_some(),
+            error_estimate: a.error_map.is_some(),
             gi: match a.gi {
                 GiArg::Auto => GiMode::Auto,
                 GiArg::On => GiMode::On,
@@ -106,6 +112,7 @@ impl RenderJob {
             crop: a.crop,
             tonemap,
             aa_map: a.aa_map.clone(),
+            error_map: a.error_map.clone(),
             save_passes: a.save_passes.clone(),
             heatmap: a.heatmap.map(|h| match h {
                 HeatArg::Nodes => Measure::Nodes,
@@ -138,6 +145,14 @@ fn sampling(a: &RenderArgs, progressive: bool) -> Result<Sampling> {
         ));
     }
     check_count("--light-samples", a.light_samples.into(), 4096)?;
+    if let Some(target) = a.noise_target {
+        return noise_sampling(a, spp, target, progressive);
+    }
+    if a.max_spp.is_some() {
+        return Err(Error::Usage(
+            "--max-spp bounds adaptive pixels: give --noise-target too".into(),
+        ));
+    }
     Ok(if a.adaptive {
         Sampling::Adaptive {
             threshold: a.aa_threshold,
@@ -146,6 +161,73 @@ fn sampling(a: &RenderArgs, progressive: bool) -> Result<Sampling> {
     } else {
         Sampling::Stratified { spp }
     })
+}
+
+/// Returns noise-driven adaptive sampling to `target` from `spp` samples, or a usage error for
+/// a target or `--max-spp` out of range or a sampling it cannot combine with.
+fn noise_sampling(a: &RenderArgs, spp: u32, target: f32, progressive: bool) -> Result<Sampling> {
+    use crate::render::noise::MAX_SPP;
+    if !(target > 0.0 && target <= 10.0) {
+        return Err(Error::Usage(format!(
+            "--noise-target must be in (0, 10], got {target}"
+        )));
+    }
+    if progressive || a.adaptive {
+        let other = if a.adaptive {
+            "--adaptive"
+        } else {
+            "--integrator progressive"
+        };
+        return Err(Error::Usage(format!(
+            "--noise-target samples pixels its own way: it cannot be combined with {other}"
+        )));
+    }
+    if spp < 2 {
+        return Err(Error::Usage(format!(
+            "--noise-target needs --spp 2 or more (two half-buffers to estimate a pixel's \
+             error), got {spp}"
+        )));
+    }
+    let max_spp = a.max_spp.unwrap_or((64 * spp).min(MAX_SPP));
+    if max_spp < spp || max_spp > MAX_SPP {
+        return Err(Error::Usage(format!(
+            "--max-spp must be in [--spp, {MAX_SPP}] = [{spp}, {MAX_SPP}], got {max_spp}"
+        )));
+    }
+    Ok(Sampling::Noise {
+        spp,
+        max_spp,
+        target,
+    })
+}
+
+/// Returns a usage error unless `--error-map MAP` can be written for `sampling`: a `.png` or
+/// `.exr` name, and samples to split into halves.
+fn check_error_map(map: &std::path::Path, sampling: &Sampling, progressive: bool) -> Result<()> {
+    let ext = map
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("png" | "exr")) {
+        return Err(Error::Usage(format!(
+            "--error-map {}: the map is written as .png or .exr",
+            map.display()
+        )));
+    }
+    let why = match sampling {
+        _ if progressive => {
+            Some("the progressive integrator estimates its error per pass (--target-error)")
+        }
+        Sampling::Adaptive { .. } => Some("--adaptive's corner rays have no half-buffers"),
+        Sampling::Stratified { spp: 1 } => {
+            Some("one sample a pixel has no half-buffers: give --spp 2 or more")
+        }
+        _ => None,
+    };
+    match why {
+        Some(why) => Err(Error::Usage(format!("--error-map: {why}"))),
+        None => Ok(()),
+    }
 }
 
 /// Returns the photon passes' settings the arguments ask for (a `progressive` render's

@@ -82,6 +82,9 @@ pub struct Settings {
     /// Record each pixel's traversal counts and time (`--heatmap`; needs
     /// [`crate::accel::counters::enable`]).
     pub heatmap: bool,
+    /// Estimate each pixel's error from its half-buffers (`--error-map`; noise sampling always
+    /// does): [`RenderStats::error`].
+    pub error_estimate: bool,
 }
 
 /// Camera samples per pixel by default. A pixel is an area: one centre ray (the course's, and
@@ -113,6 +116,7 @@ impl Default for Settings {
             maps_file: None,
             timing: false,
             heatmap: false,
+            error_estimate: false,
         }
     }
 }
@@ -240,6 +244,7 @@ fn camera_pass(
         window,
         timing: settings.timing,
         heatmap: settings.heatmap,
+        error_estimate: settings.error_estimate,
     };
     progress.start("rendering rows", window.size().1 as u64);
     crate::render::camera_pass(camera, &tracer, &opts, progress)

@@ -271,7 +271,9 @@ pub fn pass_seed(seed: u64, pass: u32) -> u64 {
 /// no progressive form; the command line refuses it, the library takes one sample).
 fn jittered(sampling: &Sampling) -> Sampling {
     match *sampling {
-        Sampling::Stratified { spp } | Sampling::Jittered { spp } => Sampling::Jittered { spp },
+        Sampling::Stratified { spp } | Sampling::Jittered { spp } | Sampling::Noise { spp, .. } => {
+            Sampling::Jittered { spp }
+        }
         Sampling::Adaptive { .. } => Sampling::Jittered { spp: 1 },
     }
 }

@@ -86,26 +86,39 @@ pub fn write(
     measure: Measure,
 ) -> Result<(f32, bool)> {
     let values: Vec<f32> = heat.iter().map(|h| h[measure.column()]).collect();
-    let max = top(values.clone()).max(f32::MIN_POSITIVE);
+    write_values(path, values, (width, height), |v| measure.caption(v))
+}
+
+/// Writes `values` (`width × height`, row-major; non-finite ones drawn as 0) to `path` as a
+/// PNG on the same scale and legend as a heatmap, `caption` giving the legend's caption and
+/// the label of a value; returns the value the top colour stands for and whether the legend
+/// has text. `--error-map` draws with it too.
+pub fn write_values(
+    path: &Path,
+    values: Vec<f32>,
+    (width, height): (u32, u32),
+    caption: impl Fn(f32) -> (&'static str, String),
+) -> Result<(f32, bool)> {
+    let finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    let max = top(finite).max(f32::MIN_POSITIVE);
     let full = (width, height + LEGEND);
     let mut rgb = vec![0u8; 3 * full.0 as usize * full.1 as usize];
     for (i, v) in values.iter().enumerate() {
         rgb[3 * i..3 * i + 3].copy_from_slice(&colour(v / max));
     }
     let text = crate::io::font::font_ready();
-    legend(&mut rgb, full, measure, max, text)
-        .map_err(|e| Error::Usage(format!("drawing the heatmap's legend: {e}")))?;
+    legend(&mut rgb, full, caption(max), text)
+        .map_err(|e| Error::Usage(format!("drawing the picture's legend: {e}")))?;
     crate::io::image::write_rgb8_png(path, full.0, full.1, &rgb)?;
     Ok((max, text))
 }
 
-/// Draws the legend strip (a white band with the colour bar and, with `text`, its labels) at
-/// the bottom of `rgb`.
+/// Draws the legend strip (a white band with the colour bar and, with `text`, its labels: the
+/// caption and the top colour's value) at the bottom of `rgb`.
 fn legend(
     rgb: &mut [u8],
     (w, h): (u32, u32),
-    measure: Measure,
-    max: f32,
+    (caption, top): (&str, String),
     text: bool,
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
     let root = BitMapBackend::with_buffer(rgb, (w, h)).into_drawing_area();
@@ -122,7 +135,6 @@ fn legend(
     }
     if text {
         let style = (crate::io::font::FAMILY, 13).into_font().color(&BLACK);
-        let (caption, top) = measure.caption(max);
         let y = y1 + 4;
         root.draw(&Text::new("0", (x0, y), style.clone()))?;
         let label = format!("≥ {top}");

@@ -11,6 +11,7 @@
 //! corners. Flat areas thus cost about one ray per pixel, and edges up to `(2^d + 1)²`. It draws
 //! no random numbers, so it is deterministic by construction.
 
+use super::noise::{self, Halves};
 use super::{PassOptions, Radiance, Sampling, Share, WEAK_SHARERS};
 use crate::camera::Camera;
 use crate::sampling::{Pass, Rng, point_key, stratified_2d};
@@ -26,6 +27,9 @@ pub struct PixelSampler<'a> {
     /// Adaptive mode: radiance at every pixel corner of the window, `(w + 1) × (h + 1)` row-major.
     corners: Vec<Vec3A>,
     corner_counts: RayCounts,
+    /// The image's mean brightness from the pilot ([`noise::pilot_mean`]), when pixels'
+    /// errors are estimated (noise sampling, or `opts.error_estimate`).
+    image_mean: Option<f32>,
 }
 
 impl<'a> PixelSampler<'a> {
@@ -41,7 +45,19 @@ impl<'a> PixelSampler<'a> {
             opts,
             corners: Vec::new(),
             corner_counts: RayCounts::default(),
+            image_mean: None,
         };
+        if sampler.estimates_error() {
+            let win = opts.window;
+            let mut counts = RayCounts {
+                timing: opts.timing,
+                ..RayCounts::default()
+            };
+            let full = (win.full_width, win.full_height);
+            let m = noise::pilot_mean(camera, integrator, opts.seed, full, &mut counts);
+            sampler.image_mean = Some(m);
+            sampler.corner_counts.add(&counts);
+        }
         if let Sampling::Adaptive { .. } = opts.sampling {
             let win = opts.window;
             let (w, h) = win.size();
@@ -72,9 +88,25 @@ impl<'a> PixelSampler<'a> {
         sampler
     }
 
-    /// Returns the rays traced for the corner grid (zero unless adaptive).
+    /// Returns the rays traced for the corner grid and the noise pilot (zero unless adaptive
+    /// or estimating errors).
     pub fn corner_counts(&self) -> RayCounts {
         self.corner_counts
+    }
+
+    /// Returns whether pixels' errors are estimated: noise sampling always, stratified sampling
+    /// of at least two samples when asked.
+    pub fn estimates_error(&self) -> bool {
+        match self.opts.sampling {
+            Sampling::Noise { .. } => true,
+            Sampling::Stratified { spp } => self.opts.error_estimate && spp >= 2,
+            Sampling::Jittered { .. } | Sampling::Adaptive { .. } => false,
+        }
+    }
+
+    /// Returns the image's mean brightness from the pilot, when errors are estimated.
+    pub fn image_mean(&self) -> Option<f32> {
+        self.image_mean
     }
 
     /// Returns how many corner rays are charged to window pixel `(i, j)`: its top-left corner,
@@ -116,45 +148,38 @@ impl<'a> PixelSampler<'a> {
         self.trace(x, y, &mut rng, counts)
     }
 
-    /// Returns the value of pixel `(x, y)` (full-image coordinates), never NaN or infinite.
-    pub fn pixel(&self, x: u32, y: u32, counts: &mut RayCounts) -> Vec3A {
-        let value = self.pixel_mean(x, y, counts);
+    /// Returns the value of pixel `(x, y)` (full-image coordinates), never NaN or infinite,
+    /// and when errors are estimated its standard errors from its half-buffers and from its
+    /// samples' variance ([`noise`]; NaN otherwise).
+    pub fn pixel(&self, x: u32, y: u32, counts: &mut RayCounts) -> (Vec3A, [f32; 2]) {
+        let (value, error) = self.pixel_mean(x, y, counts);
         // Finite samples can still sum past the largest float.
-        finite_or_dropped(value, counts)
+        (finite_or_dropped(value, counts), error)
     }
 
-    fn pixel_mean(&self, x: u32, y: u32, counts: &mut RayCounts) -> Vec3A {
+    fn pixel_mean(&self, x: u32, y: u32, counts: &mut RayCounts) -> (Vec3A, [f32; 2]) {
         match self.opts.sampling {
             Sampling::Stratified { spp } | Sampling::Jittered { spp } => {
-                let win = self.opts.window;
-                let index = y as u64 * win.full_width as u64 + x as u64;
+                let index = self.pixel_index(x, y);
                 let mut rng = Rng::new(self.opts.seed, Pass::Pixel, index);
+                let first =
+                    Rng::new(self.opts.seed, Pass::Share, index).below(spp.min(WEAK_SHARERS));
                 // One stratified sample is the pixel centre, as the course renders; more, or
                 // jittered ones, are stratified.
                 let centre = matches!(self.opts.sampling, Sampling::Stratified { .. });
-                let positions = if spp == 1 && centre {
-                    vec![(0.5, 0.5)]
-                } else {
-                    stratified_2d(&mut rng, spp)
+                let mut h = Halves::default();
+                self.round(x, y, spp, centre, first, &mut rng, &mut h, counts);
+                let error = match self.estimates_error() {
+                    true => errors(&h),
+                    false => [f32::NAN; 2],
                 };
-                // One sample in `sharers` follows the weak branches (see `Share`).
-                let sharers = spp.min(WEAK_SHARERS);
-                let first = Rng::new(self.opts.seed, Pass::Share, index).below(sharers);
-                let sum: Vec3A = positions
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &(u, v))| {
-                        let share = match sharers {
-                            1 => Share::All,
-                            n if (i as u32 + first).is_multiple_of(n) => Share::Carry(n as f32),
-                            _ => Share::Skip,
-                        };
-                        let (x, y) = (x as f32 + u, y as f32 + v);
-                        self.trace_shared(x, y, share, &mut rng, counts)
-                    })
-                    .sum();
-                sum / spp as f32
+                (h.sum / spp as f32, error)
             }
+            Sampling::Noise {
+                spp,
+                max_spp,
+                target,
+            } => self.refined_pixel(x, y, (spp, max_spp), target, counts),
             Sampling::Adaptive {
                 threshold,
                 max_depth,
@@ -173,9 +198,85 @@ impl<'a> PixelSampler<'a> {
                     y: y as f32,
                     size: 1.0,
                 };
-                self.refine(square, c, threshold, max_depth, counts)
+                (
+                    self.refine(square, c, threshold, max_depth, counts),
+                    [f32::NAN; 2],
+                )
             }
         }
+    }
+
+    /// Returns the key of pixel `(x, y)`'s streams: its index in the full image.
+    fn pixel_index(&self, x: u32, y: u32) -> u64 {
+        y as u64 * self.opts.window.full_width as u64 + x as u64
+    }
+
+    /// Traces one round of `n` stratified samples of pixel `(x, y)` drawn from `rng` (or its
+    /// centre when `n` is 1 and `centre`), adding them to `h` in order; the sample `first`
+    /// (mod the sharers) of each group of `min(n, WEAK_SHARERS)` shades the weak branches'
+    /// surfaces (see [`Share`]).
+    #[allow(clippy::too_many_arguments)]
+    fn round(
+        &self,
+        x: u32,
+        y: u32,
+        n: u32,
+        centre: bool,
+        first: u32,
+        rng: &mut Rng,
+        h: &mut Halves,
+        counts: &mut RayCounts,
+    ) {
+        let positions = if n == 1 && centre {
+            vec![(0.5, 0.5)]
+        } else {
+            stratified_2d(rng, n)
+        };
+        let sharers = n.min(WEAK_SHARERS);
+        for (i, &(u, v)) in positions.iter().enumerate() {
+            let share = match sharers {
+                1 => Share::All,
+                s if (i as u32 + first).is_multiple_of(s) => Share::Carry(s as f32),
+                _ => Share::Skip,
+            };
+            let (x, y) = (x as f32 + u, y as f32 + v);
+            h.add(self.trace_shared(x, y, share, rng, counts));
+        }
+    }
+
+    /// Returns pixel `(x, y)` sampled in rounds until its estimated error is at most `target`
+    /// or it has `max_spp` samples (see [`noise`]), and its standard error.
+    fn refined_pixel(
+        &self,
+        x: u32,
+        y: u32,
+        (spp, max_spp): (u32, u32),
+        target: f32,
+        counts: &mut RayCounts,
+    ) -> (Vec3A, [f32; 2]) {
+        let index = self.pixel_index(x, y);
+        let m = self.image_mean.unwrap_or(0.0);
+        let mut h = Halves::default();
+        let mut size = spp;
+        for r in 0u64.. {
+            // Round 0 is the stratified render's own samples; later rounds have their streams.
+            let mut rng = match r {
+                0 => Rng::new(self.opts.seed, Pass::Pixel, index),
+                _ => Rng::new(self.opts.seed, Pass::Refine, index | r << 32),
+            };
+            let first = match r {
+                0 => Rng::new(self.opts.seed, Pass::Share, index).below(size.min(WEAK_SHARERS)),
+                _ => rng.below(size.min(WEAK_SHARERS)),
+            };
+            self.round(x, y, size, false, first, &mut rng, &mut h, counts);
+            let e = h.sample_error().unwrap_or(0.0);
+            let value = h.sum / h.n as f32;
+            if h.n >= max_spp || noise::relative_error(e, value, m) <= target {
+                break;
+            }
+            size = h.n.min(max_spp - h.n);
+        }
+        (h.sum / h.n as f32, errors(&h))
     }
 
     /// Returns the mean radiance over `sq` given its corners `[top-left, top-right, bottom-left,
@@ -226,6 +327,15 @@ impl<'a> PixelSampler<'a> {
             ))
             * 0.25
     }
+}
+
+/// Returns a pixel's standard errors from its half-buffers and from its samples' variance (NaN
+/// without two samples).
+fn errors(h: &Halves) -> [f32; 2] {
+    [
+        h.std_error().unwrap_or(f32::NAN),
+        h.sample_error().unwrap_or(f32::NAN),
+    ]
 }
 
 /// Returns `radiance`, or black when it is NaN or infinite in any channel, counting it in

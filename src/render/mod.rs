@@ -17,6 +17,7 @@
 //! a cropped window equals the same window of the full render.
 
 pub mod aa;
+pub mod noise;
 
 use crate::accel::counters;
 use crate::camera::Camera;
@@ -24,7 +25,7 @@ use crate::film::{Film, Window};
 use crate::geometry::Ray;
 use crate::progress::Progress;
 use crate::sampling::Rng;
-use crate::stats::{RayCounts, RenderStats};
+use crate::stats::{PixelErrors, RayCounts, RenderStats};
 use glam::Vec3A;
 use rayon::prelude::*;
 use std::sync::Mutex;
@@ -92,6 +93,10 @@ pub enum Sampling {
     /// Corner rays, refined where neighbours differ by more than `threshold` (any channel),
     /// splitting at most `max_depth` times.
     Adaptive { threshold: f32, max_depth: u32 },
+    /// `spp` stratified samples per pixel (at least 2), then rounds that double them while the
+    /// pixel's error estimated from its half-buffers is above `target`, up to `max_spp`
+    /// ([`noise`]).
+    Noise { spp: u32, max_spp: u32, target: f32 },
 }
 
 /// What shapes the camera pass besides the integrator and the camera.
@@ -105,6 +110,9 @@ pub struct PassOptions {
     pub timing: bool,
     /// Record each pixel's traversal counts and time ([`RenderStats::heat`]).
     pub heatmap: bool,
+    /// Estimate each pixel's error from its half-buffers ([`RenderStats::error`]) under
+    /// stratified sampling of at least two samples (noise sampling always does).
+    pub error_estimate: bool,
 }
 
 /// Renders the window `opts.window` of the image through `camera`, asking `integrator` for each
@@ -126,12 +134,25 @@ pub fn camera_pass(
     let mut pixels = vec![Vec3A::ZERO; w as usize * h as usize];
     let mut samples = vec![0u32; w as usize * h as usize];
     let sampler = aa::PixelSampler::new(camera, integrator, opts);
+    let mut errors = vec![
+        [f32::NAN; 2];
+        if sampler.estimates_error() {
+            pixels.len()
+        } else {
+            0
+        }
+    ];
+    let error_rows: Vec<Option<&mut [[f32; 2]]>> = match errors.is_empty() {
+        true => (0..h).map(|_| None).collect(),
+        false => errors.chunks_mut(w as usize).map(Some).collect(),
+    };
     // Each row's heat (with `heatmap`), in row order.
     let heat_rows: Vec<Vec<[f32; 3]>> = pixels
         .par_chunks_mut(w as usize)
         .zip(samples.par_chunks_mut(w as usize))
+        .zip(error_rows)
         .enumerate()
-        .map(|(row, (px_row, count_row))| {
+        .map(|(row, ((px_row, count_row), mut error_row))| {
             let mut heat_row = opts.heatmap.then(|| vec![[0f32; 3]; px_row.len()]);
             if progress.should_stop() {
                 skipped.fetch_add(1, Ordering::Relaxed);
@@ -147,7 +168,11 @@ pub fn camera_pass(
                 let start = heat_row
                     .as_ref()
                     .map(|_| (counters::thread_total(), Instant::now()));
-                *px = sampler.pixel(win.x0 + i as u32, y, &mut counts);
+                let (value, error) = sampler.pixel(win.x0 + i as u32, y, &mut counts);
+                *px = value;
+                if let Some(e) = error_row.as_deref_mut() {
+                    e[i] = error;
+                }
                 *n = (counts.primary - before) as u32
                     + sampler.corner_rays_charged(i as u32, row as u32);
                 if let (Some(heat), Some(((nodes, tris), t))) = (heat_row.as_mut(), start) {
@@ -181,6 +206,11 @@ pub fn camera_pass(
         rows_skipped: skipped.into_inner(),
         time: start.elapsed(),
         heat: opts.heatmap.then(|| heat_rows.concat()),
+        error: sampler.image_mean().map(|image_mean| PixelErrors {
+            std_error: errors.iter().map(|e| e[0]).collect(),
+            sample_error: errors.iter().map(|e| e[1]).collect(),
+            image_mean,
+        }),
     };
     let film = Film {
         width: w,

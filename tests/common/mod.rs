@@ -122,7 +122,8 @@ pub fn centre_ray() -> Settings {
     let d = Settings::default();
     let spp = match d.sampling {
         caustic::render::Sampling::Stratified { spp }
-        | caustic::render::Sampling::Jittered { spp } => spp,
+        | caustic::render::Sampling::Jittered { spp }
+        | caustic::render::Sampling::Noise { spp, .. } => spp,
         caustic::render::Sampling::Adaptive { .. } => 1,
     };
     let mut photons = d.photons.clone();

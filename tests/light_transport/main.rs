@@ -6,11 +6,13 @@
 //! shadow rays from inside transparent solids), `weak_branches` (weak reflections shared by a
 //! pixel's samples), `progressive` (the progressive integrator), `effect_plan` (the effects
 //! decided before the passes), `pixel_sampling` (determinism, crops, tiles, adaptive sampling),
-//! `spot_and_directional` (those lights' shadows and photons) and `final_scene`.
+//! `spot_and_directional` (those lights' shadows and photons), `adaptive_pixels` (samples
+//! where the half-buffers see noise) and `final_scene`.
 
 #[path = "../common/mod.rs"]
 mod common;
 
+mod adaptive_pixels;
 mod convergence;
 mod deep_paths;
 mod dielectric;

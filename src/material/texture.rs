@@ -154,6 +154,16 @@ impl Texture {
         })
     }
 
+    /// Returns the texels of an sRGB-encoded image decoded to linear values, row-major from
+    /// the top row: what [`Texture::srgb_colour`] filters between.
+    pub fn srgb_texels(&self) -> Vec<Vec3A> {
+        let table = &*SRGB_TABLE;
+        self.texels
+            .iter()
+            .map(|&[r, g, b]| Vec3A::new(table[r as usize], table[g as usize], table[b as usize]))
+            .collect()
+    }
+
     /// Returns the mean over the texels of an sRGB-encoded image, decoded to linear values.
     pub fn srgb_mean(&self) -> Vec3A {
         let table = &*SRGB_TABLE;

@@ -31,12 +31,19 @@
 //!   two agree within the inner cone and beyond the outer one, so only a spot whose inner angle
 //!   is (nearly) its outer one, a hard cone, is the same light in both renderers; the exporter
 //!   writes the others all the same, and the difference is the penumbra's, never elsewhere.
+//! - A glTF base colour texture on a non-metal (`metallicFactor` 0, no metallic-roughness
+//!   texture: `ks` is glTF's constant 4%) → a `bitmap` reflectance of the diffuse lobe, written
+//!   beside the XML as an EXR of the texels sRGB-decoded and multiplied by what the lobe's
+//!   reflectance multiplies them by (`baseColorFactor`, and the blend's `1/(1 − w)`), read raw
+//!   with bilinear filtering and repeat wrapping, as caustic looks textures up; the mesh's OBJ
+//!   carries its texture coordinates (`vt u 1−v`: OBJ's `v` runs up the image, glTF's down).
 //! - The camera: `perspective` with the vertical field of view, a box pixel filter, an HDR film.
 //!   The integrator: `path`, unbounded depth with Russian roulette.
 //!
 //! Anything else is an error naming the object and, where there is one, the script line:
-//! CSG, cylinders, cones, Phong highlights, partly transparent or mixed materials, textures,
-//! normal maps, Perlin noise, the course's falloff, non-uniformly scaled spheres, overlapping
+//! CSG, cylinders, cones, Phong highlights, partly transparent or mixed materials, the course's
+//! textures, other glTF textures (metallic-roughness, a metal's base colour), normal maps,
+//! Perlin noise, the course's falloff, non-uniformly scaled spheres, overlapping
 //! dielectrics. Never a silent approximation. Caustic's background gradient has no Mitsuba
 //! counterpart (black there): validation scenes are closed.
 
@@ -85,13 +92,18 @@ pub fn outputs(scene: &Scene, xml: &Path) -> Vec<std::path::PathBuf> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
     let meshes = (0..scene.instances.len()).flat_map(|i| mesh_files(scene, &stem, i));
+    let textures = (scene.materials.iter().enumerate())
+        .filter(|(_, m)| matches!(base_colour_texture(m), Ok(Some(_))))
+        .map(|(id, _)| format!("{stem}_kd{id}.exr"));
     std::iter::once(xml.to_path_buf())
         .chain(meshes.map(|(name, _)| xml.with_file_name(name)))
+        .chain(textures.map(|name| xml.with_file_name(name)))
         .collect()
 }
 
 /// Writes the Mitsuba 3 scene of `scene` (built from `desc`'s `gr.render` call `r`) to `xml`, at
-/// `width × height` pixels and `spp` samples per pixel; meshes go to OBJ files beside it.
+/// `width × height` pixels and `spp` samples per pixel; meshes go to OBJ files beside it, and
+/// base colour textures to EXR files.
 pub fn export(
     desc: &SceneDesc,
     r: &RenderDesc,
@@ -119,9 +131,15 @@ pub fn export(
         let at = |what: String| Error::at(&node.loc, format!("node '{}': {what}", node.name));
         let (outside, ext) = outside(scene, i, 0);
         let bsdf_of = |material: u32| -> Result<String> {
-            Ok(bsdf(&scene.materials[material as usize], ext)
-                .map_err(|e| Error::at(material_loc(desc, material, &node.loc), e))?
-                + &media_refs(scene, material, outside))
+            let m = &scene.materials[material as usize];
+            let loc = material_loc(desc, material, &node.loc);
+            let texture = base_colour_texture(m).map_err(|e| Error::at(loc, e))?;
+            let file = texture.map(|_| format!("{stem}_kd{material}.exr"));
+            let xml = bsdf(m, ext, file.as_deref()).map_err(|e| Error::at(loc, e))?;
+            if let (Some(t), Some(file)) = (texture, &file) {
+                write_reflectance(t, kd_scale(m), &dir.join(file))?;
+            }
+            Ok(xml + &media_refs(scene, material, outside))
         };
         let m = inst.world_from_object;
         if let Shape::Mesh(k) = inst.shape {
@@ -286,12 +304,76 @@ fn sensor(s: &mut String, r: &RenderDesc, (width, height): (u32, u32), spp: u32,
     );
 }
 
-/// Returns the Mitsuba BSDF of `m`, or why it is outside the subset.
-fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
-    if m.is_textured() || m.bump.is_some() || m.perlin_scale > 0.0 {
+/// Returns the base colour texture of `m` when it is the one texturing the Mitsuba subset
+/// takes (see the module doc), none for an untextured material, or why `m` is outside it.
+fn base_colour_texture(
+    m: &Material,
+) -> std::result::Result<Option<&crate::material::texture::Texture>, String> {
+    if m.bump.is_some() || m.perlin_scale > 0.0 {
+        return Err("normal maps and Perlin noise are outside the Mitsuba subset".into());
+    }
+    if m.texture.is_some() {
+        return Err("the course's textures are outside the Mitsuba subset".into());
+    }
+    let Some(p) = &m.metal_rough else {
+        return Ok(None);
+    };
+    match (&p.base_colour_texture, &p.metallic_roughness_texture) {
+        (Some(t), None) if p.metallic == 0.0 && m.transparency == 0.0 => Ok(Some(t)),
+        (None, None) => Ok(None),
+        _ => Err(
+            "of glTF's textures, only a non-metal's base colour texture (metallic 0, no \
+                  metallic-roughness texture, opaque) is in the Mitsuba subset"
+                .into(),
+        ),
+    }
+}
+
+/// Returns what the diffuse lobe's reflectance multiplies a base colour texel by:
+/// `baseColorFactor`, over `1 − w` when the lobe is blended with a mirror lobe of weight `w`
+/// (see [`bsdf`]).
+fn kd_scale(m: &Material) -> Vec3A {
+    let factor = m.metal_rough.as_ref().map_or(Vec3A::ONE, |p| p.base_colour);
+    if m.ks.max_element() > 0.0 && m.roughness > 0.0 {
+        factor / (1.0 - m.ks.max_element().min(1.0)).max(1e-6)
+    } else {
+        factor
+    }
+}
+
+/// Writes texture `t`'s texels, sRGB-decoded and multiplied by `scale`, as a linear EXR.
+fn write_reflectance(
+    t: &crate::material::texture::Texture,
+    scale: Vec3A,
+    path: &Path,
+) -> Result<()> {
+    let film = crate::film::Film {
+        width: t.width,
+        height: t.height,
+        pixels: t.srgb_texels().into_iter().map(|c| c * scale).collect(),
+        samples: vec![1; (t.width * t.height) as usize],
+        window: crate::film::Window::full(t.width, t.height),
+    };
+    crate::io::image::write_image(&film, path, crate::io::image::Tonemap::Clamp)
+}
+
+/// Returns the Mitsuba BSDF of `m` (its diffuse reflectance the bitmap `texture` when given:
+/// [`base_colour_texture`]), or why it is outside the subset.
+fn bsdf(m: &Material, ext_ior: f32, texture: Option<&str>) -> std::result::Result<String, String> {
+    if m.texture.is_some() || m.bump.is_some() || m.perlin_scale > 0.0 {
         return Err("textures, normal maps and Perlin noise are outside the Mitsuba subset".into());
     }
     let rgb = |v: Vec3A| format!("{}, {}, {}", v.x, v.y, v.z);
+    // The diffuse reflectance, `kd` scaled by `scale`: a colour, or the texture (whose texels
+    // the file already holds scaled).
+    let reflectance = |kd: Vec3A| match texture {
+        Some(file) => format!(
+            "<texture type=\"bitmap\" name=\"reflectance\"><string name=\"filename\" value=\"{file}\"/>\
+             <string name=\"filter_type\" value=\"bilinear\"/><string name=\"wrap_mode\" value=\"repeat\"/>\
+             <boolean name=\"raw\" value=\"true\"/></texture>"
+        ),
+        None => format!("<rgb name=\"reflectance\" value=\"{}\"/>", rgb(kd)),
+    };
     let black = |v: Vec3A| v.max_element() <= 0.0;
     if m.transparency == 1.0 {
         // An index below 1 is relative to the medium outside (crate::material::medium).
@@ -315,8 +397,8 @@ fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
     }
     if black(m.ks) {
         return Ok(format!(
-            "<bsdf type=\"twosided\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"{}\"/></bsdf></bsdf>",
-            rgb(m.kd)
+            "<bsdf type=\"twosided\"><bsdf type=\"diffuse\">{}</bsdf></bsdf>",
+            reflectance(m.kd)
         ));
     }
     if black(m.kd) && m.roughness > 0.0 {
@@ -336,11 +418,11 @@ fn bsdf(m: &Material, ext_ior: f32) -> std::result::Result<String, String> {
         let w = m.ks.max_element().min(1.0);
         return Ok(format!(
             "<bsdf type=\"twosided\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"{w}\"/>\
-             <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"{}\"/></bsdf>\
+             <bsdf type=\"diffuse\">{}</bsdf>\
              <bsdf type=\"roughconductor\"><string name=\"material\" value=\"none\"/>\
              <string name=\"distribution\" value=\"ggx\"/><float name=\"alpha\" value=\"{alpha}\"/>\
              <rgb name=\"specular_reflectance\" value=\"{}\"/></bsdf></bsdf></bsdf>",
-            rgb(m.kd / (1.0 - w).max(1e-6)),
+            reflectance(m.kd / (1.0 - w).max(1e-6)),
             rgb(m.ks / w)
         ));
     }
@@ -527,7 +609,11 @@ impl Obj<'_> {
             let q = (self.normal_to_world * *n).normalize_or_zero();
             let _ = writeln!(s, "vn {} {} {}", q.x, q.y, q.z);
         }
+        for uv in &mesh.uvs {
+            let _ = writeln!(s, "vt {} {}", uv.x, 1.0 - uv.y);
+        }
         let with_normals = !mesh.normals.is_empty();
+        let with_uvs = !mesh.uvs.is_empty();
         for (i, t) in mesh.triangles.iter().enumerate() {
             if self
                 .material
@@ -536,7 +622,11 @@ impl Obj<'_> {
                 continue;
             }
             let [a, b, c] = t.map(|i| i + 1);
-            if with_normals {
+            if with_normals && with_uvs {
+                let _ = writeln!(s, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
+            } else if with_uvs {
+                let _ = writeln!(s, "f {a}/{a} {b}/{b} {c}/{c}");
+            } else if with_normals {
                 let _ = writeln!(s, "f {a}//{a} {b}//{b} {c}//{c}");
             } else {
                 let _ = writeln!(s, "f {a} {b} {c}");

@@ -545,3 +545,77 @@ fn blenders_textured_box_renders_its_checker() {
         "{orange} orange and {blue} blue pixels"
     );
 }
+
+/// `caustic export-mitsuba` writes a non-metal's base colour texture as a Mitsuba `bitmap`: an
+/// EXR of the texels sRGB-decoded times `baseColorFactor`, over `1 − 0.04` for the diffuse
+/// lobe's share of the blend with glTF's 4% specular lobe (sRGB 188 and factor (1, 0.5, 0.25):
+/// `0.50289 · (1, 0.5, 0.25) / 0.96` in every texel, to 1e-5), read raw and bilinear as caustic
+/// looks it up, and the OBJ's texture coordinates with `v` flipped (OBJ's runs up the image).
+/// A metal's base colour texture (it colours the specular lobe) stays outside the subset.
+#[test]
+fn a_base_colour_texture_exports_as_a_mitsuba_bitmap() {
+    let dir = out_dir("gltf-texture-mitsuba");
+    let mut f = quad();
+    let view = f.view(&uniform_png([188, 188, 188]));
+    let image = one_image(&format!(
+        r#"{{"bufferView":{view},"mimeType":"image/png"}}"#
+    ));
+    let paint = |metallic: u32| {
+        format!(
+            r#"{{"name":"Paint","pbrMetallicRoughness":{{"baseColorFactor":[1,0.5,0.25,1],
+                "metallicFactor":{metallic},"roughnessFactor":1,"baseColorTexture":{{"index":0}}}}}}"#
+        )
+    };
+    write(&f, &dir, "paint", &paint(0), &image);
+    let out = crate::common::run_ok(crate::common::caustic().current_dir(&dir).args([
+        "export-mitsuba",
+        "paint.glb",
+        "-o",
+        "paint.xml",
+    ]));
+    assert!(out.status.success());
+    let xml = std::fs::read_to_string(dir.join("paint.xml")).unwrap();
+    let bitmap = r#"<texture type="bitmap" name="reflectance"><string name="filename" value=""#;
+    let at = xml.find(bitmap).expect("a bitmap reflectance") + bitmap.len();
+    let file = &xml[at..at + xml[at..].find('"').unwrap()];
+    assert!(
+        file.starts_with("paint_kd") && file.ends_with(".exr"),
+        "{file}"
+    );
+    for part in [
+        r#"<string name="filter_type" value="bilinear"/>"#,
+        r#"<string name="wrap_mode" value="repeat"/>"#,
+        r#"<boolean name="raw" value="true"/>"#,
+    ] {
+        assert!(xml.contains(part), "{part} not in {xml}");
+    }
+    let exr = image::open(dir.join(file)).unwrap().into_rgb32f();
+    let want = srgb(188) * vec3(1.0, 0.5, 0.25) / 0.96;
+    for p in exr.pixels() {
+        let got = Vec3::from(p.0);
+        assert!(
+            (got - want).abs().max_element() < 1e-5,
+            "{got} against {want}"
+        );
+    }
+    let obj = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|e| e == "obj"))
+        .unwrap();
+    let obj = std::fs::read_to_string(obj).unwrap();
+    let vts: Vec<&str> = obj.lines().filter(|l| l.starts_with("vt ")).collect();
+    assert_eq!(vts, ["vt 0 1", "vt 1 1", "vt 1 0", "vt 0 0"]);
+    assert!(obj.lines().any(|l| l == "f 1/1/1 3/3/3 2/2/2"), "{obj}");
+    write(&f, &dir, "metal", &paint(1), &image);
+    let out = crate::common::caustic()
+        .current_dir(&dir)
+        .args(["export-mitsuba", "metal.glb", "-o", "metal.xml"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("only a non-metal's base colour texture"),
+        "{err}"
+    );
+}

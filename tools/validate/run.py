@@ -12,7 +12,7 @@ to docs/validation.md and the pictures (reference | caustic | difference) to doc
 With --equal-time, Mitsuba also renders at caustic's CPU time and both errors are compared.
 
 With --gltf, the scenes are glTF files rendered as whole scenes instead (by default
-scenes/gltf/{copper_bowl,frosted_sphere,glass_of_water}.glb, or --scenes), at --scale 0.25
+scenes/gltf/{copper_bowl,frosted_sphere,glass_of_water,textured_box}.glb, or --scenes), at --scale 0.25
 (200x150) for both the export and caustic's render (with the full-size render's photon counts,
 --photon-scale 16, and its samples per image area, --spp 64, unless --caustic-args sets them),
 with their regions from
@@ -60,7 +60,7 @@ def choose_variant():
 
 
 GLTF_SCENES = [os.path.join(ROOT, "scenes", "gltf", n + ".glb")
-               for n in ("copper_bowl", "frosted_sphere", "glass_of_water")]
+               for n in ("copper_bowl", "frosted_sphere", "glass_of_water", "textured_box")]
 GLTF_REGIONS = os.path.join(ROOT, "scenes", "validate", "gltf_regions.txt")
 
 

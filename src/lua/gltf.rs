@@ -84,6 +84,11 @@ pub(super) fn gr_gltf(lua: &Lua, s: &mut State, a: &Args) -> mlua::Result<MultiV
     for node in &tree.nodes {
         let id = add_node(s, a, node.name.clone(), NodeKind::Group)?;
         s.desc.nodes[id.0 as usize].transform = node.parent_from_node;
+        // The file's matrix is the same in either dialect: one call, which both orders read
+        // alike, so the legacy check ([`super::legacy`]) never counts it for either.
+        if let Some(w) = &mut s.watch {
+            w.compose(id, node.parent_from_node);
+        }
         if let Some((index, mesh_name)) = &node.mesh {
             let mesh = mesh_part_at(s, a, &given, path.clone(), Some(*index))?;
             let child = add_node(s, a, mesh_name.clone(), NodeKind::Mesh(mesh))?;

@@ -349,3 +349,28 @@ fn the_legacy_desk_is_warned_about_by_signs_and_by_layout() {
     assert!(modern.contains("gr.mesh('hat', {{"));
     assert!(!warned(&modern, "desk.lua", &dir));
 }
+
+/// The nodes `gr.gltf` makes carry the file's matrices, which are the same in either dialect:
+/// they count for neither order. Before, they counted as calls never made, so two turned and
+/// moved nodes of a Blender file (origins where no translate put them in the modern order, and
+/// "on" their absent translate calls in the legacy one) made a modern script look legacy.
+#[test]
+fn gltf_nodes_are_not_evidence_for_either_order() {
+    let dir = out_dir("legacy-detection-gltf");
+    let mut f = common::GltfFile::default();
+    f.floats("VEC3", &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    f.indices(5125, &[0, 1, 2]);
+    let (s, c) = 20f32.to_radians().sin_cos();
+    f.write_glb(
+        &dir,
+        "turned",
+        &format!(
+            r#""scene":0,"scenes":[{{"nodes":[0,1]}}],
+            "nodes":[{{"translation":[2,0,-1],"rotation":[0,{s},0,{c}],"scale":[2,2,2],"mesh":0}},
+                     {{"translation":[-3,1,0],"rotation":[{s},0,0,{c}],"mesh":0}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}]"#
+        ),
+    );
+    let src = scene("g = gr.gltf('g', 'turned.glb'); root:add_child(g)");
+    assert!(!warned(&src, "gltf.lua", &dir));
+}

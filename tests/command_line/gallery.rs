@@ -352,6 +352,26 @@ fn imported_meshes_wear_their_files_materials() {
     assert!(b > 2.0 * r && b > 1.5 * g, "vase {r} {g} {b}");
 }
 
+/// The Blender scene `gr.gltf` places whole wears the file's embedded checker texture on its
+/// box (red and blue squares, each over a tenth of the box's pixels) and is lit by its panel.
+#[test]
+fn a_blender_scene_placed_whole_wears_its_texture() {
+    let dir = out_dir("gallery-gltf-scene");
+    let img = render("gltf_scene", &dir).image;
+    let pixels = region(&img, [0.3, 0.78, 0.25, 0.9]);
+    let n = pixels.len();
+    let red = pixels.iter().filter(|p| p[0] > 2.0 * p[2]).count();
+    let blue = pixels.iter().filter(|p| p[2] > 2.0 * p[0]).count();
+    assert!(
+        red > n / 10 && blue > n / 10,
+        "{red} red, {blue} blue of {n}"
+    );
+    assert!(
+        mean_luminance(&img, [0.0, 1.0, 0.0, 0.2]) > 0.05,
+        "the back wall is lit"
+    );
+}
+
 /// `docs/gallery.md` (written by `tools/gallery.sh`) shows every scene: it names each one's
 /// thumbnail, which exists and is at most 256 pixels wide, and its render command.
 #[test]

@@ -70,6 +70,24 @@ impl PixelErrors {
 }
 
 impl RenderStats {
+    /// Returns the counters of `t` (the rows' sums), with no time, skipped rows or pictures.
+    pub fn of_counts(t: &RayCounts) -> RenderStats {
+        RenderStats {
+            primary_rays: t.primary,
+            shadow_rays: t.shadow,
+            secondary_rays: t.secondary,
+            material_time: Duration::from_nanos(t.material_nanos),
+            lookups: t.lookups,
+            photons_used: t.photons_used,
+            depth_capped: t.depth_capped,
+            nonfinite_samples: t.nonfinite,
+            cached: t.cached,
+            gathered: t.gathered,
+            weak_skipped: t.weak_skipped,
+            ..RenderStats::default()
+        }
+    }
+
     /// Adds `o`'s counts and time to these (the passes of a progressive render).
     pub fn add(&mut self, o: &RenderStats) {
         self.primary_rays += o.primary_rays;

@@ -168,7 +168,12 @@ impl<'a> PixelSampler<'a> {
                 // jittered ones, are stratified.
                 let centre = matches!(self.opts.sampling, Sampling::Stratified { .. });
                 let mut h = Halves::default();
-                self.round(x, y, spp, centre, first, &mut rng, &mut h, counts);
+                let round = Round {
+                    n: spp,
+                    centre,
+                    first,
+                };
+                self.round((x, y), round, &mut rng, &mut h, counts);
                 let error = match self.estimates_error() {
                     true => errors(&h),
                     false => [f32::NAN; 2],
@@ -211,18 +216,12 @@ impl<'a> PixelSampler<'a> {
         y as u64 * self.opts.window.full_width as u64 + x as u64
     }
 
-    /// Traces one round of `n` stratified samples of pixel `(x, y)` drawn from `rng` (or its
-    /// centre when `n` is 1 and `centre`), adding them to `h` in order; the sample `first`
-    /// (mod the sharers) of each group of `min(n, WEAK_SHARERS)` shades the weak branches'
-    /// surfaces (see [`Share`]).
-    #[allow(clippy::too_many_arguments)]
+    /// Traces one round of pixel `(x, y)`'s samples drawn from `rng`, adding them to `h` in
+    /// order.
     fn round(
         &self,
-        x: u32,
-        y: u32,
-        n: u32,
-        centre: bool,
-        first: u32,
+        (x, y): (u32, u32),
+        Round { n, centre, first }: Round,
         rng: &mut Rng,
         h: &mut Halves,
         counts: &mut RayCounts,
@@ -268,7 +267,12 @@ impl<'a> PixelSampler<'a> {
                 0 => Rng::new(self.opts.seed, Pass::Share, index).below(size.min(WEAK_SHARERS)),
                 _ => rng.below(size.min(WEAK_SHARERS)),
             };
-            self.round(x, y, size, false, first, &mut rng, &mut h, counts);
+            let round = Round {
+                n: size,
+                centre: false,
+                first,
+            };
+            self.round((x, y), round, &mut rng, &mut h, counts);
             let e = h.sample_error().unwrap_or(0.0);
             let value = h.sum / h.n as f32;
             if h.n >= max_spp || noise::relative_error(e, value, m) <= target {
@@ -347,6 +351,16 @@ fn finite_or_dropped(radiance: Vec3A, counts: &mut RayCounts) -> Vec3A {
         counts.nonfinite += 1;
         Vec3A::ZERO
     }
+}
+
+/// One round of a pixel's samples: `n` stratified samples (or the pixel's centre when `n` is 1
+/// and `centre`), of which the sample `first` (mod the sharers) of each group of
+/// `min(n, WEAK_SHARERS)` shades the weak branches' surfaces (see [`Share`]).
+#[derive(Clone, Copy, Debug)]
+struct Round {
+    n: u32,
+    centre: bool,
+    first: u32,
 }
 
 /// A square of the image plane in pixel units: top-left corner and side.

@@ -30,7 +30,7 @@ use glam::Vec3A;
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// What an integrator answers for the camera pass: the radiance arriving along a camera ray.
 pub trait Radiance: Sync {
@@ -192,17 +192,6 @@ pub fn camera_pass(
     let mut t = totals.into_inner().unwrap_or_else(|e| e.into_inner());
     t.add(&sampler.corner_counts());
     let stats = RenderStats {
-        primary_rays: t.primary,
-        shadow_rays: t.shadow,
-        secondary_rays: t.secondary,
-        material_time: Duration::from_nanos(t.material_nanos),
-        lookups: t.lookups,
-        photons_used: t.photons_used,
-        depth_capped: t.depth_capped,
-        nonfinite_samples: t.nonfinite,
-        cached: t.cached,
-        gathered: t.gathered,
-        weak_skipped: t.weak_skipped,
         rows_skipped: skipped.into_inner(),
         time: start.elapsed(),
         heat: opts.heatmap.then(|| heat_rows.concat()),
@@ -211,6 +200,7 @@ pub fn camera_pass(
             sample_error: errors.iter().map(|e| e[1]).collect(),
             image_mean,
         }),
+        ..RenderStats::of_counts(&t)
     };
     let film = Film {
         width: w,

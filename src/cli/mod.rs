@@ -450,15 +450,15 @@ fn render_one(
     Ok(())
 }
 
-/// Returns each pixel of `film`'s relative error as adaptive pixels test it
+/// Returns each pixel's relative error as adaptive pixels test it
 /// ([`crate::render::noise::relative_error`]; 0 where the pixel has no estimate).
-fn relative_errors(film: &Film, errors: &crate::stats::PixelErrors) -> Vec<f32> {
+fn relative_errors(errors: &crate::stats::PixelErrors) -> Vec<f32> {
     use crate::render::noise::relative_error;
-    film.pixels
+    errors
+        .sample_error
         .iter()
-        .zip(&errors.sample_error)
-        .map(|(&p, &e)| match e.is_finite() {
-            true => relative_error(e, p, errors.image_mean),
+        .map(|&e| match e.is_finite() {
+            true => relative_error(e, errors.image_mean),
             false => 0.0,
         })
         .collect()
@@ -479,7 +479,7 @@ fn report_noise(film: &Film, errors: &crate::stats::PixelErrors, sampling: &Samp
     {
         let n = film.samples.len().max(1) as f64;
         let mean = film.samples.iter().map(|&s| s as f64).sum::<f64>() / n;
-        let rel = relative_errors(film, errors);
+        let rel = relative_errors(errors);
         let above = rel.iter().filter(|&&e| e > target).count() as f64 / n;
         let capped = film.samples.iter().filter(|&&s| s >= max_spp).count() as f64 / n;
         line += &format!(
@@ -499,7 +499,7 @@ fn write_error_map(
     errors: &crate::stats::PixelErrors,
     map: &std::path::Path,
 ) -> Result<()> {
-    let rel = relative_errors(film, errors);
+    let rel = relative_errors(errors);
     let png = map
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));

@@ -274,8 +274,7 @@ impl<'a> PixelSampler<'a> {
             };
             self.round((x, y), round, &mut rng, &mut h, counts);
             let e = h.sample_error().unwrap_or(0.0);
-            let value = h.sum / h.n as f32;
-            if h.n >= max_spp || noise::relative_error(e, value, m) <= target {
+            if h.n >= max_spp || noise::relative_error(e, m) <= target {
                 break;
             }
             size = h.n.min(max_spp - h.n);

@@ -187,6 +187,14 @@ def main():
     for name, title in SCENES:
         if os.path.exists(os.path.join(docs, name, "photon_map.csv")):
             body += section(docs, name, title)
+    if os.path.exists(os.path.join(docs, "adaptive.md")):
+        body += [
+            "",
+            "## Adaptive pixels",
+            "",
+            "`--noise-target` against uniform `--spp` at equal CPU time on these three scenes "
+            "(`tools/accuracy/adaptive.sh`): [accuracy/adaptive.md](accuracy/adaptive.md).",
+        ]
     print("\n".join(head + body))
 
 

@@ -28,6 +28,8 @@ pub const KEYS: &[(&str, bool)] = &[
     ("adaptive", true),
     ("aa_threshold", false),
     ("aa_depth", false),
+    ("noise_target", false),
+    ("max_spp", false),
     ("light_samples", false),
     ("gi", false),
     ("photons", false),

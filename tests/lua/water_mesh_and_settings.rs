@@ -152,6 +152,17 @@ fn scene_settings_are_defaults_the_command_line_overrides() {
     assert_eq!(adaptive, render(&dir, "adaptive-flag", "", &["--adaptive"]));
     let off = render(&dir, "not-adaptive", "gr.settings{adaptive = false}", &[]);
     assert_eq!(off, render(&dir, "default", "", &[]));
+    // Adaptive pixels: noise_target and max_spp are their flags (the soft shadow is noisy at
+    // 4 samples, so the target changes the image).
+    let noisy = render(
+        &dir,
+        "noise",
+        "gr.settings{noise_target = 0.02, max_spp = 64}",
+        &[],
+    );
+    let noisy_flags = &["--noise-target", "0.02", "--max-spp", "64"];
+    assert_eq!(noisy, render(&dir, "noise-flag", "", noisy_flags));
+    assert_ne!(noisy, off, "the target changed the image");
 }
 
 #[test]

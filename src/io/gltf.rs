@@ -315,6 +315,17 @@ fn material_name(m: &gltf::Material) -> String {
     }
 }
 
+/// Reads the glTF file at `path` whole (a regular file) and returns its validated document and
+/// the file's length in bytes, for what needs the document but not the GLB's binary chunk.
+fn read_document(path: &Path) -> Result<(Document, u64), GltfError> {
+    let bytes = crate::files::read_regular(path).map_err(|error| GltfError::Read {
+        path: path.to_owned(),
+        error,
+    })?;
+    let (doc, _) = open_document(&bytes, path)?;
+    Ok((doc, bytes.len() as u64))
+}
+
 /// Returns the validated document of glTF JSON or GLB `bytes` and the GLB's binary chunk, if
 /// any; rejects required extensions caustic does not read.
 fn open_document<'b>(

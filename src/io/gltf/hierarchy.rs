@@ -14,7 +14,7 @@
 //! ```
 
 use super::scene::{MAX_LIGHTS, punctual_light, scene_bounds};
-use super::{GltfError, open_document, placements};
+use super::{GltfError, placements, read_document};
 use crate::desc::LightDesc;
 use crate::error::Loc;
 use glam::DAffine3;
@@ -50,11 +50,7 @@ pub struct FileTree {
 /// (tagged `loc`, in the units [`super::scene`] gives them); errors name the file, and a bad
 /// light its name.
 pub fn read_tree(path: &Path, lights: bool, loc: &Loc) -> Result<FileTree, GltfError> {
-    let bytes = crate::files::read_regular(path).map_err(|error| GltfError::Read {
-        path: path.to_owned(),
-        error,
-    })?;
-    let (doc, _) = open_document(&bytes, path)?;
+    let (doc, file_bytes) = read_document(path)?;
     let invalid = |message: String| GltfError::Invalid {
         path: path.to_owned(),
         message,
@@ -65,7 +61,7 @@ pub fn read_tree(path: &Path, lights: bool, loc: &Loc) -> Result<FileTree, GltfE
         position[node.index()] = k;
     }
     let mut tree = FileTree {
-        read_bytes: (bytes.len() as u64)
+        read_bytes: file_bytes
             .saturating_add(doc.buffers().map(|b| b.length() as u64).sum::<u64>()),
         ..FileTree::default()
     };

@@ -52,7 +52,7 @@
 //! `caustic info`: never silently dropped. The base colour, metallic-roughness and normal
 //! textures, embedded or not, are read ([`super::load_gltf`]).
 
-use super::{GltfError, open_document, placements};
+use super::{GltfError, placements, read_document};
 use crate::budget::Budget;
 use crate::desc::{
     CameraDesc, LightDesc, LightShape, MeshDesc, MeshFormat, MeshSource, NodeKind, RenderDesc,
@@ -98,11 +98,7 @@ pub struct View {
 /// Reads the glTF file at `path` as a scene viewed by `view`; the description draws on
 /// `budget` (whose read scope bounds the files the glTF file may name).
 pub fn describe_scene(path: &Path, view: &View, budget: Budget) -> Result<SceneDesc, GltfError> {
-    let bytes = crate::files::read_regular(path).map_err(|error| GltfError::Read {
-        path: path.to_owned(),
-        error,
-    })?;
-    let (doc, _) = open_document(&bytes, path)?;
+    let (doc, _) = read_document(path)?;
     let invalid = |message: String| GltfError::Invalid {
         path: path.to_owned(),
         message,

@@ -319,7 +319,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
 
 /// Returns an error unless every file a render of `out` with `job` may write (the image, the
 /// ray-count map, the heatmap, the image of an interrupted render) has a format it can be
-/// written in, can be written, and is none of `inputs`: checked before the render is spent.
+/// written in, can be written, is none of `inputs` and is no other of them: checked before the
+/// render is spent.
 fn check_render_outputs(
     job: &RenderJob,
     out: &std::path::Path,
@@ -347,17 +348,36 @@ fn check_render_outputs(
     }
     let heat = job.heatmap.map(|m| heatmap_path(out, m));
     let partial = crate::io::image::partial_path(out);
-    for path in [
-        Some(out),
-        job.aa_map.as_deref(),
-        job.error_map.as_deref(),
-        job.save_passes.as_deref(),
-        heat.as_deref(),
-        Some(&partial),
-    ] {
-        path.map_or(Ok(()), |p| check_out(p, inputs))?;
+    let outputs: Vec<(&str, &std::path::Path)> = [
+        ("the image", Some(out)),
+        ("--aa-map", job.aa_map.as_deref()),
+        ("--error-map", job.error_map.as_deref()),
+        ("--save-passes", job.save_passes.as_deref()),
+        ("--heatmap", heat.as_deref()),
+        ("an interrupted render's image", Some(&partial)),
+    ]
+    .into_iter()
+    .filter_map(|(what, path)| Some((what, path?)))
+    .collect();
+    for (i, &(what, path)) in outputs.iter().enumerate() {
+        check_out(path, inputs)?;
+        if let Some((other, _)) = outputs[..i].iter().find(|(_, p)| same_output(p, path)) {
+            return Err(Error::Usage(format!(
+                "{what} and {other} would both be written to {}: give each its own file",
+                path.display()
+            )));
+        }
     }
     Ok(())
+}
+
+/// Returns whether two output paths name one file: the same absolute path, or (both existing)
+/// the same file through links.
+fn same_output(a: &std::path::Path, b: &std::path::Path) -> bool {
+    let (Ok(x), Ok(y)) = (std::path::absolute(a), std::path::absolute(b)) else {
+        return a == b;
+    };
+    x == y || crate::files::check_not_input(a, &[b]).is_err()
 }
 
 /// Renders and writes the image of one `gr.render` call; every file it may write is checked

@@ -79,7 +79,8 @@ fn error_maps_and_the_estimate_are_written() {
     );
 }
 
-/// Each flag out of range or in a combination it cannot serve is a usage error naming it.
+/// Each flag out of range or in a combination it cannot serve is a usage error naming it, and
+/// so is a map written where the image or another map goes.
 #[test]
 fn bad_noise_flags_are_usage_errors() {
     let dir = setup("cli_noise_flags");
@@ -120,6 +121,14 @@ fn bad_noise_flags_are_usage_errors() {
         (
             &["--error-map", "e.png", "--spp", "1"],
             "--error-map: one sample a pixel",
+        ),
+        (
+            &["--error-map", "./p.png"],
+            "--error-map and the image would both be written to ./p.png",
+        ),
+        (
+            &["--aa-map", "m.png", "--error-map", "m.png"],
+            "--error-map and --aa-map would both be written to m.png",
         ),
         (
             &["--error-map", "e.png", "--adaptive"],

@@ -206,11 +206,14 @@ pub struct RenderArgs {
     /// (the caustic map's is half) [default: from the photon density, about k photons].
     #[arg(long, value_name = "F")]
     pub radius: Option<f32>,
-    /// Progressive: stop once the relative RMSE estimated from the even and odd passes is at
-    /// most E (noise only; see docs/accuracy.md).
+    /// Photon mapping: plan samples, photons and cache rays for the least time to a relative
+    /// RMSE of E (a pilot measures the frame; see docs/accuracy.md). Progressive: stop once
+    /// the relative RMSE estimated from the even and odd passes is at most E (noise only).
     #[arg(long, value_name = "E")]
     pub target_error: Option<f64>,
-    /// Progressive: stop before a pass that would end after S seconds.
+    /// Photon mapping: plan samples, photons and cache rays for the least error in S seconds
+    /// of wall time after the scene is built. Progressive: stop before a pass that would end
+    /// after S seconds.
     #[arg(long, value_name = "S")]
     pub time_budget: Option<f64>,
     /// Progressive: write the running image to the output every K passes.
@@ -266,9 +269,10 @@ pub struct RenderArgs {
     /// distance to other surfaces (smaller: more records, closer to --irradiance-cache off).
     #[arg(long, value_name = "A", default_value_t = crate::integrator::irradiance_cache::DEFAULT_ACCURACY)]
     pub cache_accuracy: f32,
-    /// Gather rays per irradiance-cache record.
-    #[arg(long, value_name = "N", default_value_t = crate::integrator::irradiance_cache::DEFAULT_RECORD_RAYS)]
-    pub cache_rays: u32,
+    /// Gather rays per irradiance-cache record [default: 256; with --time-budget or
+    /// --target-error, the planner's].
+    #[arg(long, value_name = "N")]
+    pub cache_rays: Option<u32>,
     /// Nearest photons per density estimate.
     #[arg(long, value_name = "K", default_value_t = 50)]
     pub photon_k: usize,

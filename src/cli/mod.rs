@@ -59,6 +59,15 @@ fn job_with_settings(
         .map_err(|e| Error::at(&r.loc, format!("gr.settings: {e}")))?;
     // Counts the scene sets still follow the image; only the command line fixes them.
     with.settings.photons.follow_image = job.settings.photons.follow_image;
+    // Likewise a time budget or target error moves what the scene sets, around what the
+    // command line typed: the scene's counts are where its effort 1 stands.
+    if let Some(request) = &mut with.settings.budget {
+        (
+            request.fixed_spp,
+            request.fixed_photons,
+            request.fixed_cache_rays,
+        ) = job.typed;
+    }
     Ok(Some(with))
 }
 
@@ -448,6 +457,14 @@ fn render_one(
         out.display(),
         start.elapsed().as_secs_f64()
     );
+    if let Some(planned) = frame
+        .stats
+        .photons
+        .as_ref()
+        .and_then(|p| p.planned.as_ref())
+    {
+        eprintln!("planned {planned}");
+    }
     if let Some(p) = &frame.stats.progressive {
         let error = p
             .estimated_error

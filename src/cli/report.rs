@@ -264,6 +264,9 @@ fn print_plan(frame: &crate::frame::Frame, secs: f64) {
         plan.features.specular_depth, plan.depth_why
     );
     println!("    camera pass: {secs:.3} s");
+    if let Some(planned) = photons.and_then(|p| p.planned.as_ref()) {
+        println!("    budget: {planned}");
+    }
     for note in &plan.notes {
         println!("    {note}");
     }

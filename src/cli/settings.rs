@@ -5,9 +5,10 @@ use super::{
     GatherLookup, GiArg, HeatArg, IndirectArg, IntegratorArg, RenderArgs, Switch, TonemapArg,
 };
 use crate::error::{Error, Result};
-use crate::integrator::irradiance_cache::CacheSettings;
+use crate::integrator::irradiance_cache::{CacheSettings, DEFAULT_RECORD_RAYS};
 use crate::integrator::photon_map::{CAUSTIC_PHOTONS, GLOBAL_PHOTONS, GiSettings, Indirect};
 use crate::integrator::plan::Overrides;
+use crate::integrator::planner::{Goal, Request};
 use crate::integrator::progressive::{
     MAX_PASSES, PASS_CAUSTIC_PHOTONS, PASS_GLOBAL_PHOTONS, ProgressiveSettings,
 };
@@ -63,12 +64,16 @@ pub struct RenderJob {
     pub stats: bool,
     /// Show a progress bar.
     pub progress: bool,
+    /// Whether `--spp`, a photon count or scale, and `--cache-rays` were typed: what a time
+    /// budget leaves as it is.
+    pub typed: (bool, bool, bool),
 }
 
 impl RenderJob {
     /// Returns the job the arguments ask for, or a usage error naming the flag out of range.
     pub fn from_args(a: &RenderArgs) -> Result<RenderJob> {
         let progressive = progressive_settings(a)?;
+        let budget = budget_request(a, progressive.is_some())?;
         let sampling = sampling(a, progressive.is_some())?;
         let photons = photon_settings(a, progressive.is_some())?;
         let tonemap = tonemap(a)?;
@@ -105,6 +110,7 @@ impl RenderJob {
             photons,
             progressive,
             maps_file: a.photon_maps.clone(),
+            budget,
         };
         Ok(RenderJob {
             settings,
@@ -121,6 +127,7 @@ impl RenderJob {
             }),
             stats: a.stats,
             progress: !a.quiet && std::io::stderr().is_terminal(),
+            typed: typed(a),
         })
     }
 }
@@ -249,7 +256,8 @@ fn photon_settings(a: &RenderArgs, progressive: bool) -> Result<GiSettings> {
     check_photons("--caustic-photons", caustic_photons)?;
     check_count("--photon-k", a.photon_k as u64, 10_000)?;
     check_count("--gather-rays", a.gather_rays.into(), 65_536)?;
-    check_count("--cache-rays", a.cache_rays.into(), 65_536)?;
+    let cache_rays = a.cache_rays.unwrap_or(DEFAULT_RECORD_RAYS);
+    check_count("--cache-rays", cache_rays.into(), 65_536)?;
     if !(a.cache_accuracy > 0.0 && a.cache_accuracy <= 1.0) {
         return Err(Error::Usage(format!(
             "--cache-accuracy must be in (0, 1], got {}",
@@ -275,7 +283,7 @@ fn photon_settings(a: &RenderArgs, progressive: bool) -> Result<GiSettings> {
         cache: CacheSettings {
             enabled: a.irradiance_cache == Switch::On,
             accuracy: a.cache_accuracy,
-            rays: a.cache_rays,
+            rays: cache_rays,
         },
         ..GiSettings::default()
     })
@@ -305,6 +313,66 @@ fn tonemap(a: &RenderArgs) -> Result<Tonemap> {
     })
 }
 
+/// Returns the time planner's request for a photon-mapped render with `--time-budget` or
+/// `--target-error` (`None` without either, or for a progressive render, which stops on them
+/// instead), or a usage error for a value out of range or a flag the planner cannot honour.
+fn budget_request(a: &RenderArgs, progressive: bool) -> Result<Option<Request>> {
+    let usage = |m: String| Err(Error::Usage(m));
+    if let Some(e) = a.target_error
+        && !(e > 0.0 && e <= 10.0)
+    {
+        return usage(format!("--target-error must be in (0, 10], got {e}"));
+    }
+    if let Some(s) = a.time_budget
+        && !(s > 0.0 && s <= 1e7)
+    {
+        return usage(format!(
+            "--time-budget must be in (0, 1e7] seconds, got {s}"
+        ));
+    }
+    let goal = match (a.time_budget, a.target_error) {
+        _ if progressive => return Ok(None),
+        (None, None) => return Ok(None),
+        (Some(_), Some(_)) => {
+            return usage(
+                "--time-budget and --target-error: a photon-mapped render plans for one of them"
+                    .into(),
+            );
+        }
+        (Some(s), None) => Goal::Time(std::time::Duration::from_secs_f64(s)),
+        (None, Some(e)) => Goal::Error(e),
+    };
+    let flag = if a.time_budget.is_some() {
+        "--time-budget"
+    } else {
+        "--target-error"
+    };
+    let conflicts = [
+        ("--noise-target", a.noise_target.is_some()),
+        ("--adaptive", a.adaptive),
+        ("--photon-maps", a.photon_maps.is_some()),
+    ];
+    if let Some((other, _)) = conflicts.iter().find(|c| c.1) {
+        return usage(format!(
+            "{flag} plans the samples and the photon maps itself: it cannot be combined with \
+             {other}"
+        ));
+    }
+    let (fixed_spp, fixed_photons, fixed_cache_rays) = typed(a);
+    Ok(Some(Request {
+        goal,
+        fixed_spp,
+        fixed_photons,
+        fixed_cache_rays,
+    }))
+}
+
+/// Returns whether `--spp`, a photon count or `--photon-scale`, and `--cache-rays` are given.
+fn typed(a: &RenderArgs) -> (bool, bool, bool) {
+    let photons = a.photons.is_some() || a.caustic_photons.is_some() || a.photon_scale.is_some();
+    (a.spp.is_some(), photons, a.cache_rays.is_some())
+}
+
 /// Returns the progressive settings the arguments ask for (`None` without `--integrator
 /// progressive`), or a usage error naming the flag out of range or given without it.
 fn progressive_settings(a: &RenderArgs) -> Result<Option<ProgressiveSettings>> {
@@ -313,8 +381,6 @@ fn progressive_settings(a: &RenderArgs) -> Result<Option<ProgressiveSettings>> {
         let given = [
             ("--passes", a.passes.is_some()),
             ("--radius", a.radius.is_some()),
-            ("--target-error", a.target_error.is_some()),
-            ("--time-budget", a.time_budget.is_some()),
             ("--write-every", a.write_every.is_some()),
             ("--first-pass", a.first_pass.is_some()),
             ("--save-passes", a.save_passes.is_some()),
@@ -351,18 +417,6 @@ fn progressive_settings(a: &RenderArgs) -> Result<Option<ProgressiveSettings>> {
     {
         return usage(format!(
             "--radius must be in (0, 1] (of the scene's diagonal), got {r}"
-        ));
-    }
-    if let Some(e) = a.target_error
-        && !(e > 0.0 && e <= 10.0)
-    {
-        return usage(format!("--target-error must be in (0, 10], got {e}"));
-    }
-    if let Some(s) = a.time_budget
-        && !(s > 0.0 && s <= 1e7)
-    {
-        return usage(format!(
-            "--time-budget must be in (0, 1e7] seconds, got {s}"
         ));
     }
     if a.write_every == Some(0) {

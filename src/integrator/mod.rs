@@ -25,6 +25,7 @@ pub mod mis;
 pub mod passes_file;
 pub mod photon_map;
 pub mod plan;
+pub mod planner;
 pub mod precomputed;
 pub mod progressive;
 pub mod whitted;
@@ -85,6 +86,9 @@ pub struct Settings {
     /// Estimate each pixel's error from its half-buffers (`--error-map`; noise sampling always
     /// does): [`RenderStats::error`].
     pub error_estimate: bool,
+    /// `--time-budget` or `--target-error` for the photon-map integrator: the planner chooses
+    /// samples and prepass effort ([`planner`]).
+    pub budget: Option<planner::Request>,
 }
 
 /// Camera samples per pixel by default. A pixel is an area: one centre ray (the course's, and
@@ -117,6 +121,7 @@ impl Default for Settings {
             timing: false,
             heatmap: false,
             error_estimate: false,
+            budget: None,
         }
     }
 }

@@ -247,6 +247,8 @@ pub struct GiStats {
     /// being traced, and the irradiance-cache records the file held.
     pub read_time: Option<Duration>,
     pub read_records: usize,
+    /// What the time planner chose, for a render with a time budget or a target error.
+    pub planned: Option<super::planner::Planned>,
 }
 
 /// What the photon-map prepass makes for one frame, and how shading reads it: the maps with
@@ -284,13 +286,35 @@ pub fn render(
     read: Option<Prepass>,
     progress: &dyn Progress,
 ) -> (Film, RenderStats, GiStats) {
-    let photons = planned(&settings.photons, plan);
+    let started = Instant::now();
+    let mut photons = planned(&settings.photons, plan);
+    let mut settings = std::borrow::Cow::Borrowed(settings);
+    let request = settings.budget.filter(|_| read.is_none());
+    let mut chosen = request.map(|request| {
+        let p = super::planner::choose(view, &settings, &photons, &request, started, progress);
+        photons = super::planner::at_effort(&photons, p.effort, &request);
+        p
+    });
     let gi = prepass(view.scene, view.camera, &photons, read, progress);
+    if let (Some(p), Some(request)) = (&mut chosen, &request) {
+        let tracer = super::eye::Tracer {
+            scene: view.scene,
+            camera: view.camera,
+            light_samples: settings.light_samples,
+            diffuse: DiffuseTerm::Photons(&gi),
+        };
+        super::planner::fit_samples(p, view, settings.seed, &tracer, request, started);
+        let s = settings.to_mut();
+        s.sampling = crate::render::Sampling::Stratified { spp: p.spp };
+        // The half-buffers' estimate of the camera part, printed beside the expected error.
+        s.error_estimate |= p.spp >= 2;
+    }
     let diffuse = DiffuseTerm::Photons(&gi);
-    let (film, stats) = camera_pass(view, diffuse, settings, progress);
+    let (film, stats) = camera_pass(view, diffuse, &settings, progress);
     let evaluated = gi.precomputed.as_ref().map_or(0, Precomputed::evaluated);
     let gi_stats = GiStats {
         precomputed_evaluated: evaluated,
+        planned: chosen,
         ..gi.stats
     };
     (film, stats, gi_stats)

@@ -7,7 +7,8 @@
 //! pixel's samples), `progressive` (the progressive integrator), `effect_plan` (the effects
 //! decided before the passes), `pixel_sampling` (determinism, crops, tiles, adaptive sampling),
 //! `spot_and_directional` (those lights' shadows and photons), `adaptive_pixels` (samples
-//! where the half-buffers see noise) and `final_scene`.
+//! where the half-buffers see noise), `time_planner` (`--time-budget` and `--target-error` for
+//! photon mapping) and `final_scene`.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -27,4 +28,5 @@ mod progressive;
 mod shading;
 mod shadow_media;
 mod spot_and_directional;
+mod time_planner;
 mod weak_branches;

@@ -395,7 +395,7 @@ fn progressive_flags_are_checked() {
     let s = script.to_str().unwrap();
     for (args, flag) in [
         (vec!["--passes", "4"], "--passes"),
-        (vec!["--target-error", "0.1"], "--target-error"),
+        (vec!["--write-every", "2"], "--write-every"),
         (vec!["--integrator", "sppm", "--passes", "0"], "--passes"),
         (
             vec!["--integrator", "sppm", "--passes", "2000000"],

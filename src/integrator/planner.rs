@@ -1,0 +1,789 @@
+//! The time planner: `--time-budget S` and `--target-error E` for the photon-map integrator.
+//! A short pilot measures what the frame's two kinds of effort cost and how much error each
+//! leaves; the planner then spends the user's time where it lowers the error most, says what it
+//! chose and why ([`Planned`], printed with the effect plan), and the error it expects.
+//!
+//! # What a pixel's error is made of
+//! A photon-mapped pixel of `s` camera samples, with prepass effort `F` (the frame's photon
+//! counts, both maps, and the irradiance cache's rays per record, all times `F`), has a relative
+//! mean squared error (relative to the image's mean brightness `m`, as `caustic study`, `caustic
+//! diff` and `--noise-target` count it) of
+//!
+//! ```text
+//! E²(s, F) = V_cam / s  +  V_map · (F₀/F)^β  +  b² · (F₀/F)²
+//! ```
+//!
+//! - `V_cam / s`: the camera pass's Monte Carlo noise (pixel position, shadow rays, gather and
+//!   glossy rays, Russian roulette), independent per sample, so it falls as `1/s`.
+//! - `V_map (F₀/F)^β`: the noise of what the prepass made (the photon maps' density estimates
+//!   and the cache's records), the same for every sample of a pixel, so no `s` removes it. A
+//!   `k`-nearest estimate's noise falls with photons only once its radius is below a pixel's
+//!   footprint (its neighbours then are independent estimates), so `β` lies between 0 and 1
+//!   and is measured, not assumed: 0.37 for the caustic of `glass_in_water` in
+//!   `docs/accuracy.md`, near 1 for the diffuse box's global map.
+//! - `b (F₀/F)`: the density estimates' blur, the bias that the seed-pair column of
+//!   `docs/accuracy.md` shows: proportional to the squared radius, so to `1/F`.
+//!
+//! Time is `T(s, F) = a + c·F + s·N·τ / threads`: the prepass's fixed part `a` (precomputation
+//! and cache probes), its part `c·F` proportional to photons and cache rays, and `N` pixels of `s`
+//! samples at `τ` thread-seconds a sample.
+//!
+//! # The pilot
+//! Four prepasses of independent seeds, two at `F₀` and two at `4F₀` (`F₀` =
+//! [`PILOT_EFFORT`], so the four together trace a third of the frame's photons), each the real
+//! chain (maps, precomputation, cache) and timed; then [`PILOT_SPP`] camera samples at each of
+//! up to [`PILOT_GRID`]² pixels spread over the window, every sample traced through all four
+//! prepasses with the same random numbers (common random numbers: the four values of a sample
+//! differ only by their prepass). Per pixel, over its samples, running means and variances of
+//! the first prepass's value and of three differences give, after subtracting what the
+//! samples' own noise adds to each squared mean difference:
+//! - `V_cam`: the first value's variance over samples;
+//! - `V_map` at `F₀` and at `4F₀`: half the squared difference of each pair (so `β`);
+//! - the bias change between `F₀` and `4F₀`: the squared difference of the two pairs' means,
+//!   less their noise (so `b`, as `b(F₀) − b(4F₀) = 3b/4`).
+//!
+//! and the four prepasses' times and the samples' thread time give `a`, `c` and `τ`. `β` is
+//! clamped to [0.2, 1.5] (1 where the pilot's difference is lost in its noise). A mean of the
+//! measured pixels is the image's `m`.
+//!
+//! # The choice
+//! With a time budget, over 97 efforts from `F₀/4` to 64 (log-spaced) the planner takes the most
+//! samples the time left after the pilot and that prepass allows and keeps the pair of least
+//! expected error; with a target error, for each effort the fewest samples that reach it and
+//! keeps the pair of least time. `--spp`, `--photons`/`--caustic-photons`/`--photon-scale` and
+//! `--cache-rays` typed by the user stay as typed: the choice runs over the others. Efforts
+//! are bounded by the photon cap per light and by the memory budget (the extra photons are
+//! charged to the scene's account before they are traced).
+//!
+//! What the planner leaves alone: shadow rays per light (`--light-samples`) and gather rays
+//! for points the cache does not serve are re-drawn by every camera sample, so more samples buy
+//! the same; the cache's accuracy (its record spacing) and `k` change the estimators' bias in
+//! ways the pilot's two effort levels cannot see. Adaptive pixels (`--noise-target`) are a
+//! different answer to the same question and are not combined with a budget.
+//!
+//! A time budget makes the image depend on the machine's speed, as the progressive
+//! integrator's does; a target error does too, through the timed pilot's choice between two
+//! equally accurate plans, though far less.
+
+use super::eye::{DiffuseTerm, Tracer};
+use super::photon_map::{GiSettings, Prepass, prepass};
+use super::{Settings, View};
+use crate::photon::trace::{MAX_PHOTONS, MapKind};
+use crate::progress::{NoProgress, Progress};
+use crate::render::{Share, WEAK_SHARERS};
+use crate::sampling::{Pass, Rng, stratified_2d};
+use crate::stats::RayCounts;
+use std::fmt;
+use std::time::{Duration, Instant};
+
+/// What the user asks the planner for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Goal {
+    /// The least error in this much wall time from the planner's start (`--time-budget`).
+    Time(Duration),
+    /// The least time to this relative RMSE (`--target-error`).
+    Error(f64),
+}
+
+/// A planned render's request: the goal and which of the planner's choices the user fixed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Request {
+    pub goal: Goal,
+    /// `--spp` was typed: the samples per pixel stay.
+    pub fixed_spp: bool,
+    /// A photon count or `--photon-scale` was typed: the photon counts stay.
+    pub fixed_photons: bool,
+    /// `--cache-rays` was typed: the cache's rays per record stay.
+    pub fixed_cache_rays: bool,
+}
+
+/// The pilot's prepass effort, relative to the frame's own counts (see the module doc).
+pub const PILOT_EFFORT: f64 = 1.0 / 32.0;
+/// The second pair of pilot prepasses runs at this multiple of [`PILOT_EFFORT`].
+pub const PILOT_STEP: f64 = 4.0;
+/// The pilot measures at most this many pixels across and down the window.
+pub const PILOT_GRID: u32 = 40;
+/// Camera samples per pilot pixel.
+pub const PILOT_SPP: u32 = 8;
+/// Efforts the planner considers, relative to the frame's own counts.
+const MIN_EFFORT: f64 = PILOT_EFFORT / 4.0;
+const MAX_EFFORT: f64 = 64.0;
+/// Fewest rays per cache record an effort makes.
+const MIN_CACHE_RAYS: u32 = 4;
+/// Most samples per pixel the planner chooses (`--spp`'s bound).
+const MAX_SPP: u32 = 1 << 16;
+/// The share of a time budget kept back for what the model does not count (writing the
+/// image, the last rows' imbalance).
+const RESERVE: f64 = 0.04;
+/// Bytes a stored photon takes ([`crate::frame`]'s charge).
+const PHOTON_BYTES: f64 = 48.0;
+
+/// What the pilot measured: the model of the module doc.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Model {
+    /// The image's mean brightness over the pilot's pixels.
+    pub mean: f64,
+    /// `V_cam`: one camera sample's relative variance.
+    pub camera_var: f64,
+    /// `V_map` at the pilot's effort, and `β`.
+    pub map_var: f64,
+    pub beta: f64,
+    /// `b²` at the pilot's effort.
+    pub bias2: f64,
+    /// The pilot's effort `F₀`.
+    pub pilot_effort: f64,
+    /// Prepass seconds per unit of effort spent on photons (tracing, kd-trees, precomputed
+    /// points; zero when the photons are fixed) and their fixed seconds otherwise.
+    pub photon_per_effort: f64,
+    pub photon_fixed: f64,
+    /// The irradiance cache's seconds per ray of a record (times its records), and its rays
+    /// per record at effort 1 (`fixed_rays`: they do not move).
+    pub cache_per_ray: f64,
+    pub cache_rays: u32,
+    pub fixed_rays: bool,
+    /// Wall seconds of one sample of every pixel of the window.
+    pub per_spp: f64,
+}
+
+impl Model {
+    /// Returns the expected relative error's three parts `(camera, maps, bias)` squared at `s`
+    /// samples and effort `f`.
+    pub fn parts2(&self, s: u32, f: f64) -> (f64, f64, f64) {
+        let r = self.pilot_effort / f;
+        (
+            self.camera_var / s as f64,
+            self.map_var * r.powf(self.beta),
+            self.bias2 * r * r,
+        )
+    }
+
+    /// Returns the expected relative RMSE at `s` samples and effort `f`.
+    pub fn error(&self, s: u32, f: f64) -> f64 {
+        let (c, m, b) = self.parts2(s, f);
+        (c + m + b).sqrt()
+    }
+
+    /// Returns the prepass's expected wall seconds at effort `f`.
+    pub fn prepass_time(&self, f: f64) -> f64 {
+        let rays = cache_rays(self.cache_rays, f, self.fixed_rays);
+        self.photon_fixed + self.photon_per_effort * f + self.cache_per_ray * rays as f64
+    }
+
+    /// Returns the expected wall seconds of prepass and camera pass at `s` and `f`.
+    pub fn time(&self, s: u32, f: f64) -> f64 {
+        self.prepass_time(f) + s as f64 * self.per_spp
+    }
+}
+
+/// Why the planner chose what it did: the effect plan's typed reason for the budget line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Why {
+    /// The least expected error the time left after the pilot allows.
+    LeastError,
+    /// The least expected time to the target.
+    LeastTime,
+    /// The target is out of reach within the bounds: the plan of least error at the largest
+    /// effort and samples considered.
+    TargetOutOfReach,
+    /// The pilot left too little of the budget for any plan: the cheapest one.
+    BudgetSpent,
+    /// The pilot found a black image: nothing to plan for; the frame's own settings.
+    Black,
+}
+
+/// What the planner chose for a frame, with the model it chose by; reported with the plan.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Planned {
+    pub goal: Goal,
+    pub why: Why,
+    /// The prepass effort chosen, relative to the frame's own counts.
+    pub effort: f64,
+    /// What the effort makes of the settings: photon scale and cache rays per record.
+    pub photon_scale: f64,
+    pub cache_rays: u32,
+    pub spp: u32,
+    /// The expected relative RMSE and its parts (each the root of its squared share).
+    pub expected: f64,
+    pub parts: (f64, f64, f64),
+    /// The expected wall seconds of the planned prepass and camera pass.
+    pub expected_seconds: f64,
+    /// The pilot's wall seconds.
+    pub pilot_seconds: f64,
+    pub model: Model,
+}
+
+impl fmt::Display for Planned {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let goal = match self.goal {
+            Goal::Time(t) => format!("--time-budget {:.3} s", t.as_secs_f64()),
+            Goal::Error(e) => format!("--target-error {e}"),
+        };
+        let why = match self.why {
+            Why::LeastError => "the least expected error in the time left",
+            Why::LeastTime => "the least expected time to the target",
+            Why::TargetOutOfReach => "the target is out of reach; the least error considered",
+            Why::BudgetSpent => "the pilot left too little time; the cheapest plan",
+            Why::Black => "a black image; the frame's own settings",
+        };
+        let (c, m, b) = self.parts;
+        let model = &self.model;
+        write!(
+            f,
+            "{goal}: {} spp, prepass effort x{:.3} (photon scale {:.4}, {} cache rays a \
+             record): {why}; expected relative RMSE {:.4} (camera {c:.4}, maps {m:.4}, bias \
+             {b:.4}) in {:.2} s after a {:.2} s pilot (measured: camera variance {:.3} a \
+             sample, maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e}; photons \
+             {:.3} s per unit effort, cache {:.2e} s per ray a record, {:.4} s a sample of \
+             every pixel)",
+            self.spp,
+            self.effort,
+            self.photon_scale,
+            self.cache_rays,
+            self.expected,
+            self.expected_seconds,
+            self.pilot_seconds,
+            model.camera_var,
+            model.map_var,
+            model.pilot_effort,
+            model.beta,
+            model.bias2,
+            model.photon_per_effort,
+            model.cache_per_ray,
+            model.per_spp,
+        )
+    }
+}
+
+/// Returns `photons` at prepass effort `f`: photon counts (unless `fixed_photons`) and cache
+/// rays per record (unless `fixed_cache_rays`) times `f`.
+pub fn at_effort(photons: &GiSettings, f: f64, request: &Request) -> GiSettings {
+    let mut s = photons.clone();
+    if !request.fixed_photons {
+        s.photon_scale *= f;
+    }
+    s.cache.rays = cache_rays(photons.cache.rays, f, request.fixed_cache_rays);
+    s
+}
+
+/// Returns the cache's rays per record at effort `f` from `rays` at effort 1.
+fn cache_rays(rays: u32, f: f64, fixed: bool) -> u32 {
+    match fixed {
+        true => rays,
+        false => (rays as f64 * f)
+            .round()
+            .clamp(MIN_CACHE_RAYS as f64, 65_536.0) as u32,
+    }
+}
+
+/// Runs the pilot for the frame `view` with `settings` (its photon settings `photons`, as the
+/// plan made them) and returns the plan for `request`, reporting the pilot's phases to
+/// `progress`. `started` is when the budget's clock started.
+pub fn choose(
+    view: View,
+    settings: &Settings,
+    photons: &GiSettings,
+    request: &Request,
+    started: Instant,
+    progress: &dyn Progress,
+) -> Planned {
+    let model = pilot(view, settings, photons, request, progress);
+    let pilot_seconds = started.elapsed().as_secs_f64();
+    let max_effort = max_effort(view, photons, request);
+    decide(model, request, max_effort, settings, pilot_seconds).with_settings(
+        photons,
+        request,
+        pilot_seconds,
+    )
+}
+
+/// Measures the camera pass's cost with the planned prepass made (`tracer` reads it): traces
+/// the pilot's pixels once more through it alone, and for a time budget re-chooses the
+/// samples per pixel from the time left since `started` at that measured cost (unless `--spp`
+/// fixed them). The prepass's own time is then spent, so only the samples can still move: the
+/// model's errors stand, the plan's samples, expected error and time are updated.
+pub fn fit_samples(
+    planned: &mut Planned,
+    view: View,
+    seed: u64,
+    tracer: &Tracer,
+    request: &Request,
+    started: Instant,
+) {
+    let Goal::Time(budget) = request.goal else {
+        return;
+    };
+    if request.fixed_spp || planned.why == Why::Black {
+        return;
+    }
+    let start = Instant::now();
+    let (_, _, samples) = pilot_pixels(view, seed, std::slice::from_ref(tracer), &NoProgress);
+    let wall = start.elapsed().as_secs_f64();
+    let (w, h) = view.window.size();
+    let per_spp = wall / samples.max(1) as f64 * w as f64 * h as f64;
+    let left = budget.as_secs_f64() * (1.0 - RESERVE) - started.elapsed().as_secs_f64();
+    let spp = (left / per_spp.max(1e-12))
+        .floor()
+        .clamp(1.0, MAX_SPP as f64) as u32;
+    let model = Model {
+        per_spp,
+        ..planned.model
+    };
+    let (c, m, b) = model.parts2(spp, planned.effort);
+    planned.spp = spp;
+    planned.expected = (c + m + b).sqrt();
+    planned.parts = (c.sqrt(), m.sqrt(), b.sqrt());
+    planned.expected_seconds =
+        started.elapsed().as_secs_f64() - planned.pilot_seconds + spp as f64 * per_spp;
+    planned.model = model;
+}
+
+/// The choice before it is turned into settings.
+struct Choice {
+    why: Why,
+    effort: f64,
+    spp: u32,
+    model: Model,
+    goal: Goal,
+}
+
+impl Choice {
+    fn with_settings(self, photons: &GiSettings, request: &Request, pilot: f64) -> Planned {
+        let gi = at_effort(photons, self.effort, request);
+        let (c, m, b) = self.model.parts2(self.spp, self.effort);
+        Planned {
+            goal: self.goal,
+            why: self.why,
+            effort: self.effort,
+            photon_scale: gi.photon_scale,
+            cache_rays: gi.cache.rays,
+            spp: self.spp,
+            expected: (c + m + b).sqrt(),
+            parts: (c.sqrt(), m.sqrt(), b.sqrt()),
+            expected_seconds: self.model.time(self.spp, self.effort),
+            pilot_seconds: pilot,
+            model: self.model,
+        }
+    }
+}
+
+/// Returns the largest effort the photon cap per light and the memory budget allow (1 when the
+/// photons are fixed: the effort then moves only the cache's rays).
+fn max_effort(view: View, photons: &GiSettings, request: &Request) -> f64 {
+    if request.fixed_photons {
+        return MAX_EFFORT;
+    }
+    let lights = &view.scene.lights;
+    let counts: Vec<u64> = [MapKind::Global, MapKind::Caustic]
+        .into_iter()
+        .flat_map(|kind| photons.budget(lights, kind))
+        .collect();
+    let largest = counts.iter().copied().max().unwrap_or(0).max(1) as f64;
+    let total = counts.iter().sum::<u64>().max(1) as f64;
+    let budget = view.scene.account.budget();
+    let free = budget.limit().saturating_sub(budget.used()) as f64;
+    // Effort 1's photons are charged already; the extra is what a larger effort needs.
+    let by_memory = 1.0 + free / (total * PHOTON_BYTES);
+    (MAX_PHOTONS as f64 / largest)
+        .min(by_memory)
+        .clamp(MIN_EFFORT, MAX_EFFORT)
+}
+
+/// Returns the efforts considered up to `max`: 97 log-spaced from [`MIN_EFFORT`] to
+/// [`MAX_EFFORT`], or the frame's own (1) when neither photons nor cache rays may move.
+fn efforts(request: &Request, max: f64) -> Vec<f64> {
+    if request.fixed_photons && request.fixed_cache_rays {
+        return vec![1.0];
+    }
+    let (lo, hi) = (MIN_EFFORT.ln(), MAX_EFFORT.ln());
+    (0..97)
+        .map(|i| (lo + (hi - lo) * i as f64 / 96.0).exp())
+        .filter(|&f| f <= max)
+        .collect()
+}
+
+/// Chooses effort and samples for `request` by `model` (see the module doc).
+fn decide(
+    model: Model,
+    request: &Request,
+    max: f64,
+    settings: &Settings,
+    pilot_seconds: f64,
+) -> Choice {
+    let given_spp = match settings.sampling {
+        crate::render::Sampling::Stratified { spp } => spp,
+        _ => super::DEFAULT_SPP,
+    };
+    let choice = |why, effort, spp| Choice {
+        why,
+        effort,
+        spp,
+        model,
+        goal: request.goal,
+    };
+    if model.mean <= 0.0 {
+        return choice(Why::Black, 1.0, given_spp);
+    }
+    let efforts = efforts(request, max);
+    let fixed_spp = request.fixed_spp.then_some(given_spp);
+    match request.goal {
+        Goal::Time(budget) => {
+            let left = budget.as_secs_f64() * (1.0 - RESERVE) - pilot_seconds;
+            let mut best: Option<(f64, f64, u32)> = None;
+            for &f in &efforts {
+                let camera = left - model.prepass_time(f);
+                let most = (camera / model.per_spp.max(1e-12)).floor();
+                let s = match fixed_spp {
+                    Some(s) if (s as f64) <= most => s,
+                    Some(_) => continue,
+                    None if most >= 1.0 => most.min(MAX_SPP as f64) as u32,
+                    None => continue,
+                };
+                let e = model.error(s, f);
+                if best.is_none_or(|(b, _, _)| e < b) {
+                    best = Some((e, f, s));
+                }
+            }
+            match best {
+                Some((_, f, s)) => choice(Why::LeastError, f, s),
+                None => choice(Why::BudgetSpent, efforts[0], fixed_spp.unwrap_or(1)),
+            }
+        }
+        Goal::Error(target) => {
+            let t2 = target * target;
+            let mut best: Option<(f64, f64, u32)> = None;
+            for &f in &efforts {
+                let (_, m, b) = model.parts2(1, f);
+                let room = t2 - m - b;
+                let s = match fixed_spp {
+                    Some(s) if model.error(s, f) <= target => s,
+                    Some(_) => continue,
+                    None if room > 0.0 => {
+                        let s = (model.camera_var / room).ceil().max(1.0);
+                        if s > MAX_SPP as f64 {
+                            continue;
+                        }
+                        s as u32
+                    }
+                    None => continue,
+                };
+                let t = model.time(s, f);
+                if best.is_none_or(|(b, _, _)| t < b) {
+                    best = Some((t, f, s));
+                }
+            }
+            match best {
+                Some((_, f, s)) => choice(Why::LeastTime, f, s),
+                None => {
+                    let f = *efforts.last().unwrap_or(&1.0);
+                    choice(Why::TargetOutOfReach, f, fixed_spp.unwrap_or(MAX_SPP))
+                }
+            }
+        }
+    }
+}
+
+/// Per-pixel running sums over a pilot pixel's samples: count, means and sums of squared
+/// deviations (Welford) of the first prepass's value and of the three differences.
+#[derive(Clone, Copy, Default)]
+struct PixelRun {
+    n: u32,
+    mean: [f64; 4],
+    m2: [f64; 4],
+}
+
+impl PixelRun {
+    fn add(&mut self, x: [f64; 4]) {
+        self.n += 1;
+        for (i, &x) in x.iter().enumerate() {
+            let d = x - self.mean[i];
+            self.mean[i] += d / self.n as f64;
+            self.m2[i] += d * (x - self.mean[i]);
+        }
+    }
+
+    /// Returns the squared standard error of the mean of quantity `i`.
+    fn se2(&self, i: usize) -> f64 {
+        match self.n {
+            0 | 1 => 0.0,
+            n => self.m2[i] / ((n - 1) as f64 * n as f64),
+        }
+    }
+
+    /// Returns the unbiased estimate of the squared mean of quantity `i` (its mean squared,
+    /// less the samples' noise in it).
+    fn mean2(&self, i: usize) -> f64 {
+        self.mean[i] * self.mean[i] - self.se2(i)
+    }
+}
+
+/// Runs the pilot of the module doc and returns its model.
+fn pilot(
+    view: View,
+    settings: &Settings,
+    photons: &GiSettings,
+    request: &Request,
+    progress: &dyn Progress,
+) -> Model {
+    let f0 = PILOT_EFFORT;
+    let seed = photons.seed;
+    progress.start("planning: pilot prepasses", 4);
+    let prepasses: Vec<Prepass> = (0..4u64)
+        .map(|i| {
+            let f = if i < 2 { f0 } else { PILOT_STEP * f0 };
+            let mut gi = at_effort(photons, f, request);
+            gi.seed = seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(i + 1));
+            let p = prepass(view.scene, view.camera, &gi, None, &NoProgress);
+            progress.advance(1);
+            p
+        })
+        .collect();
+    // The larger pair's phases: photons scale with the effort, the cache with its rays.
+    let (mut photon_seconds, mut cache_seconds) = (0.0, 0.0);
+    for p in &prepasses[2..] {
+        let st = &p.stats;
+        photon_seconds += (st.trace_time + st.build_time + st.precompute_time).as_secs_f64() / 2.0;
+        cache_seconds += st.cache.as_ref().map_or(0.0, |c| c.time.as_secs_f64()) / 2.0;
+    }
+    let step_rays = cache_rays(
+        photons.cache.rays,
+        PILOT_STEP * f0,
+        request.fixed_cache_rays,
+    );
+    let tracers: Vec<Tracer> = prepasses
+        .iter()
+        .map(|p| Tracer {
+            scene: view.scene,
+            camera: view.camera,
+            light_samples: settings.light_samples,
+            diffuse: DiffuseTerm::Photons(p),
+        })
+        .collect();
+    let start = Instant::now();
+    let (runs, thread_seconds, samples) = pilot_pixels(view, settings.seed, &tracers, progress);
+    let wall = start.elapsed().as_secs_f64();
+    let n = runs.len().max(1) as f64;
+    let mean = runs.iter().map(|r| r.mean[0]).sum::<f64>() / n;
+    let m2 = (mean * mean).max(1e-300);
+    let avg = |f: &dyn Fn(&PixelRun) -> f64| runs.iter().map(f).sum::<f64>() / n;
+    let camera_var = avg(&|r| match r.n {
+        0 | 1 => 0.0,
+        k => r.m2[0] / (k - 1) as f64,
+    }) / m2;
+    // E[(A − B)²] = 2 V(F₀); E[(C − D)²] = 2 V(4F₀); E[((A + B) − (C + D))²/4] =
+    // V(F₀)/2 + V(4F₀)/2 + (b(F₀) − b(4F₀))².
+    let v1 = (avg(&|r| r.mean2(1)) / 2.0 / m2).max(0.0);
+    let v2 = (avg(&|r| r.mean2(2)) / 2.0 / m2).max(0.0);
+    let db2 = (avg(&|r| r.mean2(3)) / m2 - v1 / 2.0 - v2 / 2.0).max(0.0);
+    let beta = if v1 > 0.0 && v2 > 0.0 {
+        ((v1 / v2).ln() / PILOT_STEP.ln()).clamp(0.2, 1.5)
+    } else {
+        1.0
+    };
+    // b(F₀) − b(sF₀) = b (1 − 1/s).
+    let bias2 = db2 / (1.0 - 1.0 / PILOT_STEP).powi(2);
+    // The pilot's own parallel efficiency: the camera pass shares its threads the same way.
+    let threads = rayon::current_num_threads().max(1) as f64;
+    let efficiency = (thread_seconds / (wall * threads).max(1e-12)).clamp(0.25, 1.0);
+    let (w, h) = view.window.size();
+    let per_sample = thread_seconds / 4.0 / samples.max(1) as f64 / efficiency;
+    let (photon_per_effort, photon_fixed) = match request.fixed_photons {
+        true => (0.0, photon_seconds),
+        false => (photon_seconds / (PILOT_STEP * f0), 0.0),
+    };
+    Model {
+        mean,
+        camera_var,
+        map_var: v1,
+        beta,
+        bias2,
+        pilot_effort: f0,
+        photon_per_effort,
+        photon_fixed,
+        cache_per_ray: cache_seconds / step_rays.max(1) as f64,
+        cache_rays: photons.cache.rays,
+        fixed_rays: request.fixed_cache_rays,
+        per_spp: per_sample * w as f64 * h as f64 / threads,
+    }
+}
+
+/// Traces the pilot's samples: [`PILOT_SPP`] at each pixel of a grid of at most
+/// [`PILOT_GRID`]² over `view`'s window, each through every tracer with the same random
+/// numbers. Returns each pixel's running sums, the thread seconds spent tracing and the
+/// samples traced per tracer.
+fn pilot_pixels(
+    view: View,
+    seed: u64,
+    tracers: &[Tracer],
+    progress: &dyn Progress,
+) -> (Vec<PixelRun>, f64, u64) {
+    use rayon::prelude::*;
+    let win = view.window;
+    let (w, h) = win.size();
+    let (cols, rows) = (PILOT_GRID.min(w), PILOT_GRID.min(h));
+    progress.start("planning: pilot pixels", rows as u64);
+    // The pilot's own streams: keyed like the render's pixels, under another seed.
+    let seed = seed ^ 0xD1B5_4A32_D192_ED03;
+    let per_row: Vec<(Vec<PixelRun>, f64, u64)> = (0..rows)
+        .into_par_iter()
+        .map(|j| {
+            let mut counts = RayCounts::default();
+            let mut runs = Vec::with_capacity(cols as usize);
+            let mut seconds = 0.0;
+            let mut samples = 0;
+            for i in 0..cols {
+                let x = win.x0 + ((2 * i + 1) * w / (2 * cols)).min(w - 1);
+                let y = win.y0 + ((2 * j + 1) * h / (2 * rows)).min(h - 1);
+                let index = y as u64 * win.full_width as u64 + x as u64;
+                let mut rng = Rng::new(seed, Pass::Pixel, index);
+                let mut run = PixelRun::default();
+                let sharers = PILOT_SPP.min(WEAK_SHARERS);
+                for (k, (u, v)) in stratified_2d(&mut rng, PILOT_SPP).into_iter().enumerate() {
+                    let share = match (k as u32).is_multiple_of(sharers) {
+                        true => Share::Carry(sharers as f32),
+                        false => Share::Skip,
+                    };
+                    let ray = view.camera.ray(x as f32 + u, y as f32 + v);
+                    let start = Instant::now();
+                    let mut last = rng.clone();
+                    let l: Vec<f64> = tracers
+                        .iter()
+                        .map(|t| {
+                            let mut r = rng.clone();
+                            let value = crate::render::Radiance::radiance(
+                                t,
+                                &ray,
+                                share,
+                                &mut r,
+                                &mut counts,
+                            );
+                            last = r;
+                            match value.is_finite() {
+                                true => (value.element_sum() / 3.0) as f64,
+                                false => 0.0,
+                            }
+                        })
+                        .collect();
+                    seconds += start.elapsed().as_secs_f64();
+                    samples += 1;
+                    rng = last;
+                    run.add(match l[..] {
+                        [a, b, c, d] => [a, a - b, c - d, (a + b - c - d) / 2.0],
+                        _ => [l[0], 0.0, 0.0, 0.0],
+                    });
+                }
+                runs.push(run);
+            }
+            progress.advance(1);
+            (runs, seconds, samples)
+        })
+        .collect();
+    let mut runs = Vec::new();
+    let (mut seconds, mut samples) = (0.0, 0);
+    for (r, s, n) in per_row {
+        runs.extend(r);
+        seconds += s;
+        samples += n;
+    }
+    (runs, seconds, samples)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model() -> Model {
+        Model {
+            mean: 1.0,
+            camera_var: 0.04,
+            map_var: 0.01,
+            beta: 1.0,
+            bias2: 0.0,
+            pilot_effort: 0.25,
+            photon_per_effort: 1.0,
+            photon_fixed: 0.0,
+            cache_per_ray: 0.0,
+            cache_rays: 256,
+            fixed_rays: false,
+            per_spp: 0.1,
+        }
+    }
+
+    fn request(goal: Goal) -> Request {
+        Request {
+            goal,
+            fixed_spp: false,
+            fixed_photons: false,
+            fixed_cache_rays: false,
+        }
+    }
+
+    /// With `E² = 0.04/s + 0.0025/F` and `T = F + 0.1 s`, the optimum spends the last second
+    /// equally well on either (`0.04/(0.1 s²) = 0.0025/F²`, so `F ≈ 0.079 s`): the planner's
+    /// choice is within 2% of the brute-force best over a fine grid of efforts.
+    #[test]
+    fn time_goal_matches_brute_force() {
+        let m = model();
+        let settings = Settings::default();
+        let r = request(Goal::Time(Duration::from_secs_f64(10.0)));
+        let c = decide(m, &r, MAX_EFFORT, &settings, 0.0);
+        let left = 10.0 * (1.0 - RESERVE);
+        let mut best = f64::INFINITY;
+        for i in 1..100_000 {
+            let f = i as f64 * 1e-4 * left;
+            let s = ((left - f) / 0.1).floor();
+            if s >= 1.0 {
+                best = best.min(m.error(s as u32, f));
+            }
+        }
+        let got = m.error(c.spp, c.effort);
+        assert!(m.time(c.spp, c.effort) <= left + 1e-9);
+        assert!(got <= best * 1.02, "planner {got} vs brute force {best}");
+    }
+
+    /// With a target, the chosen plan reaches it, and no plan on a fine grid reaches it in
+    /// less than 0.98 times the chosen plan's time.
+    #[test]
+    fn error_goal_is_reached_in_least_time() {
+        let m = model();
+        let r = request(Goal::Error(0.05));
+        let c = decide(m, &r, MAX_EFFORT, &Settings::default(), 0.0);
+        assert_eq!(c.why, Why::LeastTime);
+        assert!(m.error(c.spp, c.effort) <= 0.05);
+        let t = m.time(c.spp, c.effort);
+        for i in 1..20_000 {
+            let f = i as f64 * 1e-3;
+            let room = 0.0025 - m.parts2(1, f).1;
+            if room > 0.0 {
+                let s = (0.04 / room).ceil();
+                assert!(
+                    m.time(s as u32, f) >= 0.98 * t,
+                    "f {f}: {}",
+                    m.time(s as u32, f)
+                );
+            }
+        }
+    }
+
+    /// A fixed `--spp` stays; a target out of reach says so; a black pilot keeps the frame's.
+    #[test]
+    fn fixed_samples_and_unreachable_targets() {
+        let m = model();
+        let mut r = request(Goal::Time(Duration::from_secs(10)));
+        r.fixed_spp = true;
+        let settings = Settings {
+            sampling: crate::render::Sampling::Stratified { spp: 7 },
+            ..Settings::default()
+        };
+        assert_eq!(decide(m, &r, MAX_EFFORT, &settings, 0.0).spp, 7);
+        let r = request(Goal::Error(1e-6));
+        let c = decide(m, &r, 2.0, &Settings::default(), 0.0);
+        assert_eq!(c.why, Why::TargetOutOfReach);
+        assert!(c.effort <= 2.0);
+        let black = Model { mean: 0.0, ..m };
+        let c = decide(black, &r, 2.0, &Settings::default(), 0.0);
+        assert_eq!((c.why, c.effort, c.spp), (Why::Black, 1.0, 4));
+        let r = request(Goal::Time(Duration::from_secs(1)));
+        let c = decide(m, &r, MAX_EFFORT, &Settings::default(), 5.0);
+        assert_eq!(c.why, Why::BudgetSpent);
+    }
+}

@@ -1,0 +1,143 @@
+//! The time planner (`--time-budget`, `--target-error` for the photon-map integrator): a
+//! target error is met, the printed expected error is close to the measured one, the flags the
+//! user typed stay, and what the planner cannot honour is a usage error naming the flag.
+
+use crate::common::{caustic, out_dir, run_ok};
+
+/// A photon-mapped box under an area light, with a glass ball's caustic on the floor: every
+/// part of the planner's model (camera noise, maps' noise, their blur) is there.
+const BOX: &str = "
+    white = gr.material({0.7, 0.7, 0.7}, {0, 0, 0}, 0)
+    red = gr.material({0.7, 0.1, 0.1}, {0, 0, 0}, 0)
+    glass = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)
+    root = gr.node('root')
+    floor = gr.cube('floor'); floor:set_material(white); floor:scale(4, 0.1, 4); floor:translate(-2, -1.1, -6)
+    back = gr.cube('back'); back:set_material(white); back:scale(4, 4, 0.1); back:translate(-2, -1, -6.1)
+    left = gr.cube('left'); left:set_material(red); left:scale(0.1, 4, 4); left:translate(-2.1, -1, -6)
+    ceil = gr.cube('ceil'); ceil:set_material(white); ceil:scale(4, 0.1, 4); ceil:translate(-2, 3, -6)
+    ball = gr.nh_sphere('ball', {0.3, -0.4, -4}, 0.6); ball:set_material(glass)
+    for _, n in ipairs({floor, back, left, ceil, ball}) do root:add_child(n) end
+    gr.render(root, 'b.png', 40, 40, {0, 1, 1.5}, {0, -0.2, -1}, {0, 1, 0}, 55, {0, 0, 0},
+              {gr.area_light({0, 2.8, -4}, {6, 6, 6}, {1, 0, 0}, nil, 200000, {0.5, 0, 0}, {0, 0, 0.5})})
+";
+
+/// Returns the number after `key` in `text` (up to the next space, comma or parenthesis).
+fn number_after(text: &str, key: &str) -> f64 {
+    let at = text
+        .find(key)
+        .unwrap_or_else(|| panic!("no {key:?} in {text}"))
+        + key.len();
+    let tail: String = text[at..]
+        .trim_start()
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || *c == '.' || *c == 'e' || *c == '-')
+        .collect();
+    tail.parse()
+        .unwrap_or_else(|_| panic!("{key:?} then {tail:?}"))
+}
+
+/// `--target-error 0.05`: against two independent long renders (64 samples, 16 times the
+/// photons and cache rays; `caustic diff --second`, so the references' noise drops out) the
+/// image's relative RMSE is at most 1.5 times the target, and the error the planner printed is
+/// within 1.5 times of the measured one.
+#[test]
+fn target_error_is_met_and_the_expected_error_is_close() {
+    let dir = out_dir("time_planner_target");
+    std::fs::write(dir.join("b.lua"), BOX).unwrap();
+    let render = |args: &[&str]| {
+        let out = run_ok(
+            caustic()
+                .current_dir(&dir)
+                .arg("render")
+                .arg("b.lua")
+                .args(args),
+        );
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    for (seed, name) in [("1", "r1.exr"), ("2", "r2.exr")] {
+        let long = [
+            "--spp",
+            "64",
+            "--photon-scale",
+            "16",
+            "--cache-rays",
+            "4096",
+        ];
+        render(&[&long[..], &["--seed", seed, "-q", "-o", name]].concat());
+    }
+    let said = render(&["--target-error", "0.05", "-q", "-o", "t.exr"]);
+    let expected = number_after(&said, "expected relative RMSE");
+    let diff = run_ok(
+        caustic()
+            .current_dir(&dir)
+            .args(["diff", "t.exr", "r1.exr", "--second", "r2.exr"]),
+    );
+    let diff = String::from_utf8_lossy(&diff.stdout).to_string();
+    let measured = number_after(&diff, "relative RMSE");
+    assert!(measured <= 1.5 * 0.05, "measured {measured}: {said}");
+    let ratio = expected / measured;
+    assert!(
+        (1.0 / 1.5..=1.5).contains(&ratio),
+        "expected {expected}, measured {measured}: {said}"
+    );
+}
+
+/// The flags typed on the command line stay as typed; the planner moves the rest.
+#[test]
+fn typed_flags_stay() {
+    let dir = out_dir("time_planner_typed");
+    std::fs::write(dir.join("b.lua"), BOX).unwrap();
+    let out = run_ok(caustic().current_dir(&dir).args([
+        "render",
+        "b.lua",
+        "--time-budget",
+        "3",
+        "--spp",
+        "3",
+        "--photon-scale",
+        "0.5",
+        "-q",
+        "-o",
+        "x.png",
+    ]));
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(said.contains(": 3 spp,"), "{said}");
+    assert!(said.contains("photon scale 0.5000"), "{said}");
+    // Cache rays were not typed: they move with the effort, whatever it is.
+    assert!(said.contains("cache rays a record"), "{said}");
+}
+
+/// What the planner cannot honour is a usage error naming the flag, before any work.
+#[test]
+fn planner_flags_are_checked() {
+    let dir = out_dir("time_planner_flags");
+    std::fs::write(dir.join("b.lua"), BOX).unwrap();
+    for (args, flag) in [
+        (vec!["--time-budget", "0"], "--time-budget"),
+        (vec!["--time-budget", "inf"], "--time-budget"),
+        (vec!["--target-error", "0"], "--target-error"),
+        (
+            vec!["--time-budget", "5", "--target-error", "0.1"],
+            "--target-error",
+        ),
+        (
+            vec!["--time-budget", "5", "--noise-target", "0.1"],
+            "--noise-target",
+        ),
+        (vec!["--target-error", "0.1", "--adaptive"], "--adaptive"),
+        (
+            vec!["--time-budget", "5", "--photon-maps", "m.maps"],
+            "--photon-maps",
+        ),
+    ] {
+        let out = caustic()
+            .current_dir(&dir)
+            .args(["render", "b.lua", "-o", "x.png"])
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.contains(flag), "{args:?}: {err}");
+    }
+}

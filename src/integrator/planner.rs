@@ -19,7 +19,7 @@
 //!   and the cache's records), the same for every sample of a pixel, so no `s` removes it. A
 //!   `k`-nearest estimate's noise falls with photons only once its radius is below a pixel's
 //!   footprint (its neighbours then are independent estimates), so `β` lies between 0 and 1
-//!   and is measured, not assumed: 0.37 for the caustic of `glass_in_water` in
+//!   and is measured (clamped to [0.2, 1]), not assumed: 0.37 for the caustic of `glass_in_water` in
 //!   `docs/accuracy.md`, near 1 for the diffuse box's global map.
 //! - `b (F₀/F)`: the density estimates' blur, the bias that the seed-pair column of
 //!   `docs/accuracy.md` shows: proportional to the squared radius, so to `1/F`.
@@ -31,7 +31,7 @@
 //! # The pilot
 //! Four prepasses of independent seeds, two at `F₀` and two at `4F₀` (`F₀` =
 //! [`PILOT_EFFORT`], so the four together trace a third of the frame's photons), each the real
-//! chain (maps, precomputation, cache) and timed; then [`PILOT_SPP`] camera samples at each of
+//! chain (maps, precomputation, cache) and timed; then [`PILOT_SETS`] camera samples at each of
 //! up to [`PILOT_GRID`]² pixels spread over the window, every sample traced through all four
 //! prepasses with the same random numbers (common random numbers: the four values of a sample
 //! differ only by their prepass). Per pixel, over its samples, running means and variances of
@@ -43,7 +43,7 @@
 //!   less their noise (so `b`, as `b(F₀) − b(4F₀) = 3b/4`).
 //!
 //! and the four prepasses' times and the samples' thread time give `a`, `c` and `τ`. `β` is
-//! clamped to [0.2, 1.5] (1 where the pilot's difference is lost in its noise). A mean of the
+//! clamped to [0.2, 1] (1 where the pilot's difference is lost in its noise). A mean of the
 //! measured pixels is the image's `m`.
 //!
 //! # The choice
@@ -66,7 +66,7 @@
 //! equally accurate plans, though far less.
 
 use super::eye::{DiffuseTerm, Tracer};
-use super::photon_map::{GiSettings, Prepass, prepass};
+use super::photon_map::{GiSettings, prepass};
 use super::{Settings, View};
 use crate::photon::trace::{MAX_PHOTONS, MapKind};
 use crate::progress::{NoProgress, Progress};
@@ -99,12 +99,17 @@ pub struct Request {
 
 /// The pilot's prepass effort, relative to the frame's own counts (see the module doc).
 pub const PILOT_EFFORT: f64 = 1.0 / 32.0;
-/// The second pair of pilot prepasses runs at this multiple of [`PILOT_EFFORT`].
+/// The second pair of pilot prepasses runs at this multiple of the first pair's effort.
 pub const PILOT_STEP: f64 = 4.0;
+/// The share of a time budget the pilot's prepasses aim to take, and the largest effort of its
+/// first pair ([`pilot_effort`]).
+pub const PILOT_SHARE: f64 = 0.15;
+pub const MAX_PILOT_EFFORT: f64 = 0.25;
 /// The pilot measures at most this many pixels across and down the window.
-pub const PILOT_GRID: u32 = 40;
-/// Camera samples per pilot pixel.
-pub const PILOT_SPP: u32 = 8;
+pub const PILOT_GRID: u32 = 36;
+/// A pilot pixel's samples: four independent stratified sets of these sizes, so that each
+/// size has two replicates (see [`PixelRun`]).
+pub const PILOT_SETS: [u32; 4] = [2, 2, 4, 4];
 /// Efforts the planner considers, relative to the frame's own counts.
 const MIN_EFFORT: f64 = PILOT_EFFORT / 4.0;
 const MAX_EFFORT: f64 = 64.0;
@@ -123,8 +128,14 @@ const PHOTON_BYTES: f64 = 48.0;
 pub struct Model {
     /// The image's mean brightness over the pilot's pixels.
     pub mean: f64,
-    /// `V_cam`: one camera sample's relative variance.
+    /// `V_cam`: the relative variance of a pixel of 4 stratified samples, the part that stays
+    /// at any effort and the part that falls as `1/F` (samples reading sparse maps: a gather
+    /// ray's or a caustic lookup's value varies more when the maps are coarse).
     pub camera_var: f64,
+    pub camera_sparse: f64,
+    /// `γ`: a pixel's variance falls as `spp^-γ` (1 for independent samples; up to 2 where
+    /// stratification removes the variation of a smooth signal across the pixel).
+    pub gamma: f64,
     /// `V_map` at the pilot's effort, and `β`.
     pub map_var: f64,
     pub beta: f64,
@@ -151,10 +162,23 @@ impl Model {
     pub fn parts2(&self, s: u32, f: f64) -> (f64, f64, f64) {
         let r = self.pilot_effort / f;
         (
-            self.camera_var / s as f64,
+            self.camera_var_at(f) * (4.0 / s as f64).powf(self.gamma),
             self.map_var * r.powf(self.beta),
             self.bias2 * r * r,
         )
+    }
+
+    /// Returns a 4-sample pixel's relative variance at effort `f`.
+    pub fn camera_var_at(&self, f: f64) -> f64 {
+        self.camera_var + self.camera_sparse / f
+    }
+
+    /// Returns the samples per pixel (at least 1, unbounded) that bring the camera's part at
+    /// effort `f` down to `room`.
+    pub fn samples_for(&self, f: f64, room: f64) -> f64 {
+        (4.0 * (self.camera_var_at(f) / room).powf(1.0 / self.gamma))
+            .ceil()
+            .max(1.0)
     }
 
     /// Returns the expected relative RMSE at `s` samples and effort `f`.
@@ -232,7 +256,7 @@ impl fmt::Display for Planned {
             "{goal}: {} spp, prepass effort x{:.3} (photon scale {:.4}, {} cache rays a \
              record): {why}; expected relative RMSE {:.4} (camera {c:.4}, maps {m:.4}, bias \
              {b:.4}) in {:.2} s after a {:.2} s pilot (measured: camera variance {:.3} a \
-             sample, maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e}; photons \
+             4-sample pixel at effort 1 falling as spp^-{:.2}, maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e}; photons \
              {:.3} s per unit effort, cache {:.2e} s per ray a record, {:.4} s a sample of \
              every pixel)",
             self.spp,
@@ -242,7 +266,8 @@ impl fmt::Display for Planned {
             self.expected,
             self.expected_seconds,
             self.pilot_seconds,
-            model.camera_var,
+            model.camera_var_at(1.0),
+            model.gamma,
             model.map_var,
             model.pilot_effort,
             model.beta,
@@ -296,11 +321,13 @@ pub fn choose(
     )
 }
 
-/// Measures the camera pass's cost with the planned prepass made (`tracer` reads it): traces
-/// the pilot's pixels once more through it alone, and for a time budget re-chooses the
-/// samples per pixel from the time left since `started` at that measured cost (unless `--spp`
-/// fixed them). The prepass's own time is then spent, so only the samples can still move: the
-/// model's errors stand, the plan's samples, expected error and time are updated.
+/// Measures the camera pass with the planned prepass made (`tracer` reads it): traces the
+/// pilot's pixels once more through it alone, for the cost of a sample and the camera's
+/// variance at the chosen effort (the pilot's small prepasses measure it through coarser maps),
+/// and re-chooses the samples per pixel (unless `--spp` fixed them): for a time budget the most
+/// the time left since `started` allows, for a target error the fewest that reach it. The
+/// prepass is made, so only the samples can still move; the plan's samples, expected error,
+/// time and model are updated.
 pub fn fit_samples(
     planned: &mut Planned,
     view: View,
@@ -309,26 +336,47 @@ pub fn fit_samples(
     request: &Request,
     started: Instant,
 ) {
-    let Goal::Time(budget) = request.goal else {
-        return;
-    };
-    if request.fixed_spp || planned.why == Why::Black {
+    if planned.why == Why::Black {
         return;
     }
     let start = Instant::now();
-    let (_, _, samples) = pilot_pixels(view, seed, std::slice::from_ref(tracer), &NoProgress);
+    let (runs, _, samples) = pilot_pixels(view, seed, std::slice::from_ref(tracer), &NoProgress);
     let wall = start.elapsed().as_secs_f64();
     let (w, h) = view.window.size();
     let per_spp = wall / samples.max(1) as f64 * w as f64 * h as f64;
-    let left = budget.as_secs_f64() * (1.0 - RESERVE) - started.elapsed().as_secs_f64();
-    let spp = (left / per_spp.max(1e-12))
-        .floor()
-        .clamp(1.0, MAX_SPP as f64) as u32;
-    let model = Model {
+    let n = runs.len().max(1) as f64;
+    let mean = runs.iter().map(|r| r.mean[0]).sum::<f64>() / n;
+    let (v2, v4) = runs.iter().fold((0.0, 0.0), |(a, b), r| {
+        let (x, y) = r.set_vars(0);
+        (a + x / n, b + y / n)
+    });
+    let mut model = Model {
         per_spp,
         ..planned.model
     };
-    let (c, m, b) = model.parts2(spp, planned.effort);
+    if mean > 0.0 {
+        model.camera_var = v4 / (mean * mean);
+        model.camera_sparse = 0.0;
+        model.gamma = stratification(v2, v4);
+    }
+    let f = planned.effort;
+    let spp = match request.goal {
+        _ if request.fixed_spp => planned.spp,
+        Goal::Time(budget) => {
+            let left = budget.as_secs_f64() * (1.0 - RESERVE) - started.elapsed().as_secs_f64();
+            (left / per_spp.max(1e-12))
+                .floor()
+                .clamp(1.0, MAX_SPP as f64) as u32
+        }
+        Goal::Error(target) => {
+            let (_, m, b) = model.parts2(1, f);
+            match target * target - m - b {
+                room if room > 0.0 => model.samples_for(f, room).min(MAX_SPP as f64) as u32,
+                _ => planned.spp,
+            }
+        }
+    };
+    let (c, m, b) = model.parts2(spp, f);
     planned.spp = spp;
     planned.expected = (c + m + b).sqrt();
     planned.parts = (c.sqrt(), m.sqrt(), b.sqrt());
@@ -458,7 +506,7 @@ fn decide(
                     Some(s) if model.error(s, f) <= target => s,
                     Some(_) => continue,
                     None if room > 0.0 => {
-                        let s = (model.camera_var / room).ceil().max(1.0);
+                        let s = model.samples_for(f, room);
                         if s > MAX_SPP as f64 {
                             continue;
                         }
@@ -482,23 +530,42 @@ fn decide(
     }
 }
 
+/// Returns `γ` from the variances of pixels of 2 and of 4 stratified samples, `v2 = v4·2^γ`,
+/// within [1, 2] (1 when either is zero).
+fn stratification(v2: f64, v4: f64) -> f64 {
+    match v2 > 0.0 && v4 > 0.0 {
+        true => (v2 / v4).log2().clamp(1.0, 2.0),
+        false => 1.0,
+    }
+}
+
 /// Per-pixel running sums over a pilot pixel's samples: count, means and sums of squared
 /// deviations (Welford) of the first prepass's value and of the three differences.
 #[derive(Clone, Copy, Default)]
 struct PixelRun {
     n: u32,
-    mean: [f64; 4],
-    m2: [f64; 4],
+    mean: [f64; 5],
+    m2: [f64; 5],
+    /// The means of each stratified set ([`PILOT_SETS`]) of the first prepass's value and of
+    /// the third's: two replicates of a 2-sample and of a 4-sample pixel.
+    sets: [[f64; 4]; 2],
 }
 
 impl PixelRun {
-    fn add(&mut self, x: [f64; 4]) {
+    fn add(&mut self, x: [f64; 5]) {
         self.n += 1;
         for (i, &x) in x.iter().enumerate() {
             let d = x - self.mean[i];
             self.mean[i] += d / self.n as f64;
             self.m2[i] += d * (x - self.mean[i]);
         }
+    }
+
+    /// Returns the unbiased estimates of the variance of a pixel of 2 and of 4 stratified
+    /// samples from the replicates of tracer `t` (0: the first prepass, 1: the third).
+    fn set_vars(&self, t: usize) -> (f64, f64) {
+        let s = &self.sets[t];
+        ((s[0] - s[1]).powi(2) / 2.0, (s[2] - s[3]).powi(2) / 2.0)
     }
 
     /// Returns the squared standard error of the mean of quantity `i`.
@@ -524,19 +591,27 @@ fn pilot(
     request: &Request,
     progress: &dyn Progress,
 ) -> Model {
-    let f0 = PILOT_EFFORT;
     let seed = photons.seed;
     progress.start("planning: pilot prepasses", 4);
-    let prepasses: Vec<Prepass> = (0..4u64)
-        .map(|i| {
-            let f = if i < 2 { f0 } else { PILOT_STEP * f0 };
-            let mut gi = at_effort(photons, f, request);
-            gi.seed = seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(i + 1));
-            let p = prepass(view.scene, view.camera, &gi, None, &NoProgress);
-            progress.advance(1);
-            p
-        })
-        .collect();
+    let make = |i: u64, f: f64| {
+        let mut gi = at_effort(photons, f, request);
+        gi.seed = seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(i + 1));
+        let start = Instant::now();
+        let p = prepass(view.scene, view.camera, &gi, None, &NoProgress);
+        progress.advance(1);
+        (p, start.elapsed().as_secs_f64())
+    };
+    let (first, seconds) = make(0, PILOT_EFFORT);
+    let f0 = pilot_effort(request, seconds);
+    let first = match f0 > PILOT_EFFORT {
+        true => make(0, f0).0,
+        false => first,
+    };
+    let mut prepasses = vec![first];
+    for i in 1..4u64 {
+        let f = if i < 2 { f0 } else { PILOT_STEP * f0 };
+        prepasses.push(make(i, f).0);
+    }
     // The larger pair's phases: photons scale with the effort, the cache with its rays.
     let (mut photon_seconds, mut cache_seconds) = (0.0, 0.0);
     for p in &prepasses[2..] {
@@ -565,17 +640,24 @@ fn pilot(
     let mean = runs.iter().map(|r| r.mean[0]).sum::<f64>() / n;
     let m2 = (mean * mean).max(1e-300);
     let avg = |f: &dyn Fn(&PixelRun) -> f64| runs.iter().map(f).sum::<f64>() / n;
-    let camera_var = avg(&|r| match r.n {
-        0 | 1 => 0.0,
-        k => r.m2[0] / (k - 1) as f64,
-    }) / m2;
+    // V_cam(F) = V + K/F through the two efforts' 4-sample pixels' variances.
+    let (a2, c1) = (
+        avg(&|r| r.set_vars(0).0) / m2,
+        avg(&|r| r.set_vars(0).1) / m2,
+    );
+    let (b2, c2) = (
+        avg(&|r| r.set_vars(1).0) / m2,
+        avg(&|r| r.set_vars(1).1) / m2,
+    );
+    let camera_sparse = ((c1 - c2) / (1.0 / f0 - 1.0 / (PILOT_STEP * f0))).max(0.0);
+    let camera_var = (c2 - camera_sparse / (PILOT_STEP * f0)).max(0.0);
     // E[(A − B)²] = 2 V(F₀); E[(C − D)²] = 2 V(4F₀); E[((A + B) − (C + D))²/4] =
     // V(F₀)/2 + V(4F₀)/2 + (b(F₀) − b(4F₀))².
     let v1 = (avg(&|r| r.mean2(1)) / 2.0 / m2).max(0.0);
     let v2 = (avg(&|r| r.mean2(2)) / 2.0 / m2).max(0.0);
     let db2 = (avg(&|r| r.mean2(3)) / m2 - v1 / 2.0 - v2 / 2.0).max(0.0);
     let beta = if v1 > 0.0 && v2 > 0.0 {
-        ((v1 / v2).ln() / PILOT_STEP.ln()).clamp(0.2, 1.5)
+        ((v1 / v2).ln() / PILOT_STEP.ln()).clamp(0.2, 1.0)
     } else {
         1.0
     };
@@ -593,6 +675,8 @@ fn pilot(
     Model {
         mean,
         camera_var,
+        camera_sparse,
+        gamma: stratification(a2 + b2, c1 + c2),
         map_var: v1,
         beta,
         bias2,
@@ -606,7 +690,48 @@ fn pilot(
     }
 }
 
-/// Traces the pilot's samples: [`PILOT_SPP`] at each pixel of a grid of at most
+/// Returns the channel mean of the radiance along `ray` through each of `tracers`, all drawing
+/// the same random numbers (a NaN or infinite value counts as black, as the camera pass drops
+/// it); `rng` ends where the last tracer left it.
+fn trace_all(
+    tracers: &[Tracer],
+    ray: &crate::geometry::ray::Ray,
+    share: Share,
+    rng: &mut Rng,
+    counts: &mut RayCounts,
+) -> Vec<f64> {
+    let mut last = rng.clone();
+    let l = tracers
+        .iter()
+        .map(|t| {
+            let mut r = rng.clone();
+            let value = crate::render::Radiance::radiance(t, ray, share, &mut r, counts);
+            last = r;
+            match value.is_finite() {
+                true => (value.element_sum() / 3.0) as f64,
+                false => 0.0,
+            }
+        })
+        .collect();
+    *rng = last;
+    l
+}
+
+/// Returns the pilot's smaller effort `F₀`, given that a prepass at [`PILOT_EFFORT`] took
+/// `seconds`: for a time budget, the effort at which the pilot's four prepasses (`2 + 2s` times
+/// `F₀`'s work, `s` = [`PILOT_STEP`]) take about [`PILOT_SHARE`] of it, so that a longer
+/// budget measures the maps nearer the efforts it will choose from; at least
+/// [`PILOT_EFFORT`], at most [`MAX_PILOT_EFFORT`]. A target error keeps [`PILOT_EFFORT`].
+fn pilot_effort(request: &Request, seconds: f64) -> f64 {
+    let Goal::Time(budget) = request.goal else {
+        return PILOT_EFFORT;
+    };
+    let per_effort = seconds.max(1e-6) / PILOT_EFFORT;
+    let work = 2.0 + 2.0 * PILOT_STEP;
+    (PILOT_SHARE * budget.as_secs_f64() / (work * per_effort)).clamp(PILOT_EFFORT, MAX_PILOT_EFFORT)
+}
+
+/// Traces the pilot's samples: the sets of [`PILOT_SETS`] at each pixel of a grid of at most
 /// [`PILOT_GRID`]² over `view`'s window, each through every tracer with the same random
 /// numbers. Returns each pixel's running sums, the thread seconds spent tracing and the
 /// samples traced per tracer.
@@ -636,40 +761,26 @@ fn pilot_pixels(
                 let index = y as u64 * win.full_width as u64 + x as u64;
                 let mut rng = Rng::new(seed, Pass::Pixel, index);
                 let mut run = PixelRun::default();
-                let sharers = PILOT_SPP.min(WEAK_SHARERS);
-                for (k, (u, v)) in stratified_2d(&mut rng, PILOT_SPP).into_iter().enumerate() {
-                    let share = match (k as u32).is_multiple_of(sharers) {
-                        true => Share::Carry(sharers as f32),
-                        false => Share::Skip,
-                    };
-                    let ray = view.camera.ray(x as f32 + u, y as f32 + v);
-                    let start = Instant::now();
-                    let mut last = rng.clone();
-                    let l: Vec<f64> = tracers
-                        .iter()
-                        .map(|t| {
-                            let mut r = rng.clone();
-                            let value = crate::render::Radiance::radiance(
-                                t,
-                                &ray,
-                                share,
-                                &mut r,
-                                &mut counts,
-                            );
-                            last = r;
-                            match value.is_finite() {
-                                true => (value.element_sum() / 3.0) as f64,
-                                false => 0.0,
-                            }
-                        })
-                        .collect();
-                    seconds += start.elapsed().as_secs_f64();
-                    samples += 1;
-                    rng = last;
-                    run.add(match l[..] {
-                        [a, b, c, d] => [a, a - b, c - d, (a + b - c - d) / 2.0],
-                        _ => [l[0], 0.0, 0.0, 0.0],
-                    });
+                for (set, &size) in PILOT_SETS.iter().enumerate() {
+                    let sharers = size.min(WEAK_SHARERS);
+                    for (k, (u, v)) in stratified_2d(&mut rng, size).into_iter().enumerate() {
+                        let share = match (k as u32).is_multiple_of(sharers) {
+                            true => Share::Carry(sharers as f32),
+                            false => Share::Skip,
+                        };
+                        let ray = view.camera.ray(x as f32 + u, y as f32 + v);
+                        let start = Instant::now();
+                        let l = trace_all(tracers, &ray, share, &mut rng, &mut counts);
+                        seconds += start.elapsed().as_secs_f64();
+                        samples += 1;
+                        let q = match l[..] {
+                            [a, b, c, d] => [a, a - b, c - d, (a + b - c - d) / 2.0, c],
+                            _ => [l[0], 0.0, 0.0, 0.0, 0.0],
+                        };
+                        run.add(q);
+                        run.sets[0][set] += q[0] / size as f64;
+                        run.sets[1][set] += q[4] / size as f64;
+                    }
                 }
                 runs.push(run);
             }
@@ -694,7 +805,9 @@ mod tests {
     fn model() -> Model {
         Model {
             mean: 1.0,
-            camera_var: 0.04,
+            camera_var: 0.01,
+            camera_sparse: 0.0,
+            gamma: 1.0,
             map_var: 0.01,
             beta: 1.0,
             bias2: 0.0,

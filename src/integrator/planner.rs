@@ -5,16 +5,21 @@
 //!
 //! # What a pixel's error is made of
 //! A photon-mapped pixel of `s` camera samples, with prepass effort `F` (the frame's photon
-//! counts, both maps, and the irradiance cache's rays per record, all times `F`), has a relative
+//! counts, both maps, times `F`, and the irradiance cache's rays per record times `√F`), has a relative
 //! mean squared error (relative to the image's mean brightness `m`, as `caustic study`, `caustic
 //! diff` and `--noise-target` count it) of
 //!
 //! ```text
-//! E²(s, F) = V_cam / s  +  V_map · (F₀/F)^β  +  b² · (F₀/F)²
+//! E²(s, F) = V_cam(F) · (4/s)^γ  +  V_map · (F₀/F)^β  +  b² · (F₀/F)²
 //! ```
 //!
-//! - `V_cam / s`: the camera pass's Monte Carlo noise (pixel position, shadow rays, gather and
-//!   glossy rays, Russian roulette), independent per sample, so it falls as `1/s`.
+//! - `V_cam(F) (4/s)^γ`: the camera pass's Monte Carlo noise (pixel position, shadow rays,
+//!   gather and glossy rays, Russian roulette): `V_cam` is the variance of a pixel of 4
+//!   stratified samples, falling as `s^-γ`, `γ` = 1 for independent samples and up to 2 where
+//!   stratification removes a smooth signal's variation across the pixel. (A pixel's *sample*
+//!   variance is no measure of it: on the final scene the textures, the ripples and the light's
+//!   edge vary 26 times more across a pixel than the pixel's mean does between renders.) It
+//!   is `V + K/F`: samples that read coarse maps vary more.
 //! - `V_map (F₀/F)^β`: the noise of what the prepass made (the photon maps' density estimates
 //!   and the cache's records), the same for every sample of a pixel, so no `s` removes it. A
 //!   `k`-nearest estimate's noise falls with photons only once its radius is below a pixel's
@@ -24,27 +29,39 @@
 //! - `b (F₀/F)`: the density estimates' blur, the bias that the seed-pair column of
 //!   `docs/accuracy.md` shows: proportional to the squared radius, so to `1/F`.
 //!
-//! Time is `T(s, F) = a + c·F + s·N·τ / threads`: the prepass's fixed part `a` (precomputation
-//! and cache probes), its part `c·F` proportional to photons and cache rays, and `N` pixels of `s`
-//! samples at `τ` thread-seconds a sample.
+//! Time is `T(s, F) = c_p·F + c_r·R(F) + s·N·τ`: photons (tracing, kd-trees, precomputed
+//! points) in proportion to the effort, the cache in proportion to its rays per record `R(F)`,
+//! and `N` pixels of `s` samples at `τ` wall seconds a sample.
 //!
 //! # The pilot
-//! Four prepasses of independent seeds, two at `F₀` and two at `4F₀` (`F₀` =
-//! [`PILOT_EFFORT`], so the four together trace a third of the frame's photons), each the real
-//! chain (maps, precomputation, cache) and timed; then [`PILOT_SETS`] camera samples at each of
-//! up to [`PILOT_GRID`]² pixels spread over the window, every sample traced through all four
-//! prepasses with the same random numbers (common random numbers: the four values of a sample
-//! differ only by their prepass). Per pixel, over its samples, running means and variances of
-//! the first prepass's value and of three differences give, after subtracting what the
-//! samples' own noise adds to each squared mean difference:
-//! - `V_cam`: the first value's variance over samples;
+//! Four prepasses of independent seeds, two at `F₀` and two at `4F₀`, each the real chain
+//! (maps, precomputation, cache) and timed. `F₀` is [`PILOT_EFFORT`] for a target error; for a
+//! time budget, the effort at which the four take about [`PILOT_SHARE`] of it (at most
+//! [`MAX_PILOT_EFFORT`]), so that a long budget measures the maps nearer the efforts it
+//! chooses from (the maps' noise on the final scene falls as effort^-1.1 between 1/32 and 1/8
+//! of the frame's, as effort^-0.4 from 1/8 to 1). Then up to [`PILOT_GRID`]² pixels spread
+//! over the window take four independent stratified sets of [`PILOT_SETS`] samples, every
+//! sample traced through all four prepasses with the same random numbers (common random
+//! numbers: the four values of a sample differ only by their prepass). Per pixel, running
+//! means and variances of the first prepass's value and of three differences give, after
+//! subtracting what the samples' own noise adds to each squared mean difference:
+//! - `V_cam` at `F₀` and `4F₀` and `γ`: the replicate sets' squared differences (a 2- and a
+//!   4-sample pixel's variance);
 //! - `V_map` at `F₀` and at `4F₀`: half the squared difference of each pair (so `β`);
 //! - the bias change between `F₀` and `4F₀`: the squared difference of the two pairs' means,
 //!   less their noise (so `b`, as `b(F₀) − b(4F₀) = 3b/4`).
 //!
-//! and the four prepasses' times and the samples' thread time give `a`, `c` and `τ`. `β` is
+//! and the larger pair's phase times and the samples' time give `c_p`, `c_r` and `τ`. `β` is
 //! clamped to [0.2, 1] (1 where the pilot's difference is lost in its noise). A mean of the
-//! measured pixels is the image's `m`.
+//! measured pixels is the image's `m`. Once the chosen prepass is made, the same pixels traced
+//! through it alone measure `V_cam` and `τ` at the chosen effort, and the samples are fitted to
+//! them ([`fit_samples`]): for a budget, to the time actually left.
+//!
+//! What the pilot cannot see: error that no two seeds differ by (an estimator's systematic
+//! difference from the truth at a fixed cache accuracy or `k`, or a difference between caustic
+//! and the reference it is measured against), and pixels too rare for its grid (a light's
+//! edge, a firefly path): both make the measured error larger than the expected one.
+//! `docs/accuracy/budget.md` has the figures.
 //!
 //! # The choice
 //! With a time budget, over 97 efforts from `F₀/4` to 64 (log-spaced) the planner takes the most
@@ -120,6 +137,8 @@ const MAX_SPP: u32 = 1 << 16;
 /// The share of a time budget kept back for what the model does not count (writing the
 /// image, the last rows' imbalance).
 const RESERVE: f64 = 0.04;
+/// The largest share of the time left after the pilot a planned prepass may take.
+const PREPASS_SHARE: f64 = 0.6;
 /// Bytes a stored photon takes ([`crate::frame`]'s charge).
 const PHOTON_BYTES: f64 = 48.0;
 
@@ -255,7 +274,7 @@ impl fmt::Display for Planned {
             f,
             "{goal}: {} spp, prepass effort x{:.3} (photon scale {:.4}, {} cache rays a \
              record): {why}; expected relative RMSE {:.4} (camera {c:.4}, maps {m:.4}, bias \
-             {b:.4}) in {:.2} s after a {:.2} s pilot (measured: camera variance {:.3} a \
+             {b:.4}; lights seen directly left out) in {:.2} s after a {:.2} s pilot (measured: camera variance {:.3} a \
              4-sample pixel at effort 1 falling as spp^-{:.2}, maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e}; photons \
              {:.3} s per unit effort, cache {:.2e} s per ray a record, {:.4} s a sample of \
              every pixel)",
@@ -290,11 +309,15 @@ pub fn at_effort(photons: &GiSettings, f: f64, request: &Request) -> GiSettings 
     s
 }
 
-/// Returns the cache's rays per record at effort `f` from `rays` at effort 1.
+/// Returns the cache's rays per record at effort `f` from `rays` at effort 1: `rays·√f`. The
+/// photons take the effort in full; the cache's share of the error is smaller (a grid over
+/// `--photon-scale` at the default cache rays beat the same time spent on both alike, on
+/// every scene of `docs/accuracy/budget.md`), but a pilot at a thirty-second of the photons
+/// with all of the cache's rays would cost as much as the render.
 fn cache_rays(rays: u32, f: f64, fixed: bool) -> u32 {
     match fixed {
         true => rays,
-        false => (rays as f64 * f)
+        false => (rays as f64 * f.sqrt())
             .round()
             .clamp(MIN_CACHE_RAYS as f64, 65_536.0) as u32,
     }
@@ -314,11 +337,24 @@ pub fn choose(
     let model = pilot(view, settings, photons, request, progress);
     let pilot_seconds = started.elapsed().as_secs_f64();
     let max_effort = max_effort(view, photons, request);
-    decide(model, request, max_effort, settings, pilot_seconds).with_settings(
-        photons,
-        request,
-        pilot_seconds,
-    )
+    let mut choice = decide(model, request, max_effort, settings, pilot_seconds);
+    // Effort 1's photons were charged with the scene; a larger effort charges the rest.
+    if choice.effort > 1.0 && !request.fixed_photons {
+        let stored: u64 = [MapKind::Global, MapKind::Caustic]
+            .into_iter()
+            .flat_map(|kind| photons.budget(&view.scene.lights, kind))
+            .sum();
+        let extra = (stored as f64 * (choice.effort - 1.0) * PHOTON_BYTES) as u64;
+        if view
+            .scene
+            .account
+            .try_charge(extra, "the planner's photons")
+            .is_err()
+        {
+            choice.effort = 1.0;
+        }
+    }
+    choice.with_settings(photons, request, pilot_seconds)
 }
 
 /// Measures the camera pass with the planned prepass made (`tracer` reads it): traces the
@@ -341,6 +377,7 @@ pub fn fit_samples(
     }
     let start = Instant::now();
     let (runs, _, samples) = pilot_pixels(view, seed, std::slice::from_ref(tracer), &NoProgress);
+    let runs = lit_pixels(runs);
     let wall = start.elapsed().as_secs_f64();
     let (w, h) = view.window.size();
     let per_spp = wall / samples.max(1) as f64 * w as f64 * h as f64;
@@ -478,6 +515,11 @@ fn decide(
             let left = budget.as_secs_f64() * (1.0 - RESERVE) - pilot_seconds;
             let mut best: Option<(f64, f64, u32)> = None;
             for &f in &efforts {
+                // At least 40% of the time left goes to the camera: the prepass's time is
+                // extrapolated from the pilot's small efforts and errs on the short side.
+                if model.prepass_time(f) > PREPASS_SHARE * left {
+                    continue;
+                }
                 let camera = left - model.prepass_time(f);
                 let most = (camera / model.per_spp.max(1e-12)).floor();
                 let s = match fixed_spp {
@@ -549,6 +591,8 @@ struct PixelRun {
     /// The means of each stratified set ([`PILOT_SETS`]) of the first prepass's value and of
     /// the third's: two replicates of a 2-sample and of a 4-sample pixel.
     sets: [[f64; 4]; 2],
+    /// Whether a sample saw a light directly (the pixel is then left out, see [`lit_pixels`]).
+    light: bool,
 }
 
 impl PixelRun {
@@ -635,6 +679,7 @@ fn pilot(
         .collect();
     let start = Instant::now();
     let (runs, thread_seconds, samples) = pilot_pixels(view, settings.seed, &tracers, progress);
+    let runs = lit_pixels(runs);
     let wall = start.elapsed().as_secs_f64();
     let n = runs.len().max(1) as f64;
     let mean = runs.iter().map(|r| r.mean[0]).sum::<f64>() / n;
@@ -688,6 +733,24 @@ fn pilot(
         fixed_rays: request.fixed_cache_rays,
         per_spp: per_sample * w as f64 * h as f64 / threads,
     }
+}
+
+/// Returns whether `ray` meets a light (an area or sphere light, or an emissive surface)
+/// before anything else.
+fn sees_emitter(scene: &crate::scene::Scene, ray: &crate::geometry::ray::Ray) -> bool {
+    let first = scene.intersect(ray);
+    let t = first.as_ref().map_or(f32::INFINITY, |h| h.t);
+    super::eye::emitter_seen(scene, ray, t).is_some()
+        || first.is_some_and(|h| scene.materials[h.material as usize].emission != glam::Vec3A::ZERO)
+}
+
+/// Returns the pilot's pixels that saw no light directly, which its figures are taken over. A
+/// light's own pixels are thousands of times the image's mean (relative to which every error
+/// is counted), and their error is its edges' aliasing, the same for every prepass: it would
+/// swamp what the plan can change. `docs/accuracy.md` leaves the rows of the ceiling light
+/// out of its measures for the same reason; the expected error is the rest of the image's.
+fn lit_pixels(runs: Vec<PixelRun>) -> Vec<PixelRun> {
+    runs.into_iter().filter(|r| !r.light).collect()
 }
 
 /// Returns the channel mean of the radiance along `ray` through each of `tracers`, all drawing
@@ -769,6 +832,7 @@ fn pilot_pixels(
                             false => Share::Skip,
                         };
                         let ray = view.camera.ray(x as f32 + u, y as f32 + v);
+                        run.light |= sees_emitter(view.scene, &ray);
                         let start = Instant::now();
                         let l = trace_all(tracers, &ray, share, &mut rng, &mut counts);
                         seconds += start.elapsed().as_secs_f64();

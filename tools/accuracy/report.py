@@ -195,6 +195,16 @@ def main():
             "`--noise-target` against uniform `--spp` at equal CPU time on these three scenes "
             "(`tools/accuracy/adaptive.sh`): [accuracy/adaptive.md](accuracy/adaptive.md).",
         ]
+    if os.path.exists(os.path.join(docs, "budget.md")):
+        body += [
+            "",
+            "## A time budget or a target error",
+            "",
+            "`--time-budget` against the defaults with more samples and against a grid of "
+            "`--spp` and `--photon-scale`, at equal CPU time, on these three scenes and the final "
+            "scene at a quarter of its size (`tools/accuracy/budget.sh`): "
+            "[accuracy/budget.md](accuracy/budget.md).",
+        ]
     print("\n".join(head + body))
 
 

@@ -941,6 +941,31 @@ mod tests {
         }
     }
 
+    /// A camera ray that meets an area light before anything else sees it, one that meets the
+    /// wall beside it does not, and the pilot's figures leave out pixels that saw a light.
+    #[test]
+    fn lights_in_view_are_left_out() {
+        let src = b"wall = gr.cube('wall') wall:set_material(gr.material({0.5, 0.5, 0.5}, {0, 0, 0}, 0))
+            wall:scale(20, 20, 1) wall:translate(-10, -10, -8)
+            root = gr.node('root') root:add_child(wall)
+            gr.render(root, 'x.png', 9, 9, {0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, {0, 0, 0},
+              {gr.area_light({0, 0, -5}, {4, 4, 4}, {1, 0, 0}, nil, 1000, {0.5, 0, 0}, {0, 0.5, 0})})";
+        let no_render = Box::new(|_: &_, _: &_| Ok(()));
+        let desc = crate::lua::run_source(src, "t.lua", ".".as_ref(), no_render).unwrap();
+        let r = &desc.renders[0];
+        let scene = crate::scene::build_scene(&desc, r).unwrap();
+        let camera = crate::camera::Camera::new(&r.camera, 9, 9);
+        assert!(sees_emitter(&scene, &camera.ray(4.5, 4.5)));
+        assert!(!sees_emitter(&scene, &camera.ray(0.5, 0.5)));
+        let lit = PixelRun {
+            light: true,
+            ..PixelRun::default()
+        };
+        let kept = lit_pixels(vec![lit, PixelRun::default(), lit]);
+        assert_eq!(kept.len(), 1);
+        assert!(!kept[0].light);
+    }
+
     /// A fixed `--spp` stays; a target out of reach says so; a black pilot keeps the frame's.
     #[test]
     fn fixed_samples_and_unreachable_targets() {

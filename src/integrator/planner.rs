@@ -627,14 +627,15 @@ impl PixelRun {
     }
 }
 
-/// Runs the pilot of the module doc and returns its model.
-fn pilot(
+/// Makes the pilot's four prepasses of independent seeds, two at `F₀` and two at
+/// [`PILOT_STEP`]`·F₀` ([`pilot_effort`] chooses `F₀` from the first one's time at
+/// [`PILOT_EFFORT`]), and returns them with `F₀`.
+fn pilot_prepasses(
     view: View,
-    settings: &Settings,
     photons: &GiSettings,
     request: &Request,
     progress: &dyn Progress,
-) -> Model {
+) -> (Vec<super::photon_map::Prepass>, f64) {
     let seed = photons.seed;
     progress.start("planning: pilot prepasses", 4);
     let make = |i: u64, f: f64| {
@@ -656,6 +657,18 @@ fn pilot(
         let f = if i < 2 { f0 } else { PILOT_STEP * f0 };
         prepasses.push(make(i, f).0);
     }
+    (prepasses, f0)
+}
+
+/// Runs the pilot of the module doc and returns its model.
+fn pilot(
+    view: View,
+    settings: &Settings,
+    photons: &GiSettings,
+    request: &Request,
+    progress: &dyn Progress,
+) -> Model {
+    let (prepasses, f0) = pilot_prepasses(view, photons, request, progress);
     // The larger pair's phases: photons scale with the effort, the cache with its rays.
     let (mut photon_seconds, mut cache_seconds) = (0.0, 0.0);
     for p in &prepasses[2..] {

@@ -125,6 +125,9 @@ pub fn camera_pass(
     opts: &PassOptions,
     progress: &dyn Progress,
 ) -> (Film, RenderStats) {
+    // A caller that renders before building any scene (a synthetic integrator, a test) must
+    // not leave the process's workers at the default stack, which a deep eye path overflows.
+    let _ = crate::accel::start_workers(None);
     let start = Instant::now();
     let win = opts.window;
     let (w, h) = win.size();

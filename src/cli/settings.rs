@@ -72,8 +72,9 @@ pub struct RenderJob {
 impl RenderJob {
     /// Returns the job the arguments ask for, or a usage error naming the flag out of range.
     pub fn from_args(a: &RenderArgs) -> Result<RenderJob> {
+        // First: it checks --time-budget's and --target-error's ranges for both integrators.
+        let budget = budget_request(a, a.integrator == IntegratorArg::Progressive)?;
         let progressive = progressive_settings(a)?;
-        let budget = budget_request(a, progressive.is_some())?;
         let sampling = sampling(a, progressive.is_some())?;
         let photons = photon_settings(a, progressive.is_some())?;
         let tonemap = tonemap(a)?;

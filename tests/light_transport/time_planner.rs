@@ -115,6 +115,7 @@ fn planner_flags_are_checked() {
     for (args, flag) in [
         (vec!["--time-budget", "0"], "--time-budget"),
         (vec!["--time-budget", "inf"], "--time-budget"),
+        (vec!["--time-budget", "nan"], "--time-budget"),
         (vec!["--target-error", "0"], "--target-error"),
         (
             vec!["--time-budget", "5", "--target-error", "0.1"],

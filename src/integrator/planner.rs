@@ -340,10 +340,7 @@ pub fn choose(
     let mut choice = decide(model, request, max_effort, settings, pilot_seconds);
     // Effort 1's photons were charged with the scene; a larger effort charges the rest.
     if choice.effort > 1.0 && !request.fixed_photons {
-        let stored: u64 = [MapKind::Global, MapKind::Caustic]
-            .into_iter()
-            .flat_map(|kind| photons.budget(&view.scene.lights, kind))
-            .sum();
+        let stored: u64 = photon_counts(view.scene, photons).iter().sum();
         let extra = (stored as f64 * (choice.effort - 1.0) * PHOTON_BYTES) as u64;
         if view
             .scene
@@ -457,20 +454,31 @@ fn max_effort(view: View, photons: &GiSettings, request: &Request) -> f64 {
     if request.fixed_photons {
         return MAX_EFFORT;
     }
-    let lights = &view.scene.lights;
-    let counts: Vec<u64> = [MapKind::Global, MapKind::Caustic]
-        .into_iter()
-        .flat_map(|kind| photons.budget(lights, kind))
-        .collect();
+    let counts = photon_counts(view.scene, photons);
     let largest = counts.iter().copied().max().unwrap_or(0).max(1) as f64;
     let total = counts.iter().sum::<u64>().max(1) as f64;
     let budget = view.scene.account.budget();
     let free = budget.limit().saturating_sub(budget.used()) as f64;
     // Effort 1's photons are charged already; the extra is what a larger effort needs.
     let by_memory = 1.0 + free / (total * PHOTON_BYTES);
-    (MAX_PHOTONS as f64 / largest)
+    // A light's count is rounded after the effort scales it: keep half a photon in hand.
+    ((MAX_PHOTONS as f64 - 1.0) / (largest + 0.5))
         .min(by_memory)
         .clamp(MIN_EFFORT, MAX_EFFORT)
+}
+
+/// Returns each light's photon count at effort 1 for each map the frame traces: the global
+/// map's, and the caustic map's only when the plan traces one (as the scene's account was
+/// charged, [`crate::frame::charge_photons`]).
+fn photon_counts(scene: &crate::scene::Scene, photons: &GiSettings) -> Vec<u64> {
+    let kinds: &[MapKind] = match photons.caustics {
+        true => &[MapKind::Global, MapKind::Caustic],
+        false => &[MapKind::Global],
+    };
+    kinds
+        .iter()
+        .flat_map(|&kind| photons.budget(&scene.lights, kind))
+        .collect()
 }
 
 /// Returns the efforts considered up to `max`: 97 log-spaced from [`MIN_EFFORT`] to
@@ -977,6 +985,30 @@ mod tests {
         let kept = lit_pixels(vec![lit, PixelRun::default(), lit]);
         assert_eq!(kept.len(), 1);
         assert!(!kept[0].light);
+    }
+
+    /// A frame without a caustic map counts only the global map's photons towards the memory
+    /// an effort needs (the 2M caustic photons by default would otherwise be charged for a
+    /// map never traced).
+    #[test]
+    fn photons_count_only_the_maps_traced() {
+        let src = b"s = gr.sphere('s') s:set_material(gr.material({0.5, 0.5, 0.5}, {0, 0, 0}, 0))
+            gr.render(s, 'x.png', 9, 9, {0, 0, 5}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0},
+              {gr.light({0, 0, 5}, {1, 1, 1}, {1, 0, 0}, 1, 1000)})";
+        let no_render = Box::new(|_: &_, _: &_| Ok(()));
+        let desc = crate::lua::run_source(src, "t.lua", ".".as_ref(), no_render).unwrap();
+        let scene = crate::scene::build_scene(&desc, &desc.renders[0]).unwrap();
+        let mut photons = GiSettings {
+            photons: 1000,
+            caustic_photons: 5000,
+            ..GiSettings::default()
+        };
+        let with = photon_counts(&scene, &photons).iter().sum::<u64>();
+        photons.caustics = false;
+        let without = photon_counts(&scene, &photons).iter().sum::<u64>();
+        assert!(with > without, "{with} {without}");
+        let global: u64 = photons.budget(&scene.lights, MapKind::Global).iter().sum();
+        assert_eq!(without, global);
     }
 
     /// A fixed `--spp` stays; a target out of reach says so; a black pilot keeps the frame's.

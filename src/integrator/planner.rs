@@ -200,6 +200,21 @@ impl Model {
             .max(1.0)
     }
 
+    /// Returns the most samples per pixel (at most [`MAX_SPP`]) a camera pass of `seconds`
+    /// takes, or `None` for less than one.
+    pub fn samples_in(&self, seconds: f64) -> Option<u32> {
+        let most = (seconds / self.per_spp.max(1e-12)).floor();
+        (most >= 1.0).then(|| most.min(MAX_SPP as f64) as u32)
+    }
+
+    /// Returns the fewest samples per pixel (unbounded) that bring the error at effort `f`
+    /// to `target`, or `None` where the maps' parts alone exceed it.
+    pub fn samples_to(&self, f: f64, target: f64) -> Option<f64> {
+        let (_, m, b) = self.parts2(1, f);
+        let room = target * target - m - b;
+        (room > 0.0).then(|| self.samples_for(f, room))
+    }
+
     /// Returns the expected relative RMSE at `s` samples and effort `f`.
     pub fn error(&self, s: u32, f: f64) -> f64 {
         let (c, m, b) = self.parts2(s, f);
@@ -398,17 +413,11 @@ pub fn fit_samples(
         _ if request.fixed_spp => planned.spp,
         Goal::Time(budget) => {
             let left = budget.as_secs_f64() * (1.0 - RESERVE) - started.elapsed().as_secs_f64();
-            (left / per_spp.max(1e-12))
-                .floor()
-                .clamp(1.0, MAX_SPP as f64) as u32
+            model.samples_in(left).unwrap_or(1)
         }
-        Goal::Error(target) => {
-            let (_, m, b) = model.parts2(1, f);
-            match target * target - m - b {
-                room if room > 0.0 => model.samples_for(f, room).min(MAX_SPP as f64) as u32,
-                _ => planned.spp,
-            }
-        }
+        Goal::Error(target) => model
+            .samples_to(f, target)
+            .map_or(planned.spp, |s| s.min(MAX_SPP as f64) as u32),
     };
     let (c, m, b) = model.parts2(spp, f);
     planned.spp = spp;
@@ -518,58 +527,41 @@ fn decide(
     }
     let efforts = efforts(request, max);
     let fixed_spp = request.fixed_spp.then_some(given_spp);
+    // The first plan of least score over the efforts, each with the samples it takes.
+    let best =
+        |plans: &mut dyn Iterator<Item = (f64, f64, u32)>| plans.min_by(|a, b| a.0.total_cmp(&b.0));
     match request.goal {
         Goal::Time(budget) => {
             let left = budget.as_secs_f64() * (1.0 - RESERVE) - pilot_seconds;
-            let mut best: Option<(f64, f64, u32)> = None;
-            for &f in &efforts {
+            let mut plans = efforts.iter().filter_map(|&f| {
                 // At least 40% of the time left goes to the camera: the prepass's time is
                 // extrapolated from the pilot's small efforts and errs on the short side.
                 if model.prepass_time(f) > PREPASS_SHARE * left {
-                    continue;
+                    return None;
                 }
-                let camera = left - model.prepass_time(f);
-                let most = (camera / model.per_spp.max(1e-12)).floor();
+                let most = model.samples_in(left - model.prepass_time(f))?;
                 let s = match fixed_spp {
-                    Some(s) if (s as f64) <= most => s,
-                    Some(_) => continue,
-                    None if most >= 1.0 => most.min(MAX_SPP as f64) as u32,
-                    None => continue,
+                    Some(s) => (s <= most).then_some(s)?,
+                    None => most,
                 };
-                let e = model.error(s, f);
-                if best.is_none_or(|(b, _, _)| e < b) {
-                    best = Some((e, f, s));
-                }
-            }
-            match best {
+                Some((model.error(s, f), f, s))
+            });
+            match best(&mut plans) {
                 Some((_, f, s)) => choice(Why::LeastError, f, s),
                 None => choice(Why::BudgetSpent, efforts[0], fixed_spp.unwrap_or(1)),
             }
         }
         Goal::Error(target) => {
-            let t2 = target * target;
-            let mut best: Option<(f64, f64, u32)> = None;
-            for &f in &efforts {
-                let (_, m, b) = model.parts2(1, f);
-                let room = t2 - m - b;
+            let mut plans = efforts.iter().filter_map(|&f| {
                 let s = match fixed_spp {
-                    Some(s) if model.error(s, f) <= target => s,
-                    Some(_) => continue,
-                    None if room > 0.0 => {
-                        let s = model.samples_for(f, room);
-                        if s > MAX_SPP as f64 {
-                            continue;
-                        }
-                        s as u32
-                    }
-                    None => continue,
+                    Some(s) => (model.error(s, f) <= target).then_some(s)?,
+                    None => model
+                        .samples_to(f, target)
+                        .filter(|&s| s <= MAX_SPP as f64)? as u32,
                 };
-                let t = model.time(s, f);
-                if best.is_none_or(|(b, _, _)| t < b) {
-                    best = Some((t, f, s));
-                }
-            }
-            match best {
+                Some((model.time(s, f), f, s))
+            });
+            match best(&mut plans) {
                 Some((_, f, s)) => choice(Why::LeastTime, f, s),
                 None => {
                     let f = *efforts.last().unwrap_or(&1.0);

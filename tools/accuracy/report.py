@@ -187,24 +187,18 @@ def main():
     for name, title in SCENES:
         if os.path.exists(os.path.join(docs, name, "photon_map.csv")):
             body += section(docs, name, title)
-    if os.path.exists(os.path.join(docs, "adaptive.md")):
-        body += [
-            "",
-            "## Adaptive pixels",
-            "",
-            "`--noise-target` against uniform `--spp` at equal CPU time on these three scenes "
-            "(`tools/accuracy/adaptive.sh`): [accuracy/adaptive.md](accuracy/adaptive.md).",
-        ]
-    if os.path.exists(os.path.join(docs, "budget.md")):
-        body += [
-            "",
-            "## A time budget or a target error",
-            "",
-            "`--time-budget` against the defaults with more samples and against a grid of "
-            "`--spp` and `--photon-scale`, at equal CPU time, on these three scenes and the final "
-            "scene at a quarter of its size (`tools/accuracy/budget.sh`): "
-            "[accuracy/budget.md](accuracy/budget.md).",
-        ]
+    # Studies of their own, each linked under its heading when its page is there.
+    for page, title, text in [
+        ("adaptive.md", "Adaptive pixels",
+         "`--noise-target` against uniform `--spp` at equal CPU time on these three scenes "
+         "(`tools/accuracy/adaptive.sh`)"),
+        ("budget.md", "A time budget or a target error",
+         "`--time-budget` against the defaults with more samples and against a grid of "
+         "`--spp` and `--photon-scale`, at equal CPU time, on these three scenes and the final "
+         "scene at a quarter of its size (`tools/accuracy/budget.sh`)"),
+    ]:
+        if os.path.exists(os.path.join(docs, page)):
+            body += ["", f"## {title}", "", f"{text}: [accuracy/{page}](accuracy/{page})."]
     print("\n".join(head + body))
 
 

@@ -18,9 +18,10 @@ use crate::accel::{Bounds, Builder, Bvh, Kernel};
 use crate::geometry::Ray;
 use crate::geometry::mesh::MeshData;
 use crate::geometry::triangle::{RayShear, TriangleHit};
-use glam::{Vec2, Vec3A};
+use glam::Vec3A;
 use rayon::prelude::*;
 use std::ops::Range;
+use std::sync::Arc;
 
 /// A BVH leaf's triangles as traversal reads them: their corners, and the BVH-order index of
 /// the first, so that a hit names its triangle from the cache lines just tested. Looking it up in
@@ -36,17 +37,17 @@ struct Block {
     _pad: [u32; 3],
 }
 
-/// A mesh ready for tracing: attributes in object space, triangles reordered into BVH order.
+/// A mesh ready for tracing: its [`MeshData`] shared with the scene's mesh cache (attributes in
+/// object space, triangles in the file's order), and what tracing adds: the BVH, whose order
+/// maps a BVH-order triangle index to the file's, and each leaf's corners in one block.
+///
+/// Nothing of the data is copied: at 33.5M triangles the copies (positions, normals and uvs as
+/// `Vec3A`, the triangles in BVH order) were 1.07 GB, a third of the traceable mesh; a hit
+/// reads its triangle through [`Bvh::order`], one more load per shaded hit, none in traversal.
 pub struct MeshGeom {
-    pub positions: Vec<Vec3A>,
-    /// Per-vertex normals, or empty for face normals.
-    pub normals: Vec<Vec3A>,
-    /// Per-vertex texture coordinates, or empty.
-    pub uvs: Vec<Vec2>,
-    /// Vertex indices, in BVH order: the BVH's leaf index `i` is triangle `i`.
-    pub triangles: Vec<[u32; 3]>,
-    /// Scene material (index into `Scene::materials`) of each triangle, in BVH order like
-    /// `triangles`, or empty when the file carries no materials.
+    data: Arc<MeshData>,
+    /// Scene material (index into `Scene::materials`) of each triangle, in BVH order, or empty
+    /// when the file carries no materials.
     pub materials: Vec<u32>,
     pub bvh: Bvh,
     pub bounds: Bounds,
@@ -63,28 +64,24 @@ impl MeshGeom {
     ///
     /// Positions must be finite, and `triangle_materials` empty or parallel to `triangles` with
     /// every entry below `materials.len()` (the scene builder checks both).
-    pub fn new(data: &MeshData, first_material: u32) -> MeshGeom {
+    pub fn new(data: impl Into<Arc<MeshData>>, first_material: u32) -> MeshGeom {
         MeshGeom::with_builder(data, first_material, Builder::BinnedSah)
     }
 
     /// [`MeshGeom::new`] with the BVH built by `builder` (for benchmarks and tests).
-    pub fn with_builder(data: &MeshData, first_material: u32, builder: Builder) -> MeshGeom {
-        let mut positions = crate::mem::huge_vec(data.positions.len());
-        data.positions
-            .par_iter()
-            .map(|&p| p.into())
-            .collect_into_vec(&mut positions);
+    pub fn with_builder(
+        data: impl Into<Arc<MeshData>>,
+        first_material: u32,
+        builder: Builder,
+    ) -> MeshGeom {
+        let data: Arc<MeshData> = data.into();
+        let corner = |i: u32| Vec3A::from(data.positions[i as usize]);
         let box_of = |t: usize| {
             data.triangles[t]
                 .iter()
-                .fold(Bounds::EMPTY, |b, &i| b.grow(positions[i as usize]))
+                .fold(Bounds::EMPTY, |b, &i| b.grow(corner(i)))
         };
         let bvh = Bvh::build_by(data.triangles.len(), box_of, builder);
-        let mut triangles = crate::mem::huge_vec(bvh.len());
-        bvh.order()
-            .par_iter()
-            .map(|&i| data.triangles[i as usize])
-            .collect_into_vec(&mut triangles);
         let materials = if data.triangle_materials.is_empty() {
             Vec::new()
         } else {
@@ -96,6 +93,7 @@ impl MeshGeom {
         // The blocks, and the mesh's bounds from the corners on the way (a pass of its own over
         // every triangle's corners took 6-10 ms of a 2M-triangle build).
         let leaves = bvh.leaves();
+        let order = bvh.order();
         let mut blocks: Vec<Block> = crate::mem::huge_vec(leaves.len());
         let bounds = blocks.spare_capacity_mut()[..leaves.len()]
             .par_iter_mut()
@@ -104,8 +102,8 @@ impl MeshGeom {
                 let mut corners = [[Vec3A::ZERO; 3]; 4];
                 let range = l.first as usize..(l.first + l.count) as usize;
                 let mut b = Bounds::EMPTY;
-                for (c, t) in corners.iter_mut().zip(&triangles[range]) {
-                    *c = t.map(|i| positions[i as usize]);
+                for (c, &t) in corners.iter_mut().zip(&order[range]) {
+                    *c = data.triangles[t as usize].map(corner);
                     b = c.iter().fold(b, |b, &p| b.grow(p));
                 }
                 slot.write(Block {
@@ -119,10 +117,7 @@ impl MeshGeom {
         // SAFETY: the loop above wrote each of the first `leaves.len()` slots.
         unsafe { blocks.set_len(leaves.len()) };
         MeshGeom {
-            positions,
-            normals: data.normals.iter().map(|&n| n.into()).collect(),
-            uvs: data.uvs.clone(),
-            triangles,
+            data,
             materials,
             bvh,
             bounds,
@@ -131,13 +126,42 @@ impl MeshGeom {
         }
     }
 
+    /// Returns the mesh's data: attributes, and triangles in the file's order.
+    pub fn data(&self) -> &MeshData {
+        &self.data
+    }
+
+    /// Returns the number of triangles.
+    pub fn len(&self) -> usize {
+        self.data.triangles.len()
+    }
+
+    /// Returns true when the mesh has no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.data.triangles.is_empty()
+    }
+
+    /// Returns the vertex indices of the triangle with BVH-order index `prim` (what a hit names).
+    #[inline]
+    pub fn triangle(&self, prim: u32) -> [u32; 3] {
+        self.data.triangles[self.bvh.order()[prim as usize] as usize]
+    }
+
+    /// Returns the corners of the triangle with BVH-order index `prim`, in object space.
+    #[inline]
+    pub fn corners(&self, prim: u32) -> [Vec3A; 3] {
+        self.triangle(prim)
+            .map(|i| Vec3A::from(self.data.positions[i as usize]))
+    }
+
     /// Returns area-weighted vertex normals (computed once, on first call), for meshes whose file
     /// has none; oriented like the faces' `(v1 − v0) × (v2 − v0)`.
     pub fn smooth_normals(&self) -> &[Vec3A] {
         self.smooth.get_or_init(|| {
-            let mut acc = vec![Vec3A::ZERO; self.positions.len()];
-            for t in &self.triangles {
-                let [a, b, c] = t.map(|i| self.positions[i as usize]);
+            let positions = &self.data.positions;
+            let mut acc = vec![Vec3A::ZERO; positions.len()];
+            for t in &self.data.triangles {
+                let [a, b, c] = t.map(|i| Vec3A::from(positions[i as usize]));
                 let n = (b - a).cross(c - a); // length = twice the area: area weighting
                 for &i in t {
                     acc[i as usize] += n;
@@ -153,10 +177,10 @@ impl MeshGeom {
     }
 
     /// Returns what is wrong with the mesh's BVH, if anything: the wide BVH's checks
-    /// ([`Bvh::validate`]) over its triangles' boxes, in BVH order as `triangles` holds them.
+    /// ([`Bvh::validate`]) over its triangles' boxes, in BVH order.
     pub fn validate(&self) -> Result<(), String> {
         let box_at = |j: usize| {
-            let [a, b, c] = self.triangles[j].map(|k| self.positions[k as usize]);
+            let [a, b, c] = self.corners(j as u32);
             Bounds {
                 min: a.min(b).min(c),
                 max: a.max(b).max(c),

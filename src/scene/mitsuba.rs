@@ -600,28 +600,30 @@ impl Obj<'_> {
     /// Writes the file to `path`.
     fn write(&self, path: &Path) -> Result<()> {
         let mesh = self.mesh;
-        let mut s = String::with_capacity(mesh.positions.len() * 40 + mesh.triangles.len() * 24);
-        for p in &mesh.positions {
-            let q = self.world_from_object.transform_point3a(*p);
+        let data = mesh.data();
+        let mut s = String::with_capacity(data.positions.len() * 40 + data.triangles.len() * 24);
+        for p in &data.positions {
+            let q = self.world_from_object.transform_point3(*p);
             let _ = writeln!(s, "v {} {} {}", q.x, q.y, q.z);
         }
-        for n in &mesh.normals {
-            let q = (self.normal_to_world * *n).normalize_or_zero();
+        for n in &data.normals {
+            let q = (self.normal_to_world * glam::Vec3A::from(*n)).normalize_or_zero();
             let _ = writeln!(s, "vn {} {} {}", q.x, q.y, q.z);
         }
-        for uv in &mesh.uvs {
+        for uv in &data.uvs {
             let _ = writeln!(s, "vt {} {}", uv.x, 1.0 - uv.y);
         }
-        let with_normals = !mesh.normals.is_empty();
-        let with_uvs = !mesh.uvs.is_empty();
-        for (i, t) in mesh.triangles.iter().enumerate() {
+        let with_normals = !data.normals.is_empty();
+        let with_uvs = !data.uvs.is_empty();
+        // In BVH order, the order of `materials`.
+        for i in 0..mesh.len() {
             if self
                 .material
                 .is_some_and(|m| mesh.materials.get(i) != Some(&m))
             {
                 continue;
             }
-            let [a, b, c] = t.map(|i| i + 1);
+            let [a, b, c] = mesh.triangle(i as u32).map(|i| i + 1);
             if with_normals && with_uvs {
                 let _ = writeln!(s, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
             } else if with_uvs {

@@ -116,7 +116,7 @@ impl Scene {
         let normal = match inst.shape {
             Shape::Mesh(m) => {
                 let mesh = &self.meshes[m as usize];
-                let [a, b, c] = mesh.triangles[h.prim as usize].map(|v| mesh.positions[v as usize]);
+                let [a, b, c] = mesh.corners(h.prim);
                 (b - a).cross(c - a)
             }
             Shape::Analytic(_) | Shape::Csg(_) => h.normal,
@@ -187,27 +187,27 @@ impl Scene {
         let (p_obj, ng_obj, ns_obj, uv, dpdu) = match inst.shape {
             Shape::Mesh(m) => {
                 let mesh = &self.meshes[m as usize];
-                let idx = mesh.triangles[hit.prim as usize];
-                let [v0, v1, v2] = idx.map(|i| mesh.positions[i as usize]);
+                let idx = mesh.triangle(hit.prim);
+                let data = mesh.data();
+                let [v0, v1, v2] = idx.map(|i| Vec3A::from(data.positions[i as usize]));
                 let w0 = 1.0 - hit.b1 - hit.b2;
                 let p = v0 * w0 + v1 * hit.b1 + v2 * hit.b2;
                 let ng = triangle::geometric_normal(v0, v1, v2);
                 // Perlin noise needs a continuous base normal: smooth normals when the file has none.
-                let normals = if mesh.normals.is_empty() && perlin {
-                    mesh.smooth_normals()
-                } else {
-                    &mesh.normals
-                };
-                let ns = if normals.is_empty() {
-                    ng
-                } else {
+                let ns = if !data.normals.is_empty() {
+                    let [n0, n1, n2] = idx.map(|i| Vec3A::from(data.normals[i as usize]));
+                    n0 * w0 + n1 * hit.b1 + n2 * hit.b2
+                } else if perlin {
+                    let normals = mesh.smooth_normals();
                     let [n0, n1, n2] = idx.map(|i| normals[i as usize]);
                     n0 * w0 + n1 * hit.b1 + n2 * hit.b2
+                } else {
+                    ng
                 };
-                let [t0, t1, t2] = if mesh.uvs.is_empty() {
+                let [t0, t1, t2] = if data.uvs.is_empty() {
                     [Vec2::ZERO, Vec2::X, Vec2::Y]
                 } else {
-                    idx.map(|i| mesh.uvs[i as usize])
+                    idx.map(|i| data.uvs[i as usize])
                 };
                 let uv = t0 * w0 + t1 * hit.b1 + t2 * hit.b2;
                 (p, ng, ns, uv, triangle_dpdu([v0, v1, v2], [t0, t1, t2]))

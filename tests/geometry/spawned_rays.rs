@@ -121,9 +121,10 @@ impl Solid<'_> {
             .meshes
             .iter()
             .map(|m| {
-                let p: Vec<DVec3> = m.positions.iter().map(|v| v.as_dvec3()).collect();
+                let p: Vec<DVec3> = m.data().positions.iter().map(|v| v.as_dvec3()).collect();
                 let centre = p.iter().sum::<DVec3>() / p.len() as f64;
-                m.triangles
+                m.data()
+                    .triangles
                     .iter()
                     .map(|t| {
                         let [a, b, c] = t.map(|i| p[i as usize]);
@@ -580,11 +581,9 @@ fn box_mesh_far_face_is_hit_from_inside_at_scale_1e5_offset_1e6() {
         &scene.meshes[0],
     );
     let shear = caustic::geometry::triangle::RayShear::new(&local);
-    let brute = mesh
-        .triangles
-        .iter()
-        .filter_map(|t| {
-            let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+    let brute = (0..mesh.len() as u32)
+        .filter_map(|i| {
+            let [a, b, c] = mesh.corners(i);
             caustic::geometry::triangle::intersect(&shear, a, b, c, 0.0, f32::INFINITY)
         })
         .map(|h| h.t)

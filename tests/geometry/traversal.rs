@@ -93,13 +93,13 @@ fn assert_bounds(data: &MeshData, geom: &MeshGeom) {
         caustic::accel::Builder::Ploc,
         caustic::accel::Builder::BinnedSah,
     ] {
-        let other = MeshGeom::with_builder(data, 0, builder);
+        let other = MeshGeom::with_builder(data.clone(), 0, builder);
         assert_eq!(other.validate(), Ok(()), "the {builder:?} BVH");
     }
 }
 
 fn check_agreement(data: &MeshData, rays: &[Ray]) -> usize {
-    let mut geom = MeshGeom::new(data, 0);
+    let mut geom = MeshGeom::new(data.clone(), 0);
     assert_bounds(data, &geom);
     let mut first: Option<Vec<_>> = None;
     let mut hits = 0;
@@ -167,8 +167,7 @@ fn assert_streams_agree(geom: &MeshGeom, rays: &[Ray], results: &[RayResult], ke
                             panic!("{what}: hit or miss differs from ray by ray");
                         };
                         assert_eq!(h.t.to_bits(), t, "{what}: t differs");
-                        let [a, b, c] =
-                            geom.triangles[tri as usize].map(|v| geom.positions[v as usize]);
+                        let [a, b, c] = geom.corners(tri);
                         let own = triangle::intersect(
                             &RayShear::new(&rays[k]),
                             a,
@@ -373,7 +372,7 @@ fn large_height_field_matches_brute_force_and_builds_alike_on_one_and_two_thread
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| MeshGeom::new(&data, 0))
+        pool.install(|| MeshGeom::new(data.clone(), 0))
     };
     let (one, two) = (build(1), build(2));
     assert_eq!(one.validate(), Ok(()));
@@ -424,7 +423,7 @@ fn streams_over_a_single_triangle_and_empty_streams() {
         ],
         vec![[0, 1, 2]],
     );
-    let geom = MeshGeom::new(&data, 0);
+    let geom = MeshGeom::new(data.clone(), 0);
     let mut rng = Rng(23);
     let rays: Vec<Ray> = (0..50)
         .map(|_| {
@@ -471,7 +470,7 @@ fn camera_ray_packets_match_single_rays() {
 #[test]
 fn rays_at_closed_cube_vertices_and_edges_never_escape() {
     let data = closed_cube(24);
-    let mut geom = MeshGeom::new(&data, 0);
+    let mut geom = MeshGeom::new(data.clone(), 0);
     let aims = targets(&data, |_| true);
     let mut rng = Rng(3);
     let (mut rays, mut escaped, mut pass) = (0, 0, 0);
@@ -497,7 +496,7 @@ fn rays_at_closed_cube_vertices_and_edges_never_escape() {
 #[test]
 fn rays_at_height_field_vertices_and_edges_never_escape() {
     let data = height_field(129);
-    let mut geom = MeshGeom::new(&data, 0);
+    let mut geom = MeshGeom::new(data.clone(), 0);
     // Interior targets only: a ray aimed at the outer boundary may pass outside the mesh.
     let aims = targets(&data, |q| q.x.abs() < 0.999 && q.z.abs() < 0.999);
     let mut rng = Rng(5);

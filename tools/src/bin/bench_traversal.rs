@@ -55,6 +55,7 @@ use glam::Vec3A;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Rays per parallel work item: large enough to amortise scheduling, small enough to balance.
@@ -199,7 +200,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let o = parse_args()?;
     let ftz = clock::enable_ftz_daz();
     let t0 = Instant::now();
-    let data = read_mesh(&o.mesh)?;
+    let data = Arc::new(read_mesh(&o.mesh)?);
     let sets = o
         .rays
         .iter()
@@ -364,7 +365,7 @@ fn quality(builder: Builder, kernel: Kernel) -> String {
 /// Times [`MeshGeom::with_builder`] on one thread (process CPU time) and on all threads (wall time),
 /// prints a `BUILD` line for each and returns the last BVH built.
 fn build(
-    data: &MeshData,
+    data: &Arc<MeshData>,
     mesh: &str,
     builder: Builder,
     quality: &str,
@@ -379,8 +380,8 @@ fn build(
             drop(geom.take());
             let (c0, w0) = (clock::process_cpu_s(), Instant::now());
             let g = match pool {
-                Some(p) => p.install(|| MeshGeom::with_builder(data, 0, builder)),
-                None => MeshGeom::with_builder(data, 0, builder),
+                Some(p) => p.install(|| MeshGeom::with_builder(Arc::clone(data), 0, builder)),
+                None => MeshGeom::with_builder(Arc::clone(data), 0, builder),
             };
             wall.push(w0.elapsed().as_secs_f64());
             cpu.push(clock::process_cpu_s() - c0);
@@ -411,8 +412,8 @@ fn build(
 /// Returns the bytes only the tracer needs (BVH nodes, BVH-order index, tracer-only triangle
 /// data: `accel_MB`) and the bytes of the attributes shading shares (positions, vertex indices).
 fn sizes(g: &MeshGeom) -> (usize, usize) {
-    let shared = std::mem::size_of_val(g.positions.as_slice())
-        + std::mem::size_of_val(g.triangles.as_slice());
+    let shared = std::mem::size_of_val(g.data().positions.as_slice())
+        + std::mem::size_of_val(g.data().triangles.as_slice());
     (g.bvh.bytes() + g.tracer_bytes(), shared)
 }
 

@@ -40,6 +40,22 @@ pub fn check_regular(path: &Path) -> io::Result<()> {
     ))
 }
 
+/// Opens the regular file `path` for reading: checked before it is opened ([`check_regular`]:
+/// a FIFO is never opened) and again once open, so a file swapped for a special one in between
+/// is refused too.
+pub fn open_regular(path: &Path) -> io::Result<std::fs::File> {
+    check_regular(path)?;
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("{} ({REGULAR_ONLY})", kind(&meta)),
+        ));
+    }
+    Ok(file)
+}
+
 /// Returns the bytes of the regular file `path` ([`check_regular`]).
 pub fn read_regular(path: &Path) -> io::Result<Vec<u8>> {
     check_regular(path)?;

@@ -93,12 +93,16 @@ pub use write::write_gltf;
 use crate::budget::Account;
 use crate::geometry::mesh::{MeshData, MeshEmitter, MeshMaterial, MeshPbr};
 use crate::material::pbr::Reflectance;
-use buffer::{load_buffers, read_indices, read_uvs, read_vec3, split_glb};
+use buffer::{
+    Buffer, glb_chunks, load_buffers, read_indices, read_triangle_list, read_uvs, read_vec3,
+    split_glb,
+};
 use glam::{DAffine3, DMat3, DQuat, DVec3, Vec2, Vec3};
 use gltf::json::validation::Checked;
 use gltf::mesh::Mode;
 use gltf::{Document, Semantic};
 use images::Images;
+use std::borrow::Cow;
 use std::io;
 use std::path::{Path, PathBuf};
 
@@ -142,11 +146,7 @@ pub fn load_gltf(path: &Path) -> Result<MeshData, GltfError> {
 
 /// [`load_gltf`], charging each primitive's triangles to `account` before they are read.
 pub fn load_gltf_with(path: &Path, account: &Account) -> Result<MeshData, GltfError> {
-    let bytes = crate::files::read_regular(path).map_err(|error| GltfError::Read {
-        path: path.to_owned(),
-        error,
-    })?;
-    parse_gltf_with(&bytes, path, account)
+    load_gltf_mesh_with(path, None, account)
 }
 
 /// Parses glTF JSON or GLB bytes already in memory; `path` names the file in messages and
@@ -166,7 +166,9 @@ pub fn parse_gltf_with(
     path: &Path,
     account: &Account,
 ) -> Result<MeshData, GltfError> {
-    parse_part(bytes, path, account, None)
+    let (doc, bin) = open_document(bytes, path)?;
+    let bin = bin.map(|b| Buffer::Bytes(Cow::Borrowed(b)));
+    parse_part(&doc, bin, path, account, None)
 }
 
 /// Reads glTF mesh `mesh` of the file at `path` alone, in the mesh's own frame (no node
@@ -178,17 +180,16 @@ pub fn load_gltf_mesh_with(
     mesh: Option<u32>,
     account: &Account,
 ) -> Result<MeshData, GltfError> {
-    let bytes = crate::files::read_regular(path).map_err(|error| GltfError::Read {
-        path: path.to_owned(),
-        error,
-    })?;
-    parse_part(&bytes, path, account, mesh)
+    let (json, bin) = read_head(path)?;
+    let (doc, _) = open_document(&json, path)?;
+    parse_part(&doc, bin, path, account, mesh)
 }
 
 /// Reads the file's default scene with every node's transform baked in (`only` is `None`), or
 /// glTF mesh `only` alone in its own frame.
 fn parse_part(
-    bytes: &[u8],
+    doc: &Document,
+    bin: Option<Buffer>,
     path: &Path,
     account: &Account,
     only: Option<u32>,
@@ -197,16 +198,15 @@ fn parse_part(
         path: path.to_owned(),
         message,
     };
-    let (doc, bin) = open_document(bytes, path)?;
     let dir = path.parent().unwrap_or(Path::new(""));
-    let buffers = load_buffers(&doc, bin, dir, account.read_scope()).map_err(invalid)?;
-    let mut images = Images::new(&doc, &buffers, path, dir, account);
+    let buffers = load_buffers(doc, bin, dir, account.read_scope()).map_err(invalid)?;
+    let mut images = Images::new(doc, &buffers, path, dir, account);
     let mut parts = Vec::new();
     let (mut emitters, mut emitted) = (Vec::new(), 0);
     let mut default_material = None;
     // Each mesh to read, with its transform and where it is placed, for messages.
     let placed: Vec<(gltf::Mesh, DAffine3, String)> = match only {
-        None => placements(&doc)
+        None => placements(doc)
             .map_err(invalid)?
             .into_iter()
             .filter_map(|(node, world)| {
@@ -264,7 +264,7 @@ fn parse_part(
             parts.push(part);
         }
     }
-    let mut mesh = merge(parts, default_material, &doc, &mut images, path).map_err(invalid)?;
+    let mut mesh = merge(parts, default_material, doc, &mut images, path).map_err(invalid)?;
     mesh.emitters = emitters;
     Ok(mesh)
 }
@@ -315,15 +315,58 @@ fn material_name(m: &gltf::Material) -> String {
     }
 }
 
-/// Reads the glTF file at `path` whole (a regular file) and returns its validated document and
-/// the file's length in bytes, for what needs the document but not the GLB's binary chunk.
+/// Reads the glTF file at `path` (a regular file) and returns its validated document and the
+/// file's length in bytes, for what needs the document but not the GLB's binary chunk (which
+/// is not read).
 fn read_document(path: &Path) -> Result<(Document, u64), GltfError> {
-    let bytes = crate::files::read_regular(path).map_err(|error| GltfError::Read {
+    let size = std::fs::metadata(path).map_or(0, |m| m.len());
+    let (json, _) = read_head(path)?;
+    let (doc, _) = open_document(&json, path)?;
+    Ok((doc, size))
+}
+
+/// Reads what a glTF file on disk needs read up front: the whole of a `.gltf` (JSON), or a
+/// GLB's JSON chunk, its `BIN` chunk left in the file as a [`Buffer::File`] that accessors
+/// read in runs (see [`buffer`]'s module doc).
+fn read_head(path: &Path) -> Result<(Vec<u8>, Option<Buffer<'static>>), GltfError> {
+    use std::io::{Read, Seek, SeekFrom};
+    let cannot = |error: io::Error| GltfError::Read {
         path: path.to_owned(),
         error,
+    };
+    let mut file = crate::files::open_regular(path).map_err(cannot)?;
+    let size = file.metadata().map_err(cannot)?.len();
+    let mut magic = [0; 4];
+    let glb = file.read_exact(&mut magic).is_ok() && &magic == buffer::GLB_MAGIC;
+    file.rewind().map_err(cannot)?;
+    if !glb {
+        let mut text = Vec::new();
+        file.read_to_end(&mut text).map_err(cannot)?;
+        return Ok((text, None));
+    }
+    let read = |at: u64, len: usize| -> io::Result<Vec<u8>> {
+        let mut f = &file;
+        let mut out = vec![0; len];
+        f.seek(SeekFrom::Start(at))?;
+        f.read_exact(&mut out)?;
+        Ok(out)
+    };
+    let word = |at: usize| {
+        let b = read(at as u64, 4).ok()?;
+        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let size = usize::try_from(size).unwrap_or(usize::MAX);
+    let (json, bin) = glb_chunks(size, word).map_err(|message| GltfError::Invalid {
+        path: path.to_owned(),
+        message,
     })?;
-    let (doc, _) = open_document(&bytes, path)?;
-    Ok((doc, bytes.len() as u64))
+    let json = read(json.start as u64, json.len()).map_err(cannot)?;
+    let bin = bin.map(|b| Buffer::File {
+        file: std::sync::Mutex::new(file),
+        offset: b.start as u64,
+        len: b.len(),
+    });
+    Ok((json, bin))
 }
 
 /// Returns the validated document of glTF JSON or GLB `bytes` and the GLB's binary chunk, if
@@ -505,7 +548,7 @@ struct Part {
 }
 
 /// Reads one primitive, or `None` for points and lines; checks every index against the vertices.
-fn read_primitive(prim: &gltf::Primitive, buffers: &[Vec<u8>]) -> Result<Option<Part>, String> {
+fn read_primitive(prim: &gltf::Primitive, buffers: &[Buffer]) -> Result<Option<Part>, String> {
     let mode = prim.mode();
     if !matches!(
         mode,
@@ -534,21 +577,20 @@ fn read_primitive(prim: &gltf::Primitive, buffers: &[Vec<u8>]) -> Result<Option<
     let uvs = attribute(Semantic::TexCoords(0), "TEXCOORD_0")?
         .map(|a| read_uvs(&a, buffers))
         .transpose()?;
-    let indices = match prim.indices() {
-        Some(a) => read_indices(&a, buffers)?,
+    let triangles = match prim.indices() {
+        // The common case read straight into triangles: no list of single indices is made.
+        Some(a) if mode == Mode::Triangles => read_triangle_list(&a, buffers, count)?,
+        Some(a) => assemble(mode, &read_indices(&a, buffers, count)?),
         None if count > u32::MAX as usize => {
             return Err(format!("has {count} vertices, more than 4294967295"));
         }
-        None => (0..count as u32).collect(),
+        None => assemble(mode, &(0..count as u32).collect::<Vec<_>>()),
     };
-    if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
-        return Err(format!("index {bad} out of range ({count} vertices)"));
-    }
     Ok(Some(Part {
         positions,
         normals,
         uvs,
-        triangles: assemble(mode, &indices),
+        triangles,
         material: prim.material().index(),
     }))
 }
@@ -607,10 +649,28 @@ fn merge(
         source: path.to_owned(),
         ..Default::default()
     };
-    for part in parts {
+    for mut part in parts {
         let base = mesh.positions.len();
         if base + part.positions.len() > u32::MAX as usize {
             return Err("mesh has more than 4294967295 vertices".to_owned());
+        }
+        if mesh.positions.is_empty() && mesh.triangles.is_empty() {
+            // The first part's arrays become the mesh's, moved, not copied: a file of one
+            // primitive (most large ones) is never held twice.
+            mesh.positions = std::mem::take(&mut part.positions);
+            if has_normals {
+                mesh.normals = part.normals.take().unwrap_or_default();
+            }
+            if has_uvs {
+                let n = mesh.positions.len();
+                mesh.uvs = part.uvs.take().unwrap_or_else(|| vec![Vec2::ZERO; n]);
+            }
+            mesh.triangles = std::mem::take(&mut part.triangles);
+            if has_materials {
+                let m = part.material.unwrap_or(default_index) as u32;
+                mesh.triangle_materials = vec![m; mesh.triangles.len()];
+            }
+            continue;
         }
         let base = base as u32;
         mesh.positions.extend(&part.positions);

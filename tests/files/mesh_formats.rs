@@ -744,3 +744,90 @@ fn one_wave_mesh_as_obj_and_gltf_loads_and_renders_identically() {
         .count();
     assert!(distinct > images[0].len() / 2, "{distinct}");
 }
+
+/// A GLB on disk is read in runs of a few MiB (its BIN chunk is never read whole, see
+/// `io::gltf`'s buffer module); what it gives must be what the same bytes give in memory, and
+/// what the file holds: here an interleaved view (positions and normals 24 bytes apart) of 6 MB
+/// and 6 MB of `u32` indices, each read in two runs whose edges fall inside an element's
+/// stride; and a container that lies about its size on disk is refused as in memory.
+#[test]
+fn glb_files_stream_in_runs_and_read_as_in_memory() {
+    let n = 500u32;
+    let (vertices, cells) = (n * n, (n - 1) * (n - 1));
+    let mut bin = Vec::new();
+    let position = |i: u32| {
+        vec3(
+            (i % n) as f32 * 0.01,
+            ((i * 7) % 13) as f32 * 0.001,
+            (i / n) as f32 * 0.01,
+        )
+    };
+    let normal = |i: u32| vec3(0.0, 1.0, (i % 3) as f32).normalize();
+    for i in 0..vertices {
+        for v in [position(i), normal(i)] {
+            bin.extend(v.to_array().iter().flat_map(|f| f.to_le_bytes()));
+        }
+    }
+    let mut triangles = Vec::new();
+    for c in 0..cells {
+        let (x, z) = (c % (n - 1), c / (n - 1));
+        let a = z * n + x;
+        triangles.extend([[a, a + n, a + 1], [a + 1, a + n, a + n + 1]]);
+    }
+    bin.extend(triangles.iter().flatten().flat_map(|i| i.to_le_bytes()));
+    let vbytes = vertices as usize * 24;
+    let max = position(vertices - 1);
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}},"indices":2}}]}}],
+        "buffers":[{{"byteLength":{}}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{vbytes},"byteStride":24}},
+                       {{"buffer":0,"byteOffset":{vbytes},"byteLength":{}}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":{vertices},"type":"VEC3","min":[0,0,0],"max":[{},0.012,{}]}},
+                     {{"bufferView":0,"byteOffset":12,"componentType":5126,"count":{vertices},"type":"VEC3"}},
+                     {{"bufferView":1,"componentType":5125,"count":{},"type":"SCALAR"}}]}}"#,
+        bin.len(),
+        bin.len() - vbytes,
+        max.x,
+        max.z,
+        triangles.len() * 3
+    );
+    let bytes = crate::common::glb(&json, &bin);
+    assert!(
+        vbytes > 4 << 20 && bin.len() - vbytes > 4 << 20,
+        "each accessor spans two runs"
+    );
+    let dir = out_dir("glb_streaming");
+    let path = dir.join("grid.glb");
+    std::fs::write(&path, &bytes).unwrap();
+    let from_file = load_gltf(&path).unwrap();
+    let from_memory = parse_gltf(&bytes, &path).unwrap();
+    assert_same_mesh(&from_file, &from_memory);
+    assert_eq!(from_file.triangles, triangles);
+    assert_eq!(from_file.positions.len(), vertices as usize);
+    for i in [0, 1, 174_761, 174_762, 174_763, vertices / 2, vertices - 1] {
+        assert_eq!(from_file.positions[i as usize], position(i), "position {i}");
+        assert_eq!(from_file.normals[i as usize], normal(i), "normal {i}");
+    }
+    // The container's faults, on disk as in memory.
+    let cut = dir.join("cut.glb");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let e = load_gltf(&cut).unwrap_err().to_string();
+    assert!(
+        e.starts_with(&format!(
+            "{}: truncated GLB file: header says",
+            cut.display()
+        )),
+        "{e}"
+    );
+    // A whole container whose BIN chunk holds 8 bytes of the buffer's 12 MB.
+    let bin_len_at = 12 + 8 + u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut short_chunk = bytes[..bin_len_at + 16].to_vec();
+    short_chunk[bin_len_at..bin_len_at + 4].copy_from_slice(&8u32.to_le_bytes());
+    let total = (short_chunk.len() as u32).to_le_bytes();
+    short_chunk[8..12].copy_from_slice(&total);
+    let lying = dir.join("lying.glb");
+    std::fs::write(&lying, &short_chunk).unwrap();
+    let e = load_gltf(&lying).unwrap_err().to_string();
+    assert!(e.contains("buffer 0 declares"), "{e}");
+}

@@ -4,11 +4,20 @@
 //! Nothing here trusts the file: every offset, length, stride and count is checked with
 //! overflow-free arithmetic before a byte is read, and faults come back as messages that the
 //! caller prefixes with the file name.
+//!
+//! A load streams: a GLB's `BIN` chunk and an external `.bin` file stay on disk
+//! ([`Buffer::File`]) and an accessor is read in runs of [`RUN_BYTES`], each decoded into the
+//! mesh before the next is read, so a load never holds a file's bytes and the mesh made of them
+//! at once (a 943 MB GLB of 33.5M triangles peaked at 3.5 GiB when it was read whole and its
+//! `BIN` chunk copied out). Data URIs, and a file handed over in memory, are [`Buffer::Bytes`].
 
 use base64::Engine;
 use glam::{Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
+use std::borrow::Cow;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 /// The `glTF` magic that opens every GLB file.
 pub const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -23,40 +32,122 @@ fn u32_at(bytes: &[u8], at: usize) -> Option<u32> {
 
 /// Splits a GLB file into its JSON chunk and optional `BIN` chunk.
 pub fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
+    let (json, bin) = glb_chunks(bytes.len(), |at| u32_at(bytes, at))?;
+    Ok((&bytes[json], bin.map(|b| &bytes[b])))
+}
+
+/// Returns where a GLB file's JSON chunk and optional `BIN` chunk lie, from the little-endian
+/// words `word(at)` reads (`None` past the end) of a file of `size` bytes: the container is
+/// checked without reading the chunks themselves, so a file on disk need not be read whole.
+pub fn glb_chunks(
+    size: usize,
+    word: impl Fn(usize) -> Option<u32>,
+) -> Result<(Range<usize>, Option<Range<usize>>), String> {
     let truncated = || "truncated GLB file".to_owned();
-    let version = u32_at(bytes, 4).ok_or_else(truncated)?;
+    let version = word(4).ok_or_else(truncated)?;
     if version != 2 {
         return Err(format!(
             "GLB version {version} is not supported (glTF 2.0 only)"
         ));
     }
-    let length = u32_at(bytes, 8).ok_or_else(truncated)? as usize;
-    if length > bytes.len() {
+    let length = word(8).ok_or_else(truncated)? as usize;
+    if length > size {
         return Err(format!(
-            "truncated GLB file: header says {length} bytes, file has {}",
-            bytes.len()
+            "truncated GLB file: header says {length} bytes, file has {size}"
         ));
     }
-    let bytes = &bytes[..length];
     let mut chunks = Vec::new();
     let mut at = 12;
-    while at < bytes.len() {
-        let len = u32_at(bytes, at).ok_or_else(truncated)? as usize;
-        let kind = u32_at(bytes, at + 4).ok_or_else(truncated)?;
+    while at < length {
+        let len = word(at).ok_or_else(truncated)? as usize;
+        let kind = word(at + 4).ok_or_else(truncated)?;
         let start = at + 8;
-        let data = start
+        let end = start
             .checked_add(len)
-            .and_then(|end| bytes.get(start..end))
+            .filter(|&end| end <= length)
             .ok_or_else(|| format!("truncated GLB file: chunk at byte {at} runs past the end"))?;
-        chunks.push((kind, data));
-        at = start + len;
+        // Only the first two chunks are read; the rest are checked for size only.
+        if chunks.len() < 2 {
+            chunks.push((kind, start..end));
+        }
+        at = end;
     }
     match chunks.as_slice() {
         [(CHUNK_JSON, json), rest @ ..] => {
-            let bin = rest.first().filter(|(k, _)| *k == CHUNK_BIN).map(|c| c.1);
-            Ok((json, bin))
+            let bin = rest
+                .first()
+                .filter(|(k, _)| *k == CHUNK_BIN)
+                .map(|c| c.1.clone());
+            Ok((json.clone(), bin))
         }
         _ => Err("GLB file does not start with a JSON chunk".to_owned()),
+    }
+}
+
+/// Bytes of an accessor read and decoded at a time from a file: small enough that a run adds
+/// nothing to a load's peak, large enough that the reads cost nothing beside the decoding.
+pub const RUN_BYTES: usize = 4 << 20;
+
+/// A glTF buffer's bytes: in memory, or a span of a file read where an accessor or an image asks.
+pub enum Buffer<'a> {
+    /// A data URI's decoded bytes, or a GLB's `BIN` chunk of a file handed over in memory.
+    Bytes(Cow<'a, [u8]>),
+    /// `len` bytes of `file` from byte `offset`: a GLB's `BIN` chunk, or an external buffer.
+    File {
+        file: Mutex<std::fs::File>,
+        offset: u64,
+        len: usize,
+    },
+}
+
+impl Buffer<'_> {
+    /// Returns the file `path`'s bytes `offset..offset + len` (or, with `len` None, all of them
+    /// from `offset`) as a buffer, without reading them; `path` must be a regular file.
+    pub fn file(path: &Path, offset: u64, len: Option<usize>) -> std::io::Result<Buffer<'static>> {
+        let file = crate::files::open_regular(path)?;
+        let size = file.metadata()?.len();
+        let len = len.unwrap_or(size.saturating_sub(offset) as usize);
+        if offset.saturating_add(len as u64) > size {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::UnexpectedEof,
+                "the file is shorter than its header says",
+            ));
+        }
+        Ok(Buffer::File {
+            file: Mutex::new(file),
+            offset,
+            len,
+        })
+    }
+
+    /// Returns the buffer's length in bytes.
+    pub fn len(&self) -> usize {
+        match self {
+            Buffer::Bytes(b) => b.len(),
+            Buffer::File { len, .. } => *len,
+        }
+    }
+
+    /// Returns bytes `start..start + len` of the buffer, which the caller has checked lie
+    /// inside it; a file that shrank since it was opened is an error, not a panic.
+    pub fn read(&self, start: usize, len: usize) -> Result<Cow<'_, [u8]>, String> {
+        match self {
+            Buffer::Bytes(b) => b
+                .get(start..start.saturating_add(len))
+                .map(Cow::Borrowed)
+                .ok_or_else(|| format!("bytes {start}..+{len} lie outside the buffer")),
+            Buffer::File { file, offset, .. } => {
+                use std::io::{Read, Seek, SeekFrom};
+                let mut out = vec![0; len];
+                let mut file = file
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                file.seek(SeekFrom::Start(offset + start as u64))
+                    .and_then(|_| file.read_exact(&mut out))
+                    .map_err(|e| format!("cannot read bytes {start}..+{len} of the file: {e}"))?;
+                Ok(Cow::Owned(out))
+            }
+        }
     }
 }
 
@@ -90,20 +181,20 @@ pub fn uri_path(uri: &str, dir: &Path) -> Option<PathBuf> {
     (!uri.starts_with("data:")).then(|| dir.join(percent_decode(uri)))
 }
 
-/// Loads every buffer of the document; `bin` is the GLB `BIN` chunk, if any; a buffer file
-/// must lie in `scope`.
-pub fn load_buffers(
+/// Returns every buffer of the document; `bin` is the GLB `BIN` chunk, if any; a buffer file
+/// must lie in `scope` (it is opened, not read).
+pub fn load_buffers<'a>(
     doc: &gltf::Document,
-    bin: Option<&[u8]>,
+    mut bin: Option<Buffer<'a>>,
     dir: &Path,
     scope: &crate::files::ReadScope,
-) -> Result<Vec<Vec<u8>>, String> {
+) -> Result<Vec<Buffer<'a>>, String> {
     let mut out = Vec::new();
     for buffer in doc.buffers() {
         let i = buffer.index();
         let data = match buffer.source() {
-            gltf::buffer::Source::Bin => match (i, bin) {
-                (0, Some(bin)) => bin.to_vec(),
+            gltf::buffer::Source::Bin => match (i, bin.take()) {
+                (0, Some(bin)) => bin,
                 _ => {
                     return Err(format!(
                         "buffer {i} has no uri and there is no GLB BIN chunk"
@@ -111,12 +202,14 @@ pub fn load_buffers(
                 }
             },
             gltf::buffer::Source::Uri(uri) => match uri.strip_prefix("data:") {
-                Some(data) => decode_data_uri(data).map_err(|e| format!("buffer {i}: {e}"))?,
+                Some(data) => Buffer::Bytes(Cow::Owned(
+                    decode_data_uri(data).map_err(|e| format!("buffer {i}: {e}"))?,
+                )),
                 None => {
                     let file = dir.join(percent_decode(uri));
                     scope
                         .check(&file)
-                        .and_then(|()| crate::files::read_regular(&file))
+                        .and_then(|()| Buffer::file(&file, 0, None))
                         .map_err(|e| format!("buffer {i}: cannot read {}: {e}", file.display()))?
                 }
             },
@@ -165,7 +258,7 @@ fn type_name(dims: Dimensions, data: DataType) -> String {
     format!("{dims} of {data}")
 }
 
-/// One accessor's elements, checked to lie inside their buffer view and buffer.
+/// A run of an accessor's elements, in memory.
 struct Elements<'b> {
     bytes: &'b [u8],
     stride: usize,
@@ -181,8 +274,49 @@ impl<'b> Elements<'b> {
     }
 }
 
-/// Checks an accessor against the loaded buffers and returns its elements.
-fn elements<'b>(acc: &gltf::Accessor, buffers: &'b [Vec<u8>]) -> Result<Elements<'b>, String> {
+/// An accessor's elements, checked to lie inside their buffer view and buffer: `count`
+/// elements of `size` bytes, `stride` apart, from byte `start` of `buffer`.
+struct Span<'b, 'a> {
+    buffer: &'b Buffer<'a>,
+    start: usize,
+    stride: usize,
+    size: usize,
+    count: usize,
+}
+
+impl Span<'_, '_> {
+    /// Calls `each` on the elements in order, a run of at most [`RUN_BYTES`] at a time, with
+    /// the index of the run's first element; stops at the first error.
+    fn runs(
+        &self,
+        mut each: impl FnMut(usize, &Elements) -> Result<(), String>,
+    ) -> Result<(), String> {
+        let per_run = (RUN_BYTES / self.stride.max(1)).max(1);
+        let mut first = 0;
+        while first < self.count {
+            let count = per_run.min(self.count - first);
+            let len = (count - 1) * self.stride + self.size;
+            let bytes = self.buffer.read(self.start + first * self.stride, len)?;
+            each(
+                first,
+                &Elements {
+                    bytes: &bytes,
+                    stride: self.stride,
+                    size: self.size,
+                    count,
+                },
+            )?;
+            first += count;
+        }
+        Ok(())
+    }
+}
+
+/// Checks an accessor against the buffers and returns where its elements lie.
+fn elements<'b, 'a>(
+    acc: &gltf::Accessor,
+    buffers: &'b [Buffer<'a>],
+) -> Result<Span<'b, 'a>, String> {
     let i = acc.index();
     if acc.sparse().is_some() {
         return Err(format!("accessor {i} is sparse (not supported)"));
@@ -198,18 +332,17 @@ fn elements<'b>(acc: &gltf::Accessor, buffers: &'b [Vec<u8>]) -> Result<Elements
             view.index()
         ));
     }
-    let data = buffers
-        .get(view.buffer().index())
-        .map_or(&[][..], Vec::as_slice);
+    let buffer = buffers.get(view.buffer().index());
+    let data_len = buffer.map_or(0, Buffer::len);
     let view_end = view.offset().checked_add(view.length());
-    let Some(view_bytes) = view_end.and_then(|end| data.get(view.offset()..end)) else {
+    let (Some(buffer), Some(_)) = (buffer, view_end.filter(|&end| end <= data_len)) else {
         return Err(format!(
             "buffer view {} (bytes {}..+{}) lies outside buffer {} ({} bytes)",
             view.index(),
             view.offset(),
             view.length(),
             view.buffer().index(),
-            data.len()
+            data_len
         ));
     };
     let count = acc.count();
@@ -221,8 +354,9 @@ fn elements<'b>(acc: &gltf::Accessor, buffers: &'b [Vec<u8>]) -> Result<Elements
             .and_then(|b| b.checked_add(acc.offset())),
     };
     match needed {
-        Some(end) if end <= view_bytes.len() => Ok(Elements {
-            bytes: &view_bytes[acc.offset().min(view_bytes.len())..],
+        Some(end) if end <= view.length() => Ok(Span {
+            buffer,
+            start: view.offset() + acc.offset().min(view.length()),
             stride,
             size,
             count,
@@ -231,7 +365,7 @@ fn elements<'b>(acc: &gltf::Accessor, buffers: &'b [Vec<u8>]) -> Result<Elements
             "accessor {i} ({count} elements from byte {}) runs past the end of buffer view {} ({} bytes)",
             acc.offset(),
             view.index(),
-            view_bytes.len()
+            view.length()
         )),
     }
 }
@@ -252,7 +386,7 @@ fn component(bytes: &[u8], k: usize, data: DataType) -> f32 {
 /// Reads a `VEC3` of `FLOAT` accessor (positions, normals); `what` names it in messages.
 pub fn read_vec3(
     acc: &gltf::Accessor,
-    buffers: &[Vec<u8>],
+    buffers: &[Buffer],
     what: &str,
 ) -> Result<Vec<Vec3>, String> {
     let (dims, data) = (acc.dimensions(), acc.data_type());
@@ -263,36 +397,41 @@ pub fn read_vec3(
             type_name(dims, data)
         ));
     }
-    let e = elements(acc, buffers)?;
-    let v: Vec<Vec3> = (0..e.count)
-        .map(|i| {
+    let span = elements(acc, buffers)?;
+    let mut v = Vec::with_capacity(span.count);
+    span.runs(|first, e| {
+        for i in 0..e.count {
             let b = e.get(i);
-            Vec3::new(
+            let p = Vec3::new(
                 component(b, 0, data),
                 component(b, 1, data),
                 component(b, 2, data),
-            )
-        })
-        .collect();
-    if let Some(bad) = v.iter().position(|p| !p.is_finite()) {
-        return Err(format!(
-            "{what} {bad} of accessor {} is not finite",
-            acc.index()
-        ));
-    }
-    if what == "position"
-        && let Some((bad, e)) = v
-            .iter()
-            .enumerate()
-            .find_map(|(i, p)| crate::range::coordinate(p.to_array()).err().map(|e| (i, e)))
-    {
-        return Err(format!("position {bad} of accessor {}: {e}", acc.index()));
-    }
+            );
+            if !p.is_finite() {
+                return Err(format!(
+                    "{what} {} of accessor {} is not finite",
+                    first + i,
+                    acc.index()
+                ));
+            }
+            if what == "position"
+                && let Err(e) = crate::range::coordinate(p.to_array())
+            {
+                return Err(format!(
+                    "position {} of accessor {}: {e}",
+                    first + i,
+                    acc.index()
+                ));
+            }
+            v.push(p);
+        }
+        Ok(())
+    })?;
     Ok(v)
 }
 
 /// Reads a `VEC2` texture-coordinate accessor: `FLOAT`, or normalised `UNSIGNED_BYTE`/`SHORT`.
-pub fn read_uvs(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<Vec2>, String> {
+pub fn read_uvs(acc: &gltf::Accessor, buffers: &[Buffer]) -> Result<Vec<Vec2>, String> {
     let (dims, data) = (acc.dimensions(), acc.data_type());
     let float = data == DataType::F32;
     let unorm = acc.normalized() && matches!(data, DataType::U8 | DataType::U16);
@@ -303,21 +442,64 @@ pub fn read_uvs(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<Vec2>, 
             type_name(dims, data)
         ));
     }
-    let e = elements(acc, buffers)?;
-    let v: Vec<Vec2> = (0..e.count)
-        .map(|i| Vec2::new(component(e.get(i), 0, data), component(e.get(i), 1, data)))
-        .collect();
-    match v.iter().position(|t| !t.is_finite()) {
-        Some(bad) => Err(format!(
-            "texture coordinate {bad} of accessor {} is not finite",
-            acc.index()
-        )),
-        None => Ok(v),
-    }
+    let span = elements(acc, buffers)?;
+    let mut v = Vec::with_capacity(span.count);
+    span.runs(|first, e| {
+        for i in 0..e.count {
+            let t = Vec2::new(component(e.get(i), 0, data), component(e.get(i), 1, data));
+            if !t.is_finite() {
+                return Err(format!(
+                    "texture coordinate {} of accessor {} is not finite",
+                    first + i,
+                    acc.index()
+                ));
+            }
+            v.push(t);
+        }
+        Ok(())
+    })?;
+    Ok(v)
 }
 
-/// Reads a `SCALAR` index accessor of `UNSIGNED_BYTE`, `UNSIGNED_SHORT` or `UNSIGNED_INT`.
-pub fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
+/// Reads a `SCALAR` index accessor of `UNSIGNED_BYTE`, `UNSIGNED_SHORT` or `UNSIGNED_INT`,
+/// each index checked to be below `vertices`.
+pub fn read_indices(
+    acc: &gltf::Accessor,
+    buffers: &[Buffer],
+    vertices: usize,
+) -> Result<Vec<u32>, String> {
+    let span = index_span(acc, buffers)?;
+    let mut out = Vec::with_capacity(span.count);
+    each_index(&span, acc.data_type(), vertices, |i| out.push(i))?;
+    Ok(out)
+}
+
+/// Reads a `TRIANGLES` primitive's index accessor straight into triangles (surplus indices
+/// ignored), each index checked to be below `vertices`: no list of single indices is made.
+pub fn read_triangle_list(
+    acc: &gltf::Accessor,
+    buffers: &[Buffer],
+    vertices: usize,
+) -> Result<Vec<[u32; 3]>, String> {
+    let span = index_span(acc, buffers)?;
+    let mut out = Vec::with_capacity(span.count / 3);
+    let (mut corner, mut k) = ([0; 3], 0);
+    each_index(&span, acc.data_type(), vertices, |i| {
+        corner[k] = i;
+        k += 1;
+        if k == 3 {
+            out.push(corner);
+            k = 0;
+        }
+    })?;
+    Ok(out)
+}
+
+/// Checks that an index accessor is `SCALAR` of unsigned integers and returns its elements.
+fn index_span<'b, 'a>(
+    acc: &gltf::Accessor,
+    buffers: &'b [Buffer<'a>],
+) -> Result<Span<'b, 'a>, String> {
     let (dims, data) = (acc.dimensions(), acc.data_type());
     if dims != Dimensions::Scalar || !matches!(data, DataType::U8 | DataType::U16 | DataType::U32) {
         return Err(format!(
@@ -326,17 +508,31 @@ pub fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32
             type_name(dims, data)
         ));
     }
-    let e = elements(acc, buffers)?;
-    Ok((0..e.count)
-        .map(|i| {
+    elements(acc, buffers)
+}
+
+/// Calls `each` on every index of `span` (of type `data`) in order, after checking it.
+fn each_index(
+    span: &Span,
+    data: DataType,
+    vertices: usize,
+    mut each: impl FnMut(u32),
+) -> Result<(), String> {
+    span.runs(|_, e| {
+        for i in 0..e.count {
             let b = e.get(i);
-            match data {
+            let index = match data {
                 DataType::U8 => b[0] as u32,
                 DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as u32,
                 _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+            };
+            if index as usize >= vertices {
+                return Err(format!("index {index} out of range ({vertices} vertices)"));
             }
-        })
-        .collect())
+            each(index);
+        }
+        Ok(())
+    })
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@
 //! the image, which the caller prefixes with the material and the texture, and the loader with
 //! the file.
 
-use super::buffer::{decode_data_uri, uri_path};
+use super::buffer::{Buffer, decode_data_uri, uri_path};
 use crate::budget::Account;
 use crate::geometry::mesh::ImageSource;
 use crate::material::texture::{Texture, header_size};
@@ -29,7 +29,7 @@ enum Bytes<'a> {
 /// The images of one glTF document, found as its materials ask for them.
 pub(super) struct Images<'a> {
     doc: &'a gltf::Document,
-    buffers: &'a [Vec<u8>],
+    buffers: &'a [Buffer<'a>],
     /// The glTF file, which embedded images name.
     path: &'a Path,
     /// The folder relative URIs are resolved against.
@@ -46,7 +46,7 @@ impl<'a> Images<'a> {
     /// embedded bytes copied out are charged to `account`.
     pub fn new(
         doc: &'a gltf::Document,
-        buffers: &'a [Vec<u8>],
+        buffers: &'a [Buffer<'a>],
         path: &'a Path,
         dir: &'a Path,
         account: &'a Account,
@@ -75,20 +75,22 @@ impl<'a> Images<'a> {
             let view = self.doc.views().nth(index.value()).ok_or_else(|| {
                 format!("image {i}: buffer view {} does not exist", index.value())
             })?;
-            let buffers: &'a [Vec<u8>] = self.buffers;
-            let data = buffers
-                .get(view.buffer().index())
-                .map_or(&[][..], Vec::as_slice);
+            let buffers: &'a [Buffer<'a>] = self.buffers;
+            let buffer = buffers.get(view.buffer().index());
+            let len = buffer.map_or(0, Buffer::len);
             let end = view.offset().checked_add(view.length());
-            return match end.and_then(|end| data.get(view.offset()..end)) {
-                Some(bytes) => Ok(Bytes::Embedded(Cow::Borrowed(bytes))),
-                None => Err(format!(
+            return match (buffer, end.filter(|&end| end <= len)) {
+                (Some(buffer), Some(_)) => buffer
+                    .read(view.offset(), view.length())
+                    .map(Bytes::Embedded)
+                    .map_err(|e| format!("image {i}: {e}")),
+                _ => Err(format!(
                     "image {i}: buffer view {} (bytes {}..+{}) lies outside buffer {} ({} bytes)",
                     view.index(),
                     view.offset(),
                     view.length(),
                     view.buffer().index(),
-                    data.len()
+                    len
                 )),
             };
         }

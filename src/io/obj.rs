@@ -33,7 +33,8 @@ pub use write::write_obj;
 use crate::budget::Account;
 use crate::geometry::mesh::MeshData;
 use glam::{Vec2, Vec3};
-use std::io;
+use std::io::{self, BufRead, Seek};
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::str::SplitWhitespace;
 
@@ -64,12 +65,19 @@ pub fn load_obj(path: &Path) -> Result<MeshData, ObjError> {
 }
 
 /// [`load_obj`], charging what the mesh takes to `account` before it is parsed.
+///
+/// The file is streamed, never held whole: a first pass over its lines counts what the mesh
+/// will take (charged before anything is parsed) and vets face indices, a second feeds tobj
+/// line by line, and only a fault reads it again to find its line. A 33.5M-triangle OBJ is
+/// about 1.5 GB of text, which reading it whole added to the load's peak.
 pub fn load_obj_with(path: &Path, account: &Account) -> Result<MeshData, ObjError> {
-    let bytes = crate::files::read_regular(path).map_err(|error| ObjError::Read {
+    let read = |error: io::Error| ObjError::Read {
         path: path.to_owned(),
         error,
-    })?;
-    parse_obj_with(&String::from_utf8_lossy(&bytes), path, account)
+    };
+    let file = crate::files::open_regular(path).map_err(read)?;
+    let source = Source::File(&file);
+    parse_source(&source, path, account)
 }
 
 /// Parses OBJ text already in memory into one mesh; `path` names the file in messages and
@@ -84,19 +92,139 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<MeshData, ObjError> {
 
 /// [`parse_obj`], charging what the mesh takes to `account` before it is parsed.
 pub fn parse_obj_with(text: &str, path: &Path, account: &Account) -> Result<MeshData, ObjError> {
-    // tobj would read `\u{FEFF}v 0 0 0` as an unknown statement and lose the first vertex.
-    let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
-    let (triangles, bytes) = estimate_bytes(text);
-    let what = format!("its {triangles} triangles");
+    parse_source(&Source::Text(text), path, account)
+}
+
+/// Where the OBJ text comes from: a string in memory, or a file read line by line.
+enum Source<'a> {
+    Text(&'a str),
+    File(&'a std::fs::File),
+}
+
+impl Source<'_> {
+    /// Calls `each` on every line (1-based number, text without its line ending; bytes that
+    /// are not UTF-8 replaced; a leading byte-order mark dropped) until it breaks.
+    fn lines(&self, mut each: impl FnMut(usize, &str) -> ControlFlow<()>) -> io::Result<()> {
+        match self {
+            Source::Text(text) => {
+                for (i, line) in strip_bom(text).lines().enumerate() {
+                    if each(i + 1, line).is_break() {
+                        break;
+                    }
+                }
+                Ok(())
+            }
+            Source::File(file) => {
+                let mut reader = io::BufReader::new(*file);
+                reader.seek(io::SeekFrom::Start(0))?;
+                let mut buf = Vec::new();
+                let mut number = 0;
+                loop {
+                    buf.clear();
+                    if reader.read_until(b'\n', &mut buf)? == 0 {
+                        return Ok(());
+                    }
+                    number += 1;
+                    let line = String::from_utf8_lossy(&buf);
+                    let line = if number == 1 { strip_bom(&line) } else { &line };
+                    let line = line.strip_suffix('\n').unwrap_or(line);
+                    let line = line.strip_suffix('\r').unwrap_or(line);
+                    if each(number, line).is_break() {
+                        return Ok(());
+                    }
+                }
+            }
+        }
+    }
+
+    /// Returns the text as tobj reads it: every line, UTF-8 (lossy), byte-order mark dropped.
+    fn reader(&self) -> io::Result<Box<dyn BufRead + '_>> {
+        Ok(match self {
+            Source::Text(text) => Box::new(strip_bom(text).as_bytes()),
+            Source::File(file) => {
+                let mut reader = io::BufReader::new(*file);
+                reader.seek(io::SeekFrom::Start(0))?;
+                Box::new(Utf8Lines {
+                    inner: reader,
+                    line: Vec::new(),
+                    at: 0,
+                    first: true,
+                })
+            }
+        })
+    }
+}
+
+/// Drops a leading byte-order mark: tobj would read `\u{FEFF}v 0 0 0` as an unknown statement
+/// and lose the first vertex.
+fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{FEFF}').unwrap_or(text)
+}
+
+/// A reader of a file's lines made valid UTF-8 (bytes that are not are replaced), one line
+/// at a time, for tobj, which stops at invalid UTF-8; a valid line is passed on as read.
+struct Utf8Lines<R> {
+    inner: R,
+    /// The current line, and how much of it has been consumed.
+    line: Vec<u8>,
+    at: usize,
+    first: bool,
+}
+
+impl<R: BufRead> io::Read for Utf8Lines<R> {
+    fn read(&mut self, out: &mut [u8]) -> io::Result<usize> {
+        let line = self.fill_buf()?;
+        let n = out.len().min(line.len());
+        out[..n].copy_from_slice(&line[..n]);
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+impl<R: BufRead> BufRead for Utf8Lines<R> {
+    fn fill_buf(&mut self) -> io::Result<&[u8]> {
+        if self.at == self.line.len() {
+            self.line.clear();
+            self.at = 0;
+            self.inner.read_until(b'\n', &mut self.line)?;
+            if std::mem::take(&mut self.first) && self.line.starts_with("\u{FEFF}".as_bytes()) {
+                self.at = 3;
+            }
+            if std::str::from_utf8(&self.line).is_err() {
+                self.line = String::from_utf8_lossy(&self.line)
+                    .into_owned()
+                    .into_bytes();
+            }
+        }
+        Ok(&self.line[self.at..])
+    }
+
+    fn consume(&mut self, n: usize) {
+        self.at = (self.at + n).min(self.line.len());
+    }
+}
+
+/// Parses the OBJ text of `source` (see [`load_obj_with`] for the passes a file takes).
+fn parse_source(source: &Source, path: &Path, account: &Account) -> Result<MeshData, ObjError> {
+    let read = |error: io::Error| ObjError::Read {
+        path: path.to_owned(),
+        error,
+    };
+    let held = match source {
+        Source::Text(text) => text.len() as u64,
+        Source::File(..) => 0,
+    };
+    let survey = survey(source, held).map_err(read)?;
+    if survey.unsafe_index {
+        return Err(locate(source, path, "face index out of range"));
+    }
+    let what = format!("its {} triangles", survey.triangles);
     account
-        .try_charge(bytes, what)
+        .try_charge(survey.bytes, what)
         .map_err(|e| ObjError::Mesh {
             path: path.to_owned(),
             message: e.to_string(),
         })?;
-    if has_unsafe_index(text) {
-        return Err(locate(text, path, "face index out of range"));
-    }
     #[allow(clippy::needless_update)] // tobj's optional features add more fields.
     let options = tobj::LoadOptions {
         single_index: true,
@@ -107,22 +235,29 @@ pub fn parse_obj_with(text: &str, path: &Path, account: &Account) -> Result<Mesh
     };
     let libraries =
         mtl::MtlLoader::new(path.parent().unwrap_or(Path::new("")), account.read_scope());
+    let mut reader = source.reader().map_err(read)?;
     let (models, materials) =
-        tobj::load_obj_buf(&mut text.as_bytes(), &options, |name| libraries.load(name))
-            .map_err(|e| locate(text, path, &e.to_string()))?;
+        tobj::load_obj_buf(&mut reader, &options, |name| libraries.load(name))
+            .map_err(|e| locate(source, path, &e.to_string()))?;
+    drop(reader);
     if let Some(fault) = libraries.fault.into_inner() {
         return Err(fault);
     }
-    let mut mesh = merge(&models, path)?;
+    let mut mesh = MeshData {
+        source: path.to_owned(),
+        ..Default::default()
+    };
     mtl::attach(&mut mesh, &models, &materials.unwrap_or_default());
+    merge(&mut mesh, models, path)?;
     if let Some(what) = first_unusable(&mesh) {
-        return Err(locate(text, path, what));
+        return Err(locate(source, path, what));
     }
     Ok(mesh)
 }
 
-/// Merges tobj's models into one mesh, keeping normals and uvs all-or-nothing.
-fn merge(models: &[tobj::Model], path: &Path) -> Result<MeshData, ObjError> {
+/// Merges tobj's models into `mesh`, keeping normals and uvs all-or-nothing; each model is
+/// dropped once copied, so the load holds at most one model's arrays beside the mesh.
+fn merge(mesh: &mut MeshData, models: Vec<tobj::Model>, path: &Path) -> Result<(), ObjError> {
     let fault = |message: &str| ObjError::Mesh {
         path: path.to_owned(),
         message: message.to_owned(),
@@ -133,10 +268,6 @@ fn merge(models: &[tobj::Model], path: &Path) -> Result<MeshData, ObjError> {
     let has_uvs = models
         .iter()
         .all(|m| m.mesh.texcoords.len() * 3 == m.mesh.positions.len() * 2);
-    let mut mesh = MeshData {
-        source: path.to_owned(),
-        ..Default::default()
-    };
     for model in models {
         let m = &model.mesh;
         let base = mesh.positions.len();
@@ -171,7 +302,7 @@ fn merge(models: &[tobj::Model], path: &Path) -> Result<MeshData, ObjError> {
             mesh.triangles.push(triangle);
         }
     }
-    Ok(mesh)
+    Ok(())
 }
 
 /// Names the first kind of non-finite or out-of-range value stored in the mesh, if any.
@@ -194,20 +325,30 @@ fn first_unusable(mesh: &MeshData) -> Option<&'static str> {
 }
 
 /// Builds an error for the first faulty line, or `fallback` when none is found.
-fn locate(text: &str, path: &Path, fallback: &str) -> ObjError {
+fn locate(source: &Source, path: &Path, fallback: &str) -> ObjError {
     let mut counts = Counts::default();
-    for (number, line) in text.lines().enumerate() {
-        if let Err(message) = check_line(line, &mut counts) {
-            return ObjError::Line {
-                path: path.to_owned(),
-                line: number + 1,
-                message,
-            };
+    let mut found = None;
+    let scanned = source.lines(|number, line| match check_line(line, &mut counts) {
+        Err(message) => {
+            found = Some((number, message));
+            ControlFlow::Break(())
         }
-    }
-    ObjError::Mesh {
-        path: path.to_owned(),
-        message: fallback.to_owned(),
+        Ok(()) => ControlFlow::Continue(()),
+    });
+    match (found, scanned) {
+        (Some((line, message)), _) => ObjError::Line {
+            path: path.to_owned(),
+            line,
+            message,
+        },
+        (None, Err(error)) => ObjError::Read {
+            path: path.to_owned(),
+            error,
+        },
+        (None, Ok(())) => ObjError::Mesh {
+            path: path.to_owned(),
+            message: fallback.to_owned(),
+        },
     }
 }
 
@@ -219,55 +360,57 @@ struct Counts {
     vn: usize,
 }
 
-/// Returns the triangles the faces of `text` make and the bytes reading it takes: the text
-/// (and its copy), tobj's index per corner, a vertex per distinct corner (at most one per
-/// `v`, `vt` or `vn` statement) in tobj's arrays and in ours, and a triangle in each.
-fn estimate_bytes(text: &str) -> (u64, u64) {
-    let (mut corners, mut triangles, mut statements) = (0u64, 0u64, 0u64);
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v" | "vt" | "vn") => statements += 1,
-            Some("f" | "l") => {
-                let n = words.count() as u64;
-                corners += n;
-                triangles += n.saturating_sub(2);
-            }
-            _ => {}
-        }
-    }
-    let vertex = 2 * (size_of::<Vec3>() * 2 + size_of::<Vec2>()) as u64;
-    let bytes = 2 * text.len() as u64
-        + corners * size_of::<u32>() as u64
-        + corners.min(statements) * vertex
-        + triangles * 2 * size_of::<[u32; 3]>() as u64;
-    (triangles, bytes)
+/// What a first pass over the text finds before tobj reads it.
+struct Survey {
+    /// The triangles the faces make.
+    triangles: u64,
+    /// The bytes reading the text takes: `held` bytes of text in memory, tobj's index per
+    /// corner, a vertex per distinct corner (at most one per `v`, `vt` or `vn` statement) in
+    /// tobj's arrays and in ours, and a triangle in each.
+    bytes: u64,
+    /// Whether a face uses a zero, relative or huge index that is invalid: tobj computes such
+    /// indices with unchecked arithmetic (which can overflow for texture and normal indices)
+    /// or silently drops them, so they are checked here first; ordinary positive indices are
+    /// left to tobj. This runs on every file, so it only splits off each line's keyword.
+    unsafe_index: bool,
 }
 
-/// Reports whether a face uses a zero, relative or huge index that is invalid.
-///
-/// tobj computes such indices with unchecked arithmetic (which can overflow
-/// for texture and normal indices) or silently drops them, so they are checked
-/// here first; ordinary positive indices are left to tobj. This runs on every
-/// file, so it only splits off each line's keyword.
-fn has_unsafe_index(text: &str) -> bool {
+/// Surveys the text of `source` in one pass (see [`Survey`]); `held` bytes of it are in memory.
+fn survey(source: &Source, held: u64) -> io::Result<Survey> {
+    let (mut corners, mut triangles, mut statements) = (0u64, 0u64, 0u64);
     let mut counts = Counts::default();
-    for line in text.lines() {
+    let mut unsafe_index = false;
+    source.lines(|_, line| {
         let line = line.trim_start();
         let (keyword, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
         match keyword {
             "v" => counts.v += 1,
             "vt" => counts.vt += 1,
             "vn" => counts.vn += 1,
-            "f" | "l"
-                if is_unusual(rest) && check_face(rest.split_whitespace(), &counts).is_err() =>
-            {
-                return true;
+            "f" | "l" => {
+                let n = rest.split_whitespace().count() as u64;
+                corners += n;
+                triangles += n.saturating_sub(2);
+                if is_unusual(rest) && check_face(rest.split_whitespace(), &counts).is_err() {
+                    unsafe_index = true;
+                    return ControlFlow::Break(());
+                }
             }
             _ => {}
         }
-    }
-    false
+        ControlFlow::Continue(())
+    })?;
+    statements += (counts.v + counts.vt + counts.vn) as u64;
+    let vertex = 2 * (size_of::<Vec3>() * 2 + size_of::<Vec2>()) as u64;
+    let bytes = held
+        + corners * size_of::<u32>() as u64
+        + corners.min(statements) * vertex
+        + triangles * 2 * size_of::<[u32; 3]>() as u64;
+    Ok(Survey {
+        triangles,
+        bytes,
+        unsafe_index,
+    })
 }
 
 /// Reports whether some index in a face's corners is signed, starts with `0` or

@@ -831,3 +831,48 @@ fn glb_files_stream_in_runs_and_read_as_in_memory() {
     let e = load_gltf(&lying).unwrap_err().to_string();
     assert!(e.contains("buffer 0 declares"), "{e}");
 }
+
+/// An OBJ file is streamed line by line (never held whole); it must read as the same text
+/// parsed in memory does: a byte-order mark, CRLF and bare LF endings, bytes that are not
+/// UTF-8 in a comment and a group name, no final newline, normals and uvs, and a fault's line
+/// number, found by reading the file again.
+#[test]
+fn obj_files_stream_and_read_as_in_memory() {
+    use caustic::io::obj::parse_obj;
+    let dir = out_dir("obj_streaming");
+    let mut text = b"\xEF\xBB\xBFv 0 0 0\r\nv 1 0 0\nv 0 1 0\r\n# caf\xE9 \xFF\xFE\n".to_vec();
+    for i in 0..2000 {
+        text.extend(format!("v {} {} 0.5\n", i as f32 * 0.001, (i % 7) as f32 * 0.1).as_bytes());
+    }
+    text.extend(b"vt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\ng gr\xC3\x28oup\r\n");
+    for i in 4..2000 {
+        text.extend(format!("f {}/1/1 {}/2/1 {}/3/1\n", i, i + 1, i + 2).as_bytes());
+    }
+    text.extend(b"f 1/1/1 2/2/1 3/3/1");
+    let path = dir.join("streamed.obj");
+    std::fs::write(&path, &text).unwrap();
+    let from_file = load_obj(&path).unwrap();
+    let from_memory = parse_obj(&String::from_utf8_lossy(&text), &path).unwrap();
+    assert_same_mesh(&from_file, &from_memory);
+    assert_eq!(from_file.triangles.len(), 1997);
+    assert_eq!(from_file.positions.len(), from_file.normals.len());
+    // The last vertex a face uses (the 1998th `v` of the loop; vertices no face uses are dropped).
+    let last = Vec3::new(1997.0 * 0.001, (1997 % 7) as f32 * 0.1, 0.5);
+    assert!(from_file.positions.contains(&last));
+    // A fault on the last line, which tobj reports and a third pass over the file locates.
+    let mut bad = text.clone();
+    bad.extend(b"\nf 1 2 99999\n");
+    std::fs::write(&path, &bad).unwrap();
+    let error = |r: Result<_, caustic::io::obj::ObjError>| match r {
+        Ok(_) => panic!("an out-of-range face index was accepted"),
+        Err(e) => e.to_string(),
+    };
+    let on_disk = error(load_obj(&path));
+    let in_memory = error(parse_obj(&String::from_utf8_lossy(&bad), &path));
+    assert_eq!(on_disk, in_memory);
+    let line = bad.iter().filter(|&&b| b == b'\n').count();
+    assert!(
+        on_disk.starts_with(&format!("{}:{line}: ", path.display())),
+        "{on_disk}"
+    );
+}

@@ -25,7 +25,7 @@
 //! `$CAUSTIC_CACHE` when set, else `.cache` in the script's folder (ignored by git). The file is
 //! written to a temporary name and renamed ([`crate::files::write_replacing`]), so tiles of a farm
 //! generating it at once never read half a file. The parameters are those of
-//! [`WaveParams`]; `n` is bounded here by [`MAX_SCRIPT_N`] (8M triangles), the tool allows more.
+//! [`WaveParams`]; `n` is bounded here by [`MAX_SCRIPT_N`] (33.6M triangles), the tool allows more.
 
 use super::State;
 use crate::desc::MeshId;
@@ -38,8 +38,9 @@ use std::path::PathBuf;
 /// Bumped whenever [`wave_mesh`] or the glTF writer changes what a parameter table produces.
 pub const GENERATOR_VERSION: u64 = 1;
 
-/// Largest grid side a script may ask for: 2·2048² ≈ 8.4M triangles, about 200 MB of file.
-pub const MAX_SCRIPT_N: u32 = 2049;
+/// Largest grid side a script may ask for: 2·4096² ≈ 33.6M triangles, about 940 MB of file
+/// (the pool surface of issue 39; each new file is also charged to the memory budget).
+pub const MAX_SCRIPT_N: u32 = 4097;
 
 /// The keys `gr.water_mesh`'s table accepts, as the message for an unknown one lists them.
 const KEYS: &[&str] = &[

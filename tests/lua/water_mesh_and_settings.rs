@@ -62,8 +62,8 @@ fn water_mesh_writes_the_generator_output_once_per_parameter_set() {
 fn water_mesh_rejects_bad_tables_naming_the_key() {
     let dir = out_dir("water-mesh-errors");
     let cases = [
-        ("{n = 1}", "'n' must be a whole number in 2..=2049"),
-        ("{n = 5000}", "'n' must be a whole number in 2..=2049"),
+        ("{n = 1}", "'n' must be a whole number in 2..=4097"),
+        ("{n = 5000}", "'n' must be a whole number in 2..=4097"),
         ("{n = 2.5}", "'n' must be a whole number"),
         ("{size = -1}", "'size' must be in (0, 1e6]"),
         (

@@ -56,9 +56,12 @@ pub fn glb_chunks(
             "truncated GLB file: header says {length} bytes, file has {size}"
         ));
     }
+    // Only the first two chunks matter (JSON, then BIN); later ones are ignored unread, as
+    // glTF asks of chunks a reader does not know. Walking them would let a file of millions of
+    // empty chunks cost two reads each from disk.
     let mut chunks = Vec::new();
     let mut at = 12;
-    while at < length {
+    while at < length && chunks.len() < 2 {
         let len = word(at).ok_or_else(truncated)? as usize;
         let kind = word(at + 4).ok_or_else(truncated)?;
         let start = at + 8;
@@ -66,10 +69,7 @@ pub fn glb_chunks(
             .checked_add(len)
             .filter(|&end| end <= length)
             .ok_or_else(|| format!("truncated GLB file: chunk at byte {at} runs past the end"))?;
-        // Only the first two chunks are read; the rest are checked for size only.
-        if chunks.len() < 2 {
-            chunks.push((kind, start..end));
-        }
+        chunks.push((kind, start..end));
         at = end;
     }
     match chunks.as_slice() {
@@ -573,5 +573,23 @@ mod tests {
         assert!(split_glb(&short).unwrap_err().contains("runs past the end"));
         let whole = glb(28, b"{}      ");
         assert_eq!(split_glb(&whole).unwrap(), (&b"{}      "[..], None));
+        // Chunks after the JSON and BIN chunks are never read: a third chunk claiming more
+        // bytes than the file has, then a million empty ones, change nothing.
+        let mut more = glb(0, b"{}      ");
+        more.extend(4u32.to_le_bytes());
+        more.extend(CHUNK_BIN.to_le_bytes());
+        more.extend([1, 2, 3, 4]);
+        more.extend(u32::MAX.to_le_bytes());
+        more.extend(b"XTRA");
+        for _ in 0..1_000_000 {
+            more.extend([0u8; 4]);
+            more.extend(b"NONE");
+        }
+        let total = (more.len() as u32).to_le_bytes();
+        more[8..12].copy_from_slice(&total);
+        assert_eq!(
+            split_glb(&more).unwrap(),
+            (&b"{}      "[..], Some(&[1u8, 2, 3, 4][..]))
+        );
     }
 }

@@ -103,36 +103,24 @@ enum Source<'a> {
 
 impl Source<'_> {
     /// Calls `each` on every line (1-based number, text without its line ending; bytes that
-    /// are not UTF-8 replaced; a leading byte-order mark dropped) until it breaks.
+    /// are not UTF-8 replaced; a leading byte-order mark dropped) until it breaks: the lines
+    /// tobj reads ([`Source::reader`]), split as `str::lines` splits them.
     fn lines(&self, mut each: impl FnMut(usize, &str) -> ControlFlow<()>) -> io::Result<()> {
-        match self {
-            Source::Text(text) => {
-                for (i, line) in strip_bom(text).lines().enumerate() {
-                    if each(i + 1, line).is_break() {
-                        break;
-                    }
-                }
-                Ok(())
+        let mut reader = self.reader()?;
+        let mut line = String::new();
+        let mut number = 0;
+        loop {
+            line.clear();
+            if reader.read_line(&mut line)? == 0 {
+                return Ok(());
             }
-            Source::File(file) => {
-                let mut reader = io::BufReader::new(*file);
-                reader.seek(io::SeekFrom::Start(0))?;
-                let mut buf = Vec::new();
-                let mut number = 0;
-                loop {
-                    buf.clear();
-                    if reader.read_until(b'\n', &mut buf)? == 0 {
-                        return Ok(());
-                    }
-                    number += 1;
-                    let line = String::from_utf8_lossy(&buf);
-                    let line = if number == 1 { strip_bom(&line) } else { &line };
-                    let line = line.strip_suffix('\n').unwrap_or(line);
-                    let line = line.strip_suffix('\r').unwrap_or(line);
-                    if each(number, line).is_break() {
-                        return Ok(());
-                    }
-                }
+            number += 1;
+            let text = match line.strip_suffix('\n') {
+                Some(text) => text.strip_suffix('\r').unwrap_or(text),
+                None => &line,
+            };
+            if each(number, text).is_break() {
+                return Ok(());
             }
         }
     }

@@ -329,44 +329,25 @@ fn read_document(path: &Path) -> Result<(Document, u64), GltfError> {
 /// GLB's JSON chunk, its `BIN` chunk left in the file as a [`Buffer::File`] that accessors
 /// read in runs (see [`buffer`]'s module doc).
 fn read_head(path: &Path) -> Result<(Vec<u8>, Option<Buffer<'static>>), GltfError> {
-    use std::io::{Read, Seek, SeekFrom};
-    let cannot = |error: io::Error| GltfError::Read {
-        path: path.to_owned(),
-        error,
-    };
-    let mut file = crate::files::open_regular(path).map_err(cannot)?;
-    let size = file.metadata().map_err(cannot)?.len();
-    let mut magic = [0; 4];
-    let glb = file.read_exact(&mut magic).is_ok() && &magic == buffer::GLB_MAGIC;
-    file.rewind().map_err(cannot)?;
-    if !glb {
-        let mut text = Vec::new();
-        file.read_to_end(&mut text).map_err(cannot)?;
-        return Ok((text, None));
-    }
-    let read = |at: u64, len: usize| -> io::Result<Vec<u8>> {
-        let mut f = &file;
-        let mut out = vec![0; len];
-        f.seek(SeekFrom::Start(at))?;
-        f.read_exact(&mut out)?;
-        Ok(out)
-    };
-    let word = |at: usize| {
-        let b = read(at as u64, 4).ok()?;
-        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    };
-    let size = usize::try_from(size).unwrap_or(usize::MAX);
-    let (json, bin) = glb_chunks(size, word).map_err(|message| GltfError::Invalid {
+    let invalid = |message: String| GltfError::Invalid {
         path: path.to_owned(),
         message,
+    };
+    let file = Buffer::file(path).map_err(|error| GltfError::Read {
+        path: path.to_owned(),
+        error,
     })?;
-    let json = read(json.start as u64, json.len()).map_err(cannot)?;
-    let bin = bin.map(|b| Buffer::File {
-        file: std::sync::Mutex::new(file),
-        offset: b.start as u64,
-        len: b.len(),
-    });
-    Ok((json, bin))
+    let word = |at: usize| buffer::u32_at(&file.read(at, 4).ok()?, 0);
+    if file.read(0, 4).ok().as_deref() != Some(&buffer::GLB_MAGIC[..]) {
+        let text = file.read(0, file.len()).map_err(invalid)?.into_owned();
+        return Ok((text, None));
+    }
+    let (json, bin) = glb_chunks(file.len(), word).map_err(invalid)?;
+    let json = file
+        .read(json.start, json.len())
+        .map_err(invalid)?
+        .into_owned();
+    Ok((json, bin.map(|b| file.span(b))))
 }
 
 /// Returns the validated document of glTF JSON or GLB `bytes` and the GLB's binary chunk, if

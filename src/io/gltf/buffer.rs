@@ -25,7 +25,7 @@ const CHUNK_JSON: u32 = 0x4E4F_534A;
 const CHUNK_BIN: u32 = 0x004E_4942;
 
 /// Reads a little-endian `u32` at `at`, or `None` past the end.
-fn u32_at(bytes: &[u8], at: usize) -> Option<u32> {
+pub fn u32_at(bytes: &[u8], at: usize) -> Option<u32> {
     let b = bytes.get(at..at.checked_add(4)?)?;
     Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
 }
@@ -100,24 +100,33 @@ pub enum Buffer<'a> {
     },
 }
 
-impl Buffer<'_> {
-    /// Returns the file `path`'s bytes `offset..offset + len` (or, with `len` None, all of them
-    /// from `offset`) as a buffer, without reading them; `path` must be a regular file.
-    pub fn file(path: &Path, offset: u64, len: Option<usize>) -> std::io::Result<Buffer<'static>> {
+impl<'a> Buffer<'a> {
+    /// Returns the regular file `path` as a buffer, without reading it.
+    pub fn file(path: &Path) -> std::io::Result<Buffer<'static>> {
         let file = crate::files::open_regular(path)?;
-        let size = file.metadata()?.len();
-        let len = len.unwrap_or(size.saturating_sub(offset) as usize);
-        if offset.saturating_add(len as u64) > size {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::UnexpectedEof,
-                "the file is shorter than its header says",
-            ));
-        }
+        let len = usize::try_from(file.metadata()?.len()).unwrap_or(usize::MAX);
         Ok(Buffer::File {
             file: Mutex::new(file),
-            offset,
+            offset: 0,
             len,
         })
+    }
+
+    /// Returns bytes `range` of the buffer as a buffer of their own (a file's stay unread).
+    ///
+    /// # Panics
+    /// When `range` does not lie inside the buffer.
+    pub fn span(self, range: Range<usize>) -> Buffer<'a> {
+        assert!(range.start <= range.end && range.end <= self.len());
+        match self {
+            Buffer::Bytes(Cow::Borrowed(b)) => Buffer::Bytes(Cow::Borrowed(&b[range])),
+            Buffer::Bytes(Cow::Owned(b)) => Buffer::Bytes(Cow::Owned(b[range].to_vec())),
+            Buffer::File { file, offset, .. } => Buffer::File {
+                file,
+                offset: offset + range.start as u64,
+                len: range.len(),
+            },
+        }
     }
 
     /// Returns the buffer's length in bytes.
@@ -128,14 +137,14 @@ impl Buffer<'_> {
         }
     }
 
-    /// Returns bytes `start..start + len` of the buffer, which the caller has checked lie
-    /// inside it; a file that shrank since it was opened is an error, not a panic.
+    /// Returns bytes `start..start + len` of the buffer, or an error when they do not lie
+    /// inside it; a file that shrank since it was opened is an error too, not a panic.
     pub fn read(&self, start: usize, len: usize) -> Result<Cow<'_, [u8]>, String> {
+        if start.checked_add(len).is_none_or(|end| end > self.len()) {
+            return Err(format!("bytes {start}..+{len} lie outside the buffer"));
+        }
         match self {
-            Buffer::Bytes(b) => b
-                .get(start..start.saturating_add(len))
-                .map(Cow::Borrowed)
-                .ok_or_else(|| format!("bytes {start}..+{len} lie outside the buffer")),
+            Buffer::Bytes(b) => Ok(Cow::Borrowed(&b[start..start + len])),
             Buffer::File { file, offset, .. } => {
                 use std::io::{Read, Seek, SeekFrom};
                 let mut out = vec![0; len];
@@ -209,7 +218,7 @@ pub fn load_buffers<'a>(
                     let file = dir.join(percent_decode(uri));
                     scope
                         .check(&file)
-                        .and_then(|()| Buffer::file(&file, 0, None))
+                        .and_then(|()| Buffer::file(&file))
                         .map_err(|e| format!("buffer {i}: cannot read {}: {e}", file.display()))?
                 }
             },

@@ -191,16 +191,16 @@ impl Scene {
                 let data = mesh.data();
                 let [v0, v1, v2] = idx.map(|i| Vec3A::from(data.positions[i as usize]));
                 let w0 = 1.0 - hit.b1 - hit.b2;
-                let p = v0 * w0 + v1 * hit.b1 + v2 * hit.b2;
+                // The hit's barycentric mix of a vertex attribute.
+                let mix = |[a, b, c]: [Vec3A; 3]| a * w0 + b * hit.b1 + c * hit.b2;
+                let p = mix([v0, v1, v2]);
                 let ng = triangle::geometric_normal(v0, v1, v2);
                 // Perlin noise needs a continuous base normal: smooth normals when the file has none.
                 let ns = if !data.normals.is_empty() {
-                    let [n0, n1, n2] = idx.map(|i| Vec3A::from(data.normals[i as usize]));
-                    n0 * w0 + n1 * hit.b1 + n2 * hit.b2
+                    mix(idx.map(|i| Vec3A::from(data.normals[i as usize])))
                 } else if perlin {
                     let normals = mesh.smooth_normals();
-                    let [n0, n1, n2] = idx.map(|i| normals[i as usize]);
-                    n0 * w0 + n1 * hit.b1 + n2 * hit.b2
+                    mix(idx.map(|i| normals[i as usize]))
                 } else {
                     ng
                 };

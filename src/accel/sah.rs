@@ -564,20 +564,15 @@ mod tests {
     /// ranges of every parity around the threshold and a long one.
     #[test]
     fn two_sets_of_bins_bin_as_one() {
-        let mut state = 99u64;
-        let mut unit = || {
-            state = mix64(state);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rng = crate::sampling::Rng::new(99, crate::sampling::Pass::Pixel, 0);
+        let mut point = || Vec4::new(rng.next_f32(), rng.next_f32(), rng.next_f32(), 0.0);
         for len in [TWO_SETS - 1, TWO_SETS, TWO_SETS + 1, 1001] {
             let prims: Vec<PrimRef> = (0..len)
                 .map(|i| {
-                    let lo = Vec4::new(unit(), unit(), unit(), 0.0) * 10.0;
-                    let mut lo4 = lo;
-                    lo4.w = f32::from_bits(i as u32);
+                    let lo = point() * 10.0;
                     PrimRef {
-                        lo: lo4,
-                        hi: lo + Vec4::new(unit(), unit(), unit(), 0.0),
+                        lo: lo.with_w(f32::from_bits(i as u32)),
+                        hi: lo + point(),
                     }
                 })
                 .collect();

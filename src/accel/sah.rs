@@ -387,31 +387,60 @@ fn partition(s: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> (usize, Side
     }
 }
 
-/// A built subtree: its nodes (root first, child references relative to this array) and its
-/// leaves (ids relative to this array).
+/// A built subtree: its nodes (root first, child references relative to this array), its
+/// leaves (ids relative to this array), and the subtrees built apart from it in parallel, which
+/// [`Sub::flatten`] places after it.
+///
+/// Why apart, not appended: appending each parallel subtree to its parent as it finished copied
+/// every node and leaf once per parallel level (five at 33M triangles, 2 GB of nodes) and
+/// faulted in a new array each time; placed at the end, each is copied once.
 #[derive(Default)]
 struct Sub {
     nodes: Vec<Node>,
     leaves: Vec<Leaf>,
     depth: usize,
+    apart: Vec<Apart>,
+}
+
+/// A subtree built apart: the root of `sub` is child `slot` of node `node` of the parent.
+struct Apart {
+    node: u32,
+    slot: usize,
+    root: u32,
+    sub: Sub,
 }
 
 impl Sub {
-    /// Appends `o` whose root is `root`, returning the reference to that root from `self`.
-    fn append(&mut self, root: u32, o: Sub) -> u32 {
-        let (nb, lb) = (self.nodes.len() as u32, self.leaves.len() as u32);
-        self.depth = self.depth.max(o.depth);
-        self.leaves.extend_from_slice(&o.leaves);
-        self.nodes.extend(o.nodes.into_iter().map(|mut n| {
-            for c in &mut n.child {
-                *c = if *c & LEAF != 0 { *c + lb } else { *c + nb };
-            }
+    /// The nodes, leaves and depth of this subtree and all those apart from it.
+    fn totals(&self) -> (usize, usize, usize) {
+        self.apart.iter().fold(
+            (self.nodes.len(), self.leaves.len(), self.depth),
+            |(n, l, d), a| {
+                let (an, al, ad) = a.sub.totals();
+                (n + an, l + al, d.max(ad))
+            },
+        )
+    }
+
+    /// Appends this subtree to `nodes` and `leaves`, then each subtree apart from it (in the
+    /// order they were added, depth first), linking their roots.
+    fn flatten(self, nodes: &mut Vec<Node>, leaves: &mut Vec<Leaf>) {
+        let (nb, lb) = (nodes.len() as u32, leaves.len() as u32);
+        let shift = |c: u32| if c & LEAF != 0 { c + lb } else { c + nb };
+        leaves.extend_from_slice(&self.leaves);
+        nodes.extend(self.nodes.into_iter().map(|mut n| {
+            n.child = n.child.map(shift);
             n
         }));
-        if root & LEAF != 0 {
-            root + lb
-        } else {
-            root + nb
+        for a in self.apart {
+            let (at, root) = (nodes.len() as u32, leaves.len() as u32);
+            let link = if a.root & LEAF != 0 {
+                a.root + root
+            } else {
+                a.root + at
+            };
+            nodes[(nb + a.node) as usize].child[a.slot] = link;
+            a.sub.flatten(nodes, leaves);
         }
     }
 }
@@ -483,23 +512,30 @@ fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: u
             .map(|(mine, at, local)| {
                 // Room for the leaves and nodes such a range makes (n/3.95 leaves, a few
                 // under four triangles each, and about n/20 nodes), so that building does not
-                // grow the arrays by copying.
+                // grow the arrays by copying; a range built in parallel keeps only its root.
                 let n = local.len();
+                let (nodes, leaves) = if n >= PAR_TREE {
+                    (1, 0)
+                } else {
+                    (n / 16 + 4, n / 4 + n / 32 + 4)
+                };
                 let mut s = Sub {
-                    nodes: Vec::with_capacity(n / 16 + 4),
-                    leaves: Vec::with_capacity(n / 4 + n / 32 + 4),
+                    nodes: Vec::with_capacity(nodes),
+                    leaves: Vec::with_capacity(leaves),
                     depth: 0,
+                    apart: Vec::new(),
                 };
                 let root = subtree(mine, at, local, &mut s, level + 1);
                 (root, s)
             })
             .collect();
-        // The biggest arrays are assembled here: fault them in as huge pages (`crate::mem`).
-        let more = |f: fn(&Sub) -> usize| subs.iter().map(|s| f(&s.1)).sum::<usize>();
-        crate::mem::reserve_huge(&mut out.nodes, more(|s| s.nodes.len()));
-        crate::mem::reserve_huge(&mut out.leaves, more(|s| s.leaves.len()));
-        for (slot, (root, s)) in subs.into_iter().enumerate() {
-            out.nodes[me].child[slot] = out.append(root, s);
+        for (slot, (root, sub)) in subs.into_iter().enumerate() {
+            out.apart.push(Apart {
+                node: me as u32,
+                slot,
+                root,
+                sub,
+            });
         }
     } else {
         for (slot, k) in kids.into_iter().enumerate() {
@@ -540,19 +576,24 @@ pub(super) fn build(len: usize, box_of: impl Fn(usize) -> Bounds + Sync) -> Wide
     };
     let mut sub = Sub::default();
     let root = subtree(&mut prims, 0, whole, &mut sub, 1);
+    // The arrays are written once, here: fault them in as huge pages (`crate::mem`).
+    let (n_nodes, n_leaves, depth) = sub.totals();
+    let mut nodes = crate::mem::huge_vec(n_nodes + 1);
+    let mut leaves = crate::mem::huge_vec(n_leaves);
+    sub.flatten(&mut nodes, &mut leaves);
     if root & LEAF != 0 {
         // Too few primitives for a node: one node with the leaf as its only child.
         let mut n = Node::EMPTY;
         n.set_box(0, bounds.lo.truncate().into(), bounds.hi.truncate().into());
         n.child[0] = root;
-        sub.nodes.push(n);
+        nodes.push(n);
     }
     let mut order = crate::mem::huge_vec(prims.len());
     prims
         .par_iter()
         .map(prim_index)
         .collect_into_vec(&mut order);
-    WideBvh::new(sub.nodes, sub.leaves, order, sub.depth)
+    WideBvh::new(nodes, leaves, order, depth)
 }
 
 #[cfg(test)]

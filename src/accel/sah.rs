@@ -51,6 +51,8 @@ const PAR_BIN: usize = 1 << 16;
 const PAR_NODE: usize = 1 << 18;
 /// Subtrees at least this long are built in parallel.
 const PAR_TREE: usize = 1 << 12;
+/// Ranges at most this long find their split without bins ([`best_of_few`]).
+const FEW: usize = 16;
 /// Ranges at least this long are binned in two sets of bins ([`Bins::add`]).
 const TWO_SETS: usize = 64;
 
@@ -280,11 +282,66 @@ impl Bins {
     }
 }
 
+/// The split [`Bins::best`] finds for these references (at most [`FEW`]), found by sorting them
+/// by bin on each axis and trying only the planes between occupied bins.
+///
+/// Why: most splits are of ranges of five to sixteen references (a node opens its children
+/// down to leaves of four), and filling, sweeping and copying 3 × [`BINS`] bins for ten
+/// references cost about a microsecond each time (timed per split on the 8.4M-triangle wave,
+/// timers included, splits of 8 to 31 references took 1.4 of the 3.1 s spent binning; without
+/// timers the whole build is 5–10% faster with this path). The answer is the same:
+/// every plane between two occupied bins `a < b` parts the references alike and costs the same,
+/// and [`Bins::best`] keeps the first, `a + 1`, which is the one returned here; the costs are
+/// computed from the same unions in the same order, so they are equal to the bit.
+fn best_of_few(prims: &[PrimRef], b: &Binner) -> Option<(usize, usize)> {
+    let n = prims.len();
+    debug_assert!(n <= FEW);
+    let blocks = |n: usize| n.div_ceil(MAX_LEAF) as f32;
+    // Per axis, (bin << 8) | index of each reference; sorted, the references in bin order.
+    let mut keys = [[0u16; FEW]; 3];
+    for (i, p) in prims.iter().enumerate() {
+        for (axis_keys, &bin) in keys.iter_mut().zip(&b.bins(p)[..3]) {
+            axis_keys[i] = (bin << 8 | i) as u16;
+        }
+    }
+    let mut best = (f32::INFINITY, None);
+    let mut right_cost = [0.0f32; FEW];
+    for (axis, keys) in keys.iter_mut().enumerate() {
+        let keys = &mut keys[..n];
+        keys.sort_unstable();
+        let bin = |j: usize| (keys[j] >> 8) as usize;
+        let prim = |j: usize| &prims[(keys[j] & 0xff) as usize];
+        let mut acc = Box4::EMPTY;
+        for j in (1..n).rev() {
+            acc.grow(prim(j));
+            if bin(j - 1) != bin(j) {
+                right_cost[j] = acc.half_area() * blocks(n - j);
+            }
+        }
+        let mut acc = Box4::EMPTY;
+        for (j, &right) in right_cost.iter().enumerate().take(n).skip(1) {
+            acc.grow(prim(j - 1));
+            if bin(j - 1) != bin(j) {
+                let cost = acc.half_area() * blocks(j) + right;
+                if cost < best.0 {
+                    best = (cost, Some((axis, bin(j - 1) + 1)));
+                }
+            }
+        }
+    }
+    best.1
+}
+
 /// Splits `r` in two non-empty ranges, reordering `part`, its references (at least two).
 fn split(part: &mut [PrimRef], r: &Range) -> (Range, Range) {
     debug_assert_eq!(part.len(), r.len());
     let binner = Binner::new(&r.cent);
-    let (mid, left, right) = match Bins::of(part, &binner).best() {
+    let best = if part.len() <= FEW {
+        best_of_few(part, &binner)
+    } else {
+        Bins::of(part, &binner).best()
+    };
+    let (mid, left, right) = match best {
         Some((axis, plane)) => {
             let left = binner.left_of(axis, plane);
             partition(part, left)
@@ -630,6 +687,54 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Sorting a few references by bin finds exactly the split the bins find, axis and plane,
+    /// for every count up to [`FEW`]: on spread references, on references crowded into two or
+    /// three bins (where many planes tie), on equal ones (no split) and on flat boxes.
+    #[test]
+    fn few_references_split_as_the_bins_do() {
+        let mut rng = crate::sampling::Rng::new(5, crate::sampling::Pass::Pixel, 0);
+        let (mut splits, mut none) = (0, 0);
+        for case in 0..4000 {
+            let n = 2 + case % (FEW - 1);
+            let crowd = case / FEW % 4;
+            let prims: Vec<PrimRef> = (0..n)
+                .map(|i| {
+                    let mut c = Vec4::new(rng.next_f32(), rng.next_f32(), rng.next_f32(), 0.0);
+                    match crowd {
+                        1 => c = (c * 3.0).floor(),
+                        2 => c = Vec4::new(1.0, 2.0, 3.0, 0.0),
+                        _ => {}
+                    }
+                    let mut size = Vec4::new(rng.next_f32(), rng.next_f32(), 0.0, 0.0);
+                    if crowd == 2 {
+                        size = Vec4::new(0.5, 0.25, 0.0, 0.0);
+                    }
+                    PrimRef {
+                        lo: c.with_w(f32::from_bits(i as u32)),
+                        hi: c + size * if crowd == 3 { 0.0 } else { 0.3 },
+                    }
+                })
+                .collect();
+            let binner = Binner::new(&Side::of(&prims).cent);
+            let want = Bins::of(&prims, &binner).best();
+            assert_eq!(
+                best_of_few(&prims, &binner),
+                want,
+                "case {case}, {n} references"
+            );
+            if want.is_some() {
+                splits += 1
+            } else {
+                none += 1
+            }
+        }
+        // Both answers occur: the test is not vacuous.
+        assert!(
+            splits > 2000 && none > 500,
+            "{splits} splits, {none} without"
+        );
     }
 
     /// The index a reference carries in `lo.w` never enters the centroid's arithmetic: as a

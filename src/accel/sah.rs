@@ -199,10 +199,10 @@ impl Bins {
         }
     }
 
-    fn add(mut self, prims: &[PrimRef], b: &Binner) -> Bins {
+    fn add(&mut self, prims: &[PrimRef], b: &Binner) {
         if prims.len() < TWO_SETS {
             prims.iter().for_each(|p| self.bin(p, b));
-            return self;
+            return;
         }
         // Two sets of bins, one for the even references and one for the odd, merged at the
         // end: neighbouring references of a coherent mesh fall in the same bin, and growing one
@@ -215,36 +215,45 @@ impl Bins {
             odd.bin(q, b);
         }
         rest.iter().for_each(|p| self.bin(p, b));
-        self.merge(odd)
+        self.merge(&odd);
     }
 
     #[inline(always)]
     fn bin(&mut self, p: &PrimRef, b: &Binner) {
         let k = b.bins(p);
         for (axis, &bin) in k[..3].iter().enumerate() {
+            // `bins` never exceeds `BINS - 1`; the mask tells the compiler so.
+            let bin = bin & (BINS - 1);
             self.boxes[axis][bin].grow(p);
             self.counts[axis][bin] += 1;
         }
     }
 
-    fn merge(mut self, o: Bins) -> Bins {
+    fn merge(&mut self, o: &Bins) {
         for axis in 0..3 {
             for i in 0..BINS {
                 self.boxes[axis][i].grow(&o.boxes[axis][i]);
                 self.counts[axis][i] += o.counts[axis][i];
             }
         }
-        self
     }
 
     fn of(prims: &[PrimRef], b: &Binner) -> Bins {
+        let of_chunk = |c: &[PrimRef]| {
+            let mut bins = Bins::empty();
+            bins.add(c, b);
+            bins
+        };
         if prims.len() >= PAR_BIN {
             prims
                 .par_chunks(PAR_BIN / 4)
-                .map(|c| Bins::empty().add(c, b))
-                .reduce(Bins::empty, Bins::merge)
+                .map(of_chunk)
+                .reduce(Bins::empty, |mut x, y| {
+                    x.merge(&y);
+                    x
+                })
         } else {
-            Bins::empty().add(prims, b)
+            of_chunk(prims)
         }
     }
 
@@ -676,7 +685,8 @@ mod tests {
                 .collect();
             let side = Side::of(&prims);
             let binner = Binner::new(&side.cent);
-            let two = Bins::empty().add(&prims, &binner);
+            let mut two = Bins::empty();
+            two.add(&prims, &binner);
             let mut one = Bins::empty();
             prims.iter().for_each(|p| one.bin(p, &binner));
             assert_eq!(two.counts, one.counts, "{len} references");

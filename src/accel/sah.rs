@@ -51,6 +51,8 @@ const PAR_BIN: usize = 1 << 16;
 const PAR_NODE: usize = 1 << 18;
 /// Subtrees at least this long are built in parallel.
 const PAR_TREE: usize = 1 << 12;
+/// Pairs of references ahead of the one binned whose line is prefetched.
+const AHEAD: usize = 8;
 /// Ranges at most this long find their split without bins ([`best_of_few`]).
 const FEW: usize = 16;
 /// Ranges at least this long are binned in two sets of bins ([`Bins::add`]).
@@ -222,7 +224,8 @@ impl Bins {
         // sets too). The sums, minima and maxima, and so the tree, are the same.
         let mut odd = Bins::empty();
         let (pairs, rest) = prims.as_chunks::<2>();
-        for [p, q] in pairs {
+        for (k, [p, q]) in pairs.iter().enumerate() {
+            super::wide::prefetch_line(pairs.as_ptr().wrapping_add(k + AHEAD).cast());
             self.bin(p, b);
             odd.bin(q, b);
         }

@@ -42,6 +42,7 @@ use super::MAX_LEAF;
 use super::wide::{LEAF, Leaf, Node, PAIR, WIDTH, WideBvh};
 use glam::{BVec4A, Vec4};
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 
 /// Split planes tried per axis.
 const BINS: usize = 16;
@@ -467,7 +468,7 @@ fn partition(s: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> (usize, Side
 
 /// A built subtree: its nodes (root first, child references relative to this array), its
 /// leaves (ids relative to this array), and the subtrees built apart from it in parallel, which
-/// [`Sub::flatten`] places after it.
+/// [`Sub::place`] writes after it.
 ///
 /// Why apart, not appended: appending each parallel subtree to its parent as it finished copied
 /// every node and leaf once per parallel level (five at 33M triangles, 2 GB of nodes) and
@@ -500,26 +501,56 @@ impl Sub {
         )
     }
 
-    /// Appends this subtree to `nodes` and `leaves`, then each subtree apart from it (in the
-    /// order they were added, depth first), linking their roots.
-    fn flatten(self, nodes: &mut Vec<Node>, leaves: &mut Vec<Leaf>) {
-        let (nb, lb) = (nodes.len() as u32, leaves.len() as u32);
-        let shift = |c: u32| if c & LEAF != 0 { c + lb } else { c + nb };
-        leaves.extend_from_slice(&self.leaves);
-        nodes.extend(self.nodes.into_iter().map(|mut n| {
-            n.child = n.child.map(shift);
-            n
-        }));
-        for a in self.apart {
-            let (at, root) = (nodes.len() as u32, leaves.len() as u32);
-            let link = if a.root & LEAF != 0 {
-                a.root + root
+    /// Writes this subtree into `nodes` and `leaves`, then each subtree apart from it after it
+    /// (in the order they were added, depth first), linking their roots; the slices are exactly
+    /// [`Sub::totals`] long and start at `base` (nodes, leaves) of the whole arrays. Subtrees
+    /// apart are written in parallel: placing them one after the other took 0.26 s of a 7.3 s
+    /// build of 33.5M triangles on two threads.
+    fn place(
+        self,
+        nodes: &mut [MaybeUninit<Node>],
+        leaves: &mut [MaybeUninit<Leaf>],
+        base: (u32, u32),
+    ) {
+        let shift = |c: u32| {
+            if c & LEAF != 0 {
+                c + base.1
             } else {
-                a.root + at
-            };
-            nodes[(nb + a.node) as usize].child[a.slot] = link;
-            a.sub.flatten(nodes, leaves);
+                c + base.0
+            }
+        };
+        let (own_nodes, mut rest_nodes) = nodes.split_at_mut(self.nodes.len());
+        let (own_leaves, mut rest_leaves) = leaves.split_at_mut(self.leaves.len());
+        for (slot, l) in own_leaves.iter_mut().zip(&self.leaves) {
+            slot.write(*l);
         }
+        let mut own = self.nodes;
+        for n in &mut own {
+            n.child = n.child.map(shift);
+        }
+        let mut at = (base.0 + own.len() as u32, base.1 + self.leaves.len() as u32);
+        let mut jobs = Vec::with_capacity(self.apart.len());
+        for a in self.apart {
+            own[a.node as usize].child[a.slot] = if a.root & LEAF != 0 {
+                a.root + at.1
+            } else {
+                a.root + at.0
+            };
+            let (n, l, _) = a.sub.totals();
+            let (sub_nodes, tail) = rest_nodes.split_at_mut(n);
+            rest_nodes = tail;
+            let (sub_leaves, tail) = rest_leaves.split_at_mut(l);
+            rest_leaves = tail;
+            jobs.push((a.sub, sub_nodes, sub_leaves, at));
+            at = (at.0 + n as u32, at.1 + l as u32);
+        }
+        // Every slot is written: the slices were cut to the totals, to the last element.
+        assert!(rest_nodes.is_empty() && rest_leaves.is_empty());
+        for (slot, n) in own_nodes.iter_mut().zip(own) {
+            slot.write(n);
+        }
+        jobs.into_par_iter()
+            .for_each(|(sub, n, l, at)| sub.place(n, l, at));
     }
 }
 
@@ -658,7 +689,17 @@ pub(super) fn build(len: usize, box_of: impl Fn(usize) -> Bounds + Sync) -> Wide
     let (n_nodes, n_leaves, depth) = sub.totals();
     let mut nodes = crate::mem::huge_vec(n_nodes + 1);
     let mut leaves = crate::mem::huge_vec(n_leaves);
-    sub.flatten(&mut nodes, &mut leaves);
+    sub.place(
+        &mut nodes.spare_capacity_mut()[..n_nodes],
+        &mut leaves.spare_capacity_mut()[..n_leaves],
+        (0, 0),
+    );
+    // SAFETY: `place` wrote every one of the first `n_nodes` nodes and `n_leaves` leaves (it
+    // asserts that the slices it was given were used up).
+    unsafe {
+        nodes.set_len(n_nodes);
+        leaves.set_len(n_leaves);
+    }
     if root & LEAF != 0 {
         // Too few primitives for a node: one node with the leaf as its only child.
         let mut n = Node::EMPTY;

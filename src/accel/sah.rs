@@ -658,25 +658,34 @@ fn subtree(prims: &mut [PrimRef], base: usize, r: Range, out: &mut Sub, level: u
 /// Builds an 8-wide BVH over the `len` boxes `box_of` gives (at least two, all finite), each
 /// padded as [`Bounds::padded`] says.
 pub(super) fn build(len: usize, box_of: impl Fn(usize) -> Bounds + Sync) -> WideBvh {
+    let reference = |i: usize| {
+        let b = box_of(i);
+        debug_assert!(b.is_finite());
+        let b = b.padded();
+        let mut lo = Vec4::from((b.min, 0.0));
+        lo.w = f32::from_bits(i as u32);
+        PrimRef {
+            lo,
+            hi: Vec4::from((b.max, 0.0)),
+        }
+    };
+    // The references and their bounds in one pass: a second pass to measure them read the whole
+    // array again (1.6 GB at 50M triangles).
     let mut prims = crate::mem::huge_vec(len);
-    (0..len)
-        .into_par_iter()
-        .map(|i| {
-            let b = box_of(i);
-            debug_assert!(b.is_finite());
-            let b = b.padded();
-            let mut lo = Vec4::from((b.min, 0.0));
-            lo.w = f32::from_bits(i as u32);
-            PrimRef {
-                lo,
-                hi: Vec4::from((b.max, 0.0)),
+    const CHUNK: usize = PAR_BIN / 4;
+    let Side { bounds, cent } = prims.spare_capacity_mut()[..len]
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(c, chunk)| {
+            let mut side = Side::EMPTY;
+            for (k, slot) in chunk.iter_mut().enumerate() {
+                side.add(slot.write(reference(c * CHUNK + k)));
             }
+            side
         })
-        .collect_into_vec(&mut prims);
-    let Side { bounds, cent } = prims
-        .par_chunks(PAR_BIN / 4)
-        .map(Side::of)
         .reduce(|| Side::EMPTY, Side::merge);
+    // SAFETY: the chunks cover the first `len` slots, and each slot was written.
+    unsafe { prims.set_len(len) };
     let whole = Range {
         start: 0,
         end: prims.len(),

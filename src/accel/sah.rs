@@ -518,13 +518,6 @@ impl Sub {
         leaves: &mut [MaybeUninit<Leaf>],
         base: (u32, u32),
     ) {
-        let shift = |c: u32| {
-            if c & LEAF != 0 {
-                c + base.1
-            } else {
-                c + base.0
-            }
-        };
         let (own_nodes, mut rest_nodes) = nodes.split_at_mut(self.nodes.len());
         let (own_leaves, mut rest_leaves) = leaves.split_at_mut(self.leaves.len());
         for (slot, l) in own_leaves.iter_mut().zip(&self.leaves) {
@@ -532,16 +525,12 @@ impl Sub {
         }
         let mut own = self.nodes;
         for n in &mut own {
-            n.child = n.child.map(shift);
+            n.child = n.child.map(|c| rebase(c, base));
         }
         let mut at = (base.0 + own.len() as u32, base.1 + self.leaves.len() as u32);
         let mut jobs = Vec::with_capacity(self.apart.len());
         for a in self.apart {
-            own[a.node as usize].child[a.slot] = if a.root & LEAF != 0 {
-                a.root + at.1
-            } else {
-                a.root + at.0
-            };
+            own[a.node as usize].child[a.slot] = rebase(a.root, at);
             let (n, l, _) = a.sub.totals();
             let (sub_nodes, tail) = rest_nodes.split_at_mut(n);
             rest_nodes = tail;
@@ -557,6 +546,16 @@ impl Sub {
         }
         jobs.into_par_iter()
             .for_each(|(sub, n, l, at)| sub.place(n, l, at));
+    }
+}
+
+/// A child reference of a subtree whose nodes and leaves start at `base` (nodes, leaves) of the
+/// whole arrays, made relative to those arrays.
+fn rebase(child: u32, base: (u32, u32)) -> u32 {
+    if child & LEAF != 0 {
+        child + base.1
+    } else {
+        child + base.0
     }
 }
 
@@ -727,8 +726,11 @@ pub(super) fn build(len: usize, box_of: impl Fn(usize) -> Bounds + Sync) -> Wide
     // mapped on their own) were all alive at once and are free now: without giving their pages
     // back, the final scene's peak resident size rose from 284 to 341 MB at 1024²; given back,
     // 323 MB (the rest sits in pages the allocator still uses: see docs/profiling.md). At 33.6M
-    // triangles the peak is the same as before the subtrees were kept apart (2.78 GB).
-    crate::mem::release_free_memory();
+    // triangles the peak is the same as before the subtrees were kept apart (2.78 GB). Only
+    // after large builds: the trim walks every heap, and a scene may build thousands of meshes.
+    if len >= PAR_NODE {
+        crate::mem::release_free_memory();
+    }
     if root & LEAF != 0 {
         // Too few primitives for a node: one node with the leaf as its only child.
         let mut n = Node::EMPTY;

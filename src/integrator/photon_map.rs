@@ -305,7 +305,14 @@ pub fn render(
         };
         super::planner::fit_samples(p, view, settings.seed, &tracer, request, started);
         let s = settings.to_mut();
-        s.sampling = crate::render::Sampling::Stratified { spp: p.spp };
+        s.sampling = match p.adaptive {
+            Some(a) => crate::render::Sampling::Noise {
+                spp: p.spp,
+                max_spp: a.max_spp,
+                target: a.target,
+            },
+            None => crate::render::Sampling::Stratified { spp: p.spp },
+        };
         // The half-buffers' estimate of the camera part, printed beside the expected error.
         s.error_estimate |= p.spp >= 2;
     }

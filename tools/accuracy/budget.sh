@@ -80,12 +80,18 @@ budgets() {
 
 # planned B: the planner's render with B/2 wall seconds (B CPU seconds on 2 cores).
 planned() {
-  local wall c expected spp
+  local wall c expected spp setting
   wall=$(awk -v b="$1" 'BEGIN {print b / 2}')
   c=$(cpu "$BIN" render "$SCRIPT" --scale "$SCALE" --time-budget "$wall" -o "$OUT/$NAME.b$1.exr")
   expected=$(grep -o 'expected relative RMSE [0-9.]*' "$OUT/log" | awk '{print $4}')
+  # Adaptive rounds: the samples a pixel the plan expected on average, after a "~".
   spp=$(grep -o ': [0-9]* spp' "$OUT/log" | awk '{print $2}')
-  row "$1" budget "$(grep -o 'effort x[0-9.]*' "$OUT/log")" "$spp" "$c" "$(err "$OUT/$NAME.b$1.exr")" "$expected"
+  setting=$(grep -o 'effort x[0-9.]*' "$OUT/log")
+  if grep -q 'then rounds' "$OUT/log"; then
+    spp="~$(grep -o '[0-9.]* spp a pixel expected' "$OUT/log" | awk '{printf "%.1f", $1}')"
+    setting="$setting; rounds from $(grep -o ': [0-9]* spp' "$OUT/log" | awk '{print $2}')"
+  fi
+  row "$1" budget "$setting" "$spp" "$c" "$(err "$OUT/$NAME.b$1.exr")" "$expected"
 }
 
 # grid "SPPS" "PHOTON_SCALES": every pair, one seed.

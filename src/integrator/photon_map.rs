@@ -290,12 +290,19 @@ pub fn render(
     let mut photons = planned(&settings.photons, plan);
     let mut settings = std::borrow::Cow::Borrowed(settings);
     let request = settings.budget.filter(|_| read.is_none());
+    // The planner's pilot may have made the chosen prepass already.
+    let mut reused = None;
     let mut chosen = request.map(|request| {
-        let p = super::planner::choose(view, &settings, &photons, &request, started, progress);
+        let (p, pilot_made) =
+            super::planner::choose(view, &settings, &photons, &request, started, progress);
         photons = super::planner::at_effort(&photons, p.effort, &request);
+        reused = pilot_made;
         p
     });
-    let gi = prepass(view.scene, view.camera, &photons, read, progress);
+    let gi = match reused {
+        Some(gi) => gi,
+        None => prepass(view.scene, view.camera, &photons, read, progress),
+    };
     if let (Some(p), Some(request)) = (&mut chosen, &request) {
         let tracer = super::eye::Tracer {
             scene: view.scene,

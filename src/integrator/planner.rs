@@ -156,6 +156,13 @@ const MAX_SPP: u32 = 1 << 16;
 const RESERVE: f64 = 0.04;
 /// The largest share of the time left after the pilot a planned prepass may take.
 const PREPASS_SHARE: f64 = 0.6;
+/// A plan is judged by the samples it would leave if its prepass took this many times the
+/// model's prediction: on the final scene at 1024² the pilot's extrapolation of the photons'
+/// seconds per unit effort varied from 5.5 to 7.1 between runs, and a plan that counts on the
+/// short end is left with a sample a pixel and twice the error it expected (0.102 against
+/// 0.072). A prepass that does take its predicted time leaves the surplus to the camera,
+/// whose samples are fitted to the time actually left ([`fit_samples`]).
+const PREPASS_MARGIN: f64 = 1.3;
 /// Bytes a stored photon takes ([`crate::frame`]'s charge).
 const PHOTON_BYTES: f64 = 48.0;
 
@@ -260,7 +267,8 @@ pub enum Why {
     /// The target is out of reach within the bounds: the plan of least error at the largest
     /// effort and samples considered.
     TargetOutOfReach,
-    /// The pilot left too little of the budget for any plan: the cheapest one.
+    /// The pilot left too little of the budget for any plan: its own prepass (the larger
+    /// pair's), and the fewest samples.
     BudgetSpent,
     /// The pilot found a black image: nothing to plan for; the frame's own settings.
     Black,
@@ -273,8 +281,10 @@ pub enum Why {
 pub struct Adaptive {
     pub target: f32,
     pub max_spp: u32,
-    /// The samples a pixel takes on average, as the pilot's pixels predict.
+    /// The samples a pixel takes on average, as the pilot's pixels predict, and their time
+    /// in samples of every pixel (noisy pixels are often costlier than the average).
     pub mean_spp: f64,
+    pub cost: f64,
 }
 
 /// What the planner chose for a frame, with the model it chose by; reported with the plan.
@@ -286,6 +296,8 @@ pub struct Planned {
     pub effort: f64,
     /// What the effort makes of the settings: photon scale and cache rays per record.
     pub photon_scale: f64,
+    /// Whether the render takes the pilot's own prepass at this effort instead of making one.
+    pub pilot_prepass: bool,
     pub cache_rays: u32,
     /// Samples per pixel: all of them, or with `adaptive` the first round's.
     pub spp: u32,
@@ -312,7 +324,7 @@ impl fmt::Display for Planned {
             Why::LeastError => "the least expected error in the time left",
             Why::LeastTime => "the least expected time to the target",
             Why::TargetOutOfReach => "the target is out of reach; the least error considered",
-            Why::BudgetSpent => "the pilot left too little time; the cheapest plan",
+            Why::BudgetSpent => "the pilot left too little time; its own prepass",
             Why::Black => "a black image; the frame's own settings",
         };
         let (c, m, b) = self.parts;
@@ -328,7 +340,7 @@ impl fmt::Display for Planned {
         write!(
             f,
             "{goal}: {} spp{rounds}, prepass effort x{:.3} (photon scale {:.4}, {} cache rays a \
-             record): {why}; expected relative RMSE {:.4} (camera {c:.4}, maps {m:.4}, bias \
+             record{}): {why}; expected relative RMSE {:.4} (camera {c:.4}, maps {m:.4}, bias \
              {b:.4}; lights seen directly left out) in {:.2} s after a {:.2} s pilot (measured: camera variance {:.3} a \
              4-sample pixel at effort 1 falling as spp^-{:.2}, maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e}; photons \
              {:.3} s per unit effort, cache {:.2e} s per ray a record, {:.4} s a sample of \
@@ -337,6 +349,10 @@ impl fmt::Display for Planned {
             self.effort,
             self.photon_scale,
             self.cache_rays,
+            match self.pilot_prepass {
+                true => "; the pilot's own",
+                false => "",
+            },
             self.expected,
             self.expected_seconds,
             self.pilot_seconds,
@@ -388,8 +404,8 @@ pub fn choose(
     request: &Request,
     started: Instant,
     progress: &dyn Progress,
-) -> Planned {
-    let model = pilot(view, settings, photons, request, progress);
+) -> (Planned, Option<super::photon_map::Prepass>) {
+    let (model, mut prepasses) = pilot(view, settings, photons, request, progress);
     let pilot_seconds = started.elapsed().as_secs_f64();
     let max_effort = max_effort(view, photons, request);
     let mut choice = decide(model, request, max_effort, settings, pilot_seconds);
@@ -406,7 +422,21 @@ pub fn choose(
             choice.effort = 1.0;
         }
     }
-    choice.with_settings(photons, request, pilot_seconds)
+    let reused =
+        (reused_effort(&model, request) == Some(choice.effort)).then(|| prepasses.swap_remove(2));
+    let mut planned = choice.with_settings(photons, request, pilot_seconds);
+    planned.pilot_prepass = reused.is_some();
+    (planned, reused)
+}
+
+/// Returns the effort whose prepass the pilot has made already and the render may take as its
+/// own (the larger pair's first, at [`PILOT_STEP`]`·F₀`; with the photons and the cache's rays
+/// both fixed every effort makes the same prepass, and the frame's own effort 1 is it).
+fn reused_effort(model: &Model, request: &Request) -> Option<f64> {
+    match request.fixed_photons && request.fixed_cache_rays {
+        true => Some(1.0),
+        false => Some(PILOT_STEP * model.pilot_effort),
+    }
 }
 
 /// Measures the camera pass with the planned prepass made (`tracer` reads it): traces the
@@ -427,12 +457,16 @@ pub fn fit_samples(
     if planned.why == Why::Black {
         return;
     }
-    let start = Instant::now();
-    let (all, _, samples) = pilot_pixels(view, seed, std::slice::from_ref(tracer), &NoProgress);
-    let wall = start.elapsed().as_secs_f64();
+    let (all, thread_seconds, samples) =
+        pilot_pixels(view, seed, std::slice::from_ref(tracer), &NoProgress);
     let runs = lit_pixels(all.clone());
     let (w, h) = view.window.size();
-    let per_spp = wall / samples.max(1) as f64 * w as f64 * h as f64;
+    // Thread seconds over the threads, not the wall time: the pilot's pixels take a tenth of a
+    // second, over rows of unequal cost, and its wall time varied from 4.7 to 6.5 s a sample
+    // of every pixel between runs on the final scene; the camera pass's rows share the threads
+    // evenly.
+    let threads = rayon::current_num_threads().max(1) as f64;
+    let per_spp = thread_seconds / samples.max(1) as f64 * w as f64 * h as f64 / threads;
     let n = runs.len().max(1) as f64;
     let mean = runs.iter().map(|r| r.mean[0]).sum::<f64>() / n;
     let (v2, v4) = runs.iter().fold((0.0, 0.0), |(a, b), r| {
@@ -466,7 +500,7 @@ pub fn fit_samples(
         }
     };
     let mut camera2 = model.parts2(spp, f).0;
-    let mut mean_spp = spp as f64;
+    let mut camera_samples = spp as f64;
     planned.spp = spp;
     planned.adaptive = None;
     if let Some(need) = need.filter(|_| mean > 0.0) {
@@ -475,13 +509,13 @@ pub fn fit_samples(
             planned.spp = first;
             planned.adaptive = Some(a);
             camera2 = c2;
-            mean_spp = a.mean_spp;
+            camera_samples = a.cost;
         }
     }
     planned.expected = (camera2 + maps2 + bias2).sqrt();
     planned.parts = (camera2.sqrt(), maps2.sqrt(), bias2.sqrt());
     planned.expected_seconds =
-        started.elapsed().as_secs_f64() - planned.pilot_seconds + mean_spp * per_spp;
+        started.elapsed().as_secs_f64() - planned.pilot_seconds + camera_samples * per_spp;
     planned.model = model;
 }
 
@@ -506,6 +540,10 @@ const ADAPTIVE_CAP: u32 = 16;
 /// what they would gain are independent estimates).
 struct PilotPixels {
     pixels: Vec<(f64, Option<f64>)>,
+    /// Each pixel's seconds a sample, relative to the mean over the pixels: the noisy pixels
+    /// are often the costly ones (on the diffuse box, the corners the irradiance cache leaves
+    /// to fresh gathers: rounds there cost twice a uniform sample's time).
+    cost: Vec<f64>,
     /// The image's mean over all the pilot's pixels, lights included, as the rounds' test
     /// divides by ([`crate::render::noise::pilot_mean`]).
     test_mean: f64,
@@ -515,7 +553,16 @@ impl PilotPixels {
     fn of(all: &[PixelRun], mean: f64) -> PilotPixels {
         let n = all.len().max(1) as f64;
         let m2 = mean * mean;
+        let per_sample: Vec<f64> = all.iter().map(|r| r.seconds / r.n.max(1) as f64).collect();
+        let average = per_sample.iter().sum::<f64>() / n;
         PilotPixels {
+            cost: per_sample
+                .iter()
+                .map(|&t| match average > 0.0 {
+                    true => t / average,
+                    false => 1.0,
+                })
+                .collect(),
             pixels: all
                 .iter()
                 .map(|r| {
@@ -539,22 +586,24 @@ impl PilotPixels {
         n
     }
 
-    /// Returns the mean samples a pixel and the camera's expected squared relative error of
-    /// rounds from `first` samples to `target`, at most `max`, with a pixel's variance falling
-    /// as `spp^-gamma`.
-    fn predict(&self, first: u32, max: u32, target: f64, gamma: f64) -> (f64, f64) {
+    /// Returns what rounds from `first` samples to `target`, at most `max`, are expected to
+    /// make, with a pixel's variance falling as `spp^-gamma`: the mean samples a pixel, their
+    /// cost in uniform samples a pixel (each pixel's samples weighed by its cost), and the
+    /// camera's squared relative error.
+    fn predict(&self, first: u32, max: u32, target: f64, gamma: f64) -> (f64, f64, f64) {
         let limit = target * self.test_mean;
-        let (mut samples, mut error2, mut counted) = (0.0, 0.0, 0.0f64);
-        for &(var, v4) in &self.pixels {
-            let n = Self::rounds(var, first, max, limit);
-            samples += n as f64;
+        let (mut samples, mut cost, mut error2, mut counted) = (0.0, 0.0, 0.0, 0.0f64);
+        for (&(var, v4), &c) in self.pixels.iter().zip(&self.cost) {
+            let n = Self::rounds(var, first, max, limit) as f64;
+            samples += n;
+            cost += n * c;
             if let Some(v4) = v4 {
-                error2 += v4 * (4.0 / n as f64).powf(gamma);
+                error2 += v4 * (4.0 / n).powf(gamma);
                 counted += 1.0;
             }
         }
         let n = self.pixels.len().max(1) as f64;
-        (samples / n, error2 / counted.max(1.0))
+        (samples / n, cost / n, error2 / counted.max(1.0))
     }
 }
 
@@ -563,8 +612,8 @@ impl PilotPixels {
 /// error `uniform2`: a lower error within the same samples on average, or fewer samples to the
 /// same error; `None` when no candidate does.
 ///
-/// The candidates: first rounds of 2, 4, 8, … samples (fewer than the uniform plan's, or at
-/// most as many for a target), and 97 noise targets log-spaced over [10⁻⁴, 10] of the image's
+/// The candidates: first rounds of 2, 4, 8, … samples up to the uniform plan's (a time budget
+/// may leave room for a fraction of a sample more than it), and 97 noise targets log-spaced over [10⁻⁴, 10] of the image's
 /// mean, rounds up to [`ADAPTIVE_CAP`] times the uniform plan's samples. Each is predicted on
 /// the pilot's pixels ([`PilotPixels::predict`]). Adaptive pixels spend samples where a pixel's
 /// samples vary, which is not only where its mean does (a texture or an edge across a pixel
@@ -577,18 +626,15 @@ fn fit_adaptive(
     need: Need,
 ) -> Option<(u32, Adaptive, f64)> {
     let max = (ADAPTIVE_CAP * spp.max(4)).min(noise::MAX_SPP);
-    let firsts = (1..16).map(|k| 1u32 << k).take_while(|&s| match need {
-        Need::Within(_) => s < spp,
-        Need::Below(_) => s <= spp,
-    });
+    let firsts = (1..16).map(|k| 1u32 << k).take_while(|&s| s <= spp.max(2));
     let mut best: Option<(f64, u32, Adaptive, f64)> = None;
     for first in firsts {
         for i in 0..97 {
             let target = 10f64.powf(-4.0 + 5.0 * i as f64 / 96.0);
-            let (mean_spp, error2) = pixels.predict(first, max, target, gamma);
+            let (mean_spp, cost, error2) = pixels.predict(first, max, target, gamma);
             let score = match need {
-                Need::Within(most) if mean_spp <= most && error2 < uniform2 => error2,
-                Need::Below(room) if error2 <= room && mean_spp < spp as f64 => mean_spp,
+                Need::Within(most) if cost <= most && error2 < uniform2 => error2,
+                Need::Below(room) if error2 <= room && cost < spp as f64 => cost,
                 _ => continue,
             };
             if best.as_ref().is_none_or(|b| score < b.0) {
@@ -596,6 +642,7 @@ fn fit_adaptive(
                     target: target as f32,
                     max_spp: max,
                     mean_spp,
+                    cost,
                 };
                 best = Some((score, first, a, error2));
             }
@@ -622,6 +669,7 @@ impl Choice {
             why: self.why,
             effort: self.effort,
             photon_scale: gi.photon_scale,
+            pilot_prepass: false,
             cache_rays: gi.cache.rays,
             spp: self.spp,
             adaptive: None,
@@ -703,6 +751,12 @@ fn decide(
         return choice(Why::Black, 1.0, given_spp);
     }
     let efforts = efforts(request, max);
+    // An effort at or below the prepass the pilot made already is that prepass, for no time.
+    let reused = reused_effort(&model, request).filter(|&r| r <= max);
+    let made = |f: f64| match reused {
+        Some(r) if f <= r => (r, 0.0),
+        _ => (f, model.prepass_time(f)),
+    };
     let fixed_spp = request.fixed_spp.then_some(given_spp);
     // The first plan of least score over the efforts, each with the samples it takes.
     let best =
@@ -711,12 +765,13 @@ fn decide(
         Goal::Time(budget) => {
             let left = budget.as_secs_f64() * (1.0 - RESERVE) - pilot_seconds;
             let mut plans = efforts.iter().filter_map(|&f| {
+                let (f, prepass) = made(f);
                 // At least 40% of the time left goes to the camera: the prepass's time is
                 // extrapolated from the pilot's small efforts and errs on the short side.
-                if model.prepass_time(f) > PREPASS_SHARE * left {
+                if prepass > PREPASS_SHARE * left {
                     return None;
                 }
-                let most = model.samples_in(left - model.prepass_time(f))?;
+                let most = model.samples_in(left - PREPASS_MARGIN * prepass)?;
                 let s = match fixed_spp {
                     Some(s) => (s <= most).then_some(s)?,
                     None => most,
@@ -725,18 +780,22 @@ fn decide(
             });
             match best(&mut plans) {
                 Some((_, f, s)) => choice(Why::LeastError, f, s),
-                None => choice(Why::BudgetSpent, efforts[0], fixed_spp.unwrap_or(1)),
+                None => {
+                    let f = reused.unwrap_or(efforts[0]);
+                    choice(Why::BudgetSpent, f, fixed_spp.unwrap_or(1))
+                }
             }
         }
         Goal::Error(target) => {
             let mut plans = efforts.iter().filter_map(|&f| {
+                let (f, prepass) = made(f);
                 let s = match fixed_spp {
                     Some(s) => (model.error(s, f) <= target).then_some(s)?,
                     None => model
                         .samples_to(f, target)
                         .filter(|&s| s <= MAX_SPP as f64)? as u32,
                 };
-                Some((model.time(s, f), f, s))
+                Some((prepass + s as f64 * model.per_spp, f, s))
             });
             match best(&mut plans) {
                 Some((_, f, s)) => choice(Why::LeastTime, f, s),
@@ -774,6 +833,8 @@ struct PixelRun {
     /// 4-sample replicates): their channel variance, as adaptive pixels test it
     /// ([`crate::render::noise::Halves::sample_error`]; see [`fit_adaptive`]).
     noise: Halves,
+    /// The thread seconds its samples took.
+    seconds: f64,
 }
 
 impl PixelRun {
@@ -848,7 +909,7 @@ fn pilot(
     photons: &GiSettings,
     request: &Request,
     progress: &dyn Progress,
-) -> Model {
+) -> (Model, Vec<super::photon_map::Prepass>) {
     let (prepasses, f0) = pilot_prepasses(view, photons, request, progress);
     // The larger pair's phases: photons scale with the effort, the cache with its rays.
     let (mut photon_seconds, mut cache_seconds) = (0.0, 0.0);
@@ -911,7 +972,7 @@ fn pilot(
         true => (0.0, photon_seconds),
         false => (photon_seconds / (PILOT_STEP * f0), 0.0),
     };
-    Model {
+    let model = Model {
         mean,
         camera_var,
         camera_sparse,
@@ -926,7 +987,8 @@ fn pilot(
         cache_rays: photons.cache.rays,
         fixed_rays: request.fixed_cache_rays,
         per_spp: per_sample * w as f64 * h as f64 / threads,
-    }
+    };
+    (model, prepasses)
 }
 
 /// Returns whether `ray` meets a light (an area or sphere light, or an emissive surface)
@@ -1029,7 +1091,9 @@ fn pilot_pixels(
                         run.light |= sees_emitter(view.scene, &ray);
                         let start = Instant::now();
                         let values = trace_all(tracers, &ray, share, &mut rng, &mut counts);
-                        seconds += start.elapsed().as_secs_f64();
+                        let took = start.elapsed().as_secs_f64();
+                        seconds += took;
+                        run.seconds += took;
                         samples += 1;
                         if set < 2 {
                             run.noise.add(values[0]);
@@ -1073,10 +1137,11 @@ mod tests {
             camera_var: 0.01,
             camera_sparse: 0.0,
             gamma: 1.0,
-            map_var: 0.01,
+            // 0.0025/F, from a pilot whose own prepass (at 4F₀ = 0.004) is too coarse to take.
+            map_var: 2.5,
             beta: 1.0,
             bias2: 0.0,
-            pilot_effort: 0.25,
+            pilot_effort: 0.001,
             photon_per_effort: 1.0,
             photon_fixed: 0.0,
             cache_per_ray: 0.0,
@@ -1097,7 +1162,8 @@ mod tests {
 
     /// With `E² = 0.04/s + 0.0025/F` and `T = F + 0.1 s`, the optimum spends the last second
     /// equally well on either (`0.04/(0.1 s²) = 0.0025/F²`, so `F ≈ 0.079 s`): the planner's
-    /// choice is within 2% of the brute-force best over a fine grid of efforts.
+    /// choice is within 2% of the brute-force best over a fine grid of efforts, each judged by
+    /// the samples it leaves with the prepass at [`PREPASS_MARGIN`] times its time.
     #[test]
     fn time_goal_matches_brute_force() {
         let m = model();
@@ -1108,13 +1174,14 @@ mod tests {
         let mut best = f64::INFINITY;
         for i in 1..100_000 {
             let f = i as f64 * 1e-4 * left;
-            let s = ((left - f) / 0.1).floor();
+            let s = ((left - PREPASS_MARGIN * f) / 0.1).floor();
             if s >= 1.0 {
                 best = best.min(m.error(s as u32, f));
             }
         }
         let got = m.error(c.spp, c.effort);
-        assert!(m.time(c.spp, c.effort) <= left + 1e-9);
+        let margin = PREPASS_MARGIN * m.prepass_time(c.effort) + c.spp as f64 * m.per_spp;
+        assert!(margin <= left + 1e-9, "{margin} s with the margin");
         assert!(got <= best * 1.02, "planner {got} vs brute force {best}");
     }
 
@@ -1217,6 +1284,7 @@ mod tests {
         let mut pixels = flat(990, 1.0);
         pixels.extend(flat(10, 1e4));
         let pixels = PilotPixels {
+            cost: vec![1.0; pixels.len()],
             pixels,
             test_mean: 1.0,
         };
@@ -1235,6 +1303,23 @@ mod tests {
             .collect();
         let mean = n.iter().sum::<u32>() as f64 / 1000.0;
         assert!((mean - a.mean_spp).abs() < 1e-9);
+        assert!((a.cost - a.mean_spp).abs() < 1e-9);
+        // Where the noisy pixels' samples cost three times the others' (relative to their
+        // mean, 1.02), the same rounds cost (990·4 + 10·128·3)/1020 = 7.65 uniform samples,
+        // more than their 5.24 samples a pixel, and still within 8.
+        let costly = PilotPixels {
+            cost: (0..1000)
+                .map(|i| (if i < 990 { 1.0 } else { 3.0 }) / 1.02)
+                .collect(),
+            ..pixels
+        };
+        let (_, c, _) =
+            fit_adaptive(&costly, 1.0, (8, uniform2), Need::Within(8.0)).expect("a plan");
+        assert!(c.cost <= 8.0 && (c.cost - 7.65).abs() < 0.01, "{c:?}");
+        let pixels = PilotPixels {
+            cost: vec![1.0; 1000],
+            ..costly
+        };
         // A target: the uniform plan's error in fewer samples.
         let (_, b, e2) =
             fit_adaptive(&pixels, 1.0, (8, uniform2), Need::Below(uniform2)).expect("a plan");
@@ -1248,6 +1333,7 @@ mod tests {
     fn even_noise_stays_uniform() {
         let even = PilotPixels {
             pixels: flat(1000, 1.0),
+            cost: vec![1.0; 1000],
             test_mean: 1.0,
         };
         let uniform2 = 0.25 * 0.5;
@@ -1256,6 +1342,7 @@ mod tests {
         pixels.extend(vec![(1e4, Some(0.25)); 10]);
         let textured = PilotPixels {
             pixels,
+            cost: vec![1.0; 1000],
             test_mean: 1.0,
         };
         assert!(fit_adaptive(&textured, 1.0, (8, uniform2), Need::Within(8.0)).is_none());
@@ -1282,5 +1369,23 @@ mod tests {
         let r = request(Goal::Time(Duration::from_secs(1)));
         let c = decide(m, &r, MAX_EFFORT, &Settings::default(), 5.0);
         assert_eq!(c.why, Why::BudgetSpent);
+        // Spent, the render takes the pilot's own prepass, not a coarser one.
+        assert_eq!(c.effort, PILOT_STEP * m.pilot_effort);
+    }
+
+    /// A pilot whose larger prepass is what the budget can afford: the plan takes it, for no
+    /// prepass time, and spends the rest on samples (with 0.46 s left, 4 samples of 0.1 s).
+    /// The plans that must make a prepass (1.3 s for effort 1.3 and the margin) do not fit.
+    #[test]
+    fn the_pilot_prepass_is_taken_when_it_is_the_best_affordable() {
+        let m = Model {
+            pilot_effort: 0.25,
+            map_var: 0.01,
+            ..model()
+        };
+        let r = request(Goal::Time(Duration::from_secs(1)));
+        let c = decide(m, &r, MAX_EFFORT, &Settings::default(), 0.5);
+        assert_eq!((c.why, c.effort, c.spp), (Why::LeastError, 1.0, 4));
+        assert_eq!(reused_effort(&m, &r), Some(1.0));
     }
 }

@@ -168,6 +168,10 @@ pub enum Why {
     NoMaterial,
     /// `--adaptive`.
     AdaptiveAsked,
+    /// `--noise-target`: rounds of samples where a pixel's noise is above it.
+    NoiseTarget,
+    /// The time planner chose rounds of samples where the pixels' noise is above a target.
+    PlannedRounds,
     /// A fixed number of samples per pixel.
     FixedSamples,
 }
@@ -221,6 +225,8 @@ impl fmt::Display for Decision {
             }
             Why::NoMaterial => format!("no material {}", self.effect.material_noun()),
             Why::AdaptiveAsked => "--adaptive".to_string(),
+            Why::NoiseTarget => "--noise-target".to_string(),
+            Why::PlannedRounds => "the time planner's rounds".to_string(),
             Why::FixedSamples => "a fixed number of samples per pixel".to_string(),
         };
         write!(f, "{}: {state} ({why})", self.effect.name())
@@ -302,13 +308,18 @@ pub fn plan_for(scene: &Scene, settings: &super::Settings) -> Plan {
     } else {
         progressive_plan(scene, settings, gather)
     };
-    if let crate::render::Sampling::Adaptive { .. } = settings.sampling
+    let asked = match settings.sampling {
+        crate::render::Sampling::Adaptive { .. } => Some(Why::AdaptiveAsked),
+        crate::render::Sampling::Noise { .. } => Some(Why::NoiseTarget),
+        _ => None,
+    };
+    if let Some(why) = asked
         && let Some(d) = plan
             .decisions
             .iter_mut()
             .find(|d| d.effect == Effect::Adaptive)
     {
-        (d.on, d.why) = (true, Why::AdaptiveAsked);
+        (d.on, d.why) = (true, why);
     }
     plan
 }

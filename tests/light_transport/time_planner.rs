@@ -142,3 +142,64 @@ fn planner_flags_are_checked() {
         assert!(err.contains(flag), "{args:?}: {err}");
     }
 }
+
+/// A floor under a large area light with a thin post: the camera's noise is all in the post's
+/// penumbra (the frame where adaptive rounds pay; the planner chose them in every run tried).
+const PENUMBRA: &str = "
+    white = gr.material({0.7, 0.7, 0.7}, {0, 0, 0}, 0)
+    root = gr.node('root')
+    floor = gr.cube('floor'); floor:set_material(white); floor:scale(8, 0.1, 8); floor:translate(-4, -1.1, -8)
+    post = gr.cube('post'); post:set_material(white); post:scale(0.05, 1.5, 0.05); post:translate(0, -1, -4)
+    root:add_child(floor) root:add_child(post)
+    gr.render(root, 'p.png', 40, 40, {0, 1, 1.5}, {0, -0.4, -1}, {0, 1, 0}, 55, {0, 0, 0},
+      {gr.area_light({0, 2.8, -4}, {6, 6, 6}, {1, 0, 0}, nil, 200000, {2, 0, 0}, {0, 0, 2})})
+";
+
+/// The effect plan `--stats` prints says what sampling the frame had: `--noise-target` and a
+/// budget's rounds are adaptive, and a budget's rounds are really taken (the pixels' samples
+/// vary) exactly when the budget line says so, whichever the planner chose: on the box (even
+/// noise: uniform samples in every run tried) and on the penumbra (rounds).
+#[test]
+fn the_plan_reports_the_sampling_the_frame_had() {
+    let dir = out_dir("time_planner_rounds");
+    std::fs::write(dir.join("b.lua"), BOX).unwrap();
+    std::fs::write(dir.join("p.lua"), PENUMBRA).unwrap();
+    let stats = |script: &str, args: &[&str]| {
+        let out = run_ok(
+            caustic()
+                .current_dir(&dir)
+                .args(["render", script, "--stats", "-o", "x.png"])
+                .args(args),
+        );
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr)
+    };
+    let noise = stats("b.lua", &["--noise-target", "0.05"]);
+    assert!(noise.contains("adaptive: on (--noise-target)"), "{noise}");
+    let fixed = stats("b.lua", &["--spp", "4"]);
+    assert!(fixed.contains("adaptive: off"), "{fixed}");
+    for script in ["b.lua", "p.lua"] {
+        let planned = stats(script, &["--time-budget", "1"]);
+        let rounds = planned.contains("spp then rounds to a noise target");
+        let line = planned
+            .lines()
+            .find(|l| l.contains("camera rays per pixel"))
+            .unwrap_or_default()
+            .to_string();
+        let mean = number_after(&line, "mean");
+        let (lo, hi) = (number_after(&line, "min"), number_after(&line, "max"));
+        assert!(mean >= lo && mean <= hi, "{line}");
+        match rounds {
+            true => {
+                assert!(
+                    planned.contains("adaptive: on (the time planner's rounds)"),
+                    "{planned}"
+                );
+                assert!(hi > lo, "rounds planned but every pixel took {lo}: {line}");
+            }
+            false => {
+                assert!(planned.contains("adaptive: off"), "{planned}");
+                assert_eq!(lo, hi, "{line}");
+            }
+        }
+    }
+}

@@ -9,9 +9,10 @@
 #
 # PLANNER_ONLY=1 renders only the planner's images and keeps the other rows of
 # docs/accuracy/budget.csv (for a change to the planner alone: the defaults and the grid do not
-# run it). Timings: run it on an idle machine. About 30 minutes on 2 cores (10 planner only). The final scene's
-# references (two 256x256 renders of 64 samples a pixel at 8 times the preview's photons and 4
-# times its cache rays) are made once into target/accuracy/budget/.
+# run it). Timings: run it on an idle machine. About 40 minutes on 2 cores (10 planner only).
+# The final scene's references (two 256x256 renders of 64 samples a pixel at 64 times the
+# preview's photons, the planner's largest effort, and 8 times its cache rays) are made once
+# into target/accuracy/budget/.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 BIN=target/release/caustic
@@ -33,19 +34,21 @@ row() { echo "$NAME,$1,$2,$3,$4,$5,$6,$7" >> "$OUT/budget.csv"; }
 final_refs() {
   for seed in 1 2; do
     [ -f "$OUT/final_ref$seed.exr" ] && continue
-    "$BIN" render scenes/final.lua --scale 0.25 --spp 64 --photon-scale 0.5 --cache-rays 1024 \
+    "$BIN" render scenes/final.lua --scale 0.25 --spp 64 --photon-scale 4 --cache-rays 2048 \
       --seed "$seed" -q -o "$OUT/final_ref$seed.exr"
   done
 }
 
-# self_refs: two long caustic renders of the scene (seeds 1 and 2: 256 samples a pixel at 16
-# times its photons and 8 times its cache rays), and the planner's images measured against them
+# self_refs: two long caustic renders of the scene (seeds 1 and 2: 256 samples a pixel at 64
+# times its photons, the planner's largest effort, and 8 times its cache rays, the rays at that
+# effort: a reference with fewer photons than the plan measured would carry its own kernel blur
+# into the measure), and the planner's images measured against them
 # too: the planner expects caustic's own error, and against Mitsuba every caustic image also
 # carries caustic's converged difference from Mitsuba (the seed-pair column of
 # docs/accuracy.md), which no plan changes.
 self_refs() {
   local seed ps b
-  ps=$(awk -v s="$SCALE" 'BEGIN {print 16 * s * s}')
+  ps=$(awk -v s="$SCALE" 'BEGIN {print 64 * s * s}')
   for seed in 1 2; do
     [ -f "$OUT/$NAME.self$seed.exr" ] && continue
     "$BIN" render "$SCRIPT" --scale "$SCALE" --spp 256 --photon-scale "$ps" --cache-rays 2048 \

@@ -91,7 +91,7 @@
 //! also credited by luck. On the final scene at 1024² the frame's noise is in 0.1–0.4% of the
 //! pixels (the caustic under the glass ball, the glass's rim, the water's bright creases):
 //! with the defaults' time, rounds took the relative RMSE from the uniform plan's 0.086 to
-//! 0.072 (`docs/accuracy/budget.md`).
+//! 0.075, below the defaults' 0.084 (`docs/accuracy/budget.md`).
 //!
 //! A time budget makes the image depend on the machine's speed, as the progressive
 //! integrator's does; a target error does too, through the timed pilot's choice between two
@@ -423,7 +423,7 @@ pub fn choose(
         }
     }
     let reused =
-        (reused_effort(&model, request) == Some(choice.effort)).then(|| prepasses.swap_remove(2));
+        (reused_effort(&model, request) == choice.effort).then(|| prepasses.swap_remove(2));
     let mut planned = choice.with_settings(photons, request, pilot_seconds);
     planned.pilot_prepass = reused.is_some();
     (planned, reused)
@@ -432,10 +432,10 @@ pub fn choose(
 /// Returns the effort whose prepass the pilot has made already and the render may take as its
 /// own (the larger pair's first, at [`PILOT_STEP`]`·F₀`; with the photons and the cache's rays
 /// both fixed every effort makes the same prepass, and the frame's own effort 1 is it).
-fn reused_effort(model: &Model, request: &Request) -> Option<f64> {
+fn reused_effort(model: &Model, request: &Request) -> f64 {
     match request.fixed_photons && request.fixed_cache_rays {
-        true => Some(1.0),
-        false => Some(PILOT_STEP * model.pilot_effort),
+        true => 1.0,
+        false => PILOT_STEP * model.pilot_effort,
     }
 }
 
@@ -613,8 +613,9 @@ impl PilotPixels {
 /// same error; `None` when no candidate does.
 ///
 /// The candidates: first rounds of 2, 4, 8, … samples up to the uniform plan's (a time budget
-/// may leave room for a fraction of a sample more than it), and 97 noise targets log-spaced over [10⁻⁴, 10] of the image's
-/// mean, rounds up to [`ADAPTIVE_CAP`] times the uniform plan's samples. Each is predicted on
+/// may leave room for a fraction of a sample more than it), and 97 noise targets log-spaced
+/// over [10⁻⁴, 10] of the image's mean, rounds up to [`ADAPTIVE_CAP`] times the uniform plan's
+/// samples. Each is predicted on
 /// the pilot's pixels ([`PilotPixels::predict`]). Adaptive pixels spend samples where a pixel's
 /// samples vary, which is not only where its mean does (a texture or an edge across a pixel
 /// varies too, and stratification removes most of that): the per-pixel variances of the
@@ -752,7 +753,7 @@ fn decide(
     }
     let efforts = efforts(request, max);
     // An effort at or below the prepass the pilot made already is that prepass, for no time.
-    let reused = reused_effort(&model, request).filter(|&r| r <= max);
+    let reused = Some(reused_effort(&model, request)).filter(|&r| r <= max);
     let made = |f: f64| match reused {
         Some(r) if f <= r => (r, 0.0),
         _ => (f, model.prepass_time(f)),
@@ -1386,6 +1387,6 @@ mod tests {
         let r = request(Goal::Time(Duration::from_secs(1)));
         let c = decide(m, &r, MAX_EFFORT, &Settings::default(), 0.5);
         assert_eq!((c.why, c.effort, c.spp), (Why::LeastError, 1.0, 4));
-        assert_eq!(reused_effort(&m, &r), Some(1.0));
+        assert_eq!(reused_effort(&m, &r), 1.0);
     }
 }

@@ -102,6 +102,13 @@ pub fn render_desc(
     let (film, mut stats) = plan
         .integrator
         .render(view, &settings, plan, read, progress);
+    // The time planner decides on adaptive rounds once the prepass is made, after the plan.
+    let planned = stats.photons.as_ref().and_then(|p| p.planned.as_ref());
+    if planned.is_some_and(|p| p.adaptive.is_some()) {
+        stats
+            .plan
+            .adaptive(crate::integrator::plan::Why::PlannedRounds);
+    }
     // Why the photon counts differ from the script's and the settings' (see
     // `GiSettings::follow_image`), among the plan's notes.
     if let Some(factor) = factor

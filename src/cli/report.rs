@@ -230,13 +230,7 @@ fn print_plan(frame: &crate::frame::Frame, secs: f64) {
     let (r, photons) = (&frame.stats.render, frame.stats.photons.as_ref());
     let s = |d: std::time::Duration| d.as_secs_f64();
     println!("  plan, with the phases each decision runs:");
-    let planned = photons.and_then(|p| p.planned.as_ref());
     for d in &plan.decisions {
-        // The time planner decides on rounds after the plan was made.
-        let mut d = d.clone();
-        if d.effect == Effect::Adaptive && planned.is_some_and(|p| p.adaptive.is_some()) {
-            (d.on, d.why) = (true, crate::integrator::plan::Why::PlannedRounds);
-        }
         let phase = match (d.effect, d.on, photons) {
             (Effect::PhotonMaps, true, Some(p)) => format!(
                 "; global map traced and built in {:.3} s",
@@ -270,7 +264,7 @@ fn print_plan(frame: &crate::frame::Frame, secs: f64) {
         plan.features.specular_depth, plan.depth_why
     );
     println!("    camera pass: {secs:.3} s");
-    if let Some(planned) = planned {
+    if let Some(planned) = photons.and_then(|p| p.planned.as_ref()) {
         println!("    budget: {planned}");
     }
     for note in &plan.notes {

@@ -270,6 +270,18 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// Turns adaptive sampling on, for `why`: the sampling asked for it, or the time planner
+    /// chose rounds after the plan was made ([`crate::frame`] then records it here).
+    pub fn adaptive(&mut self, why: Why) {
+        if let Some(d) = self
+            .decisions
+            .iter_mut()
+            .find(|d| d.effect == Effect::Adaptive)
+        {
+            (d.on, d.why) = (true, why);
+        }
+    }
+
     /// Returns the decisions and notes as text, one per item.
     pub fn lines(&self) -> Vec<String> {
         let decisions = self.decisions.iter().map(ToString::to_string);
@@ -313,13 +325,8 @@ pub fn plan_for(scene: &Scene, settings: &super::Settings) -> Plan {
         crate::render::Sampling::Noise { .. } => Some(Why::NoiseTarget),
         _ => None,
     };
-    if let Some(why) = asked
-        && let Some(d) = plan
-            .decisions
-            .iter_mut()
-            .find(|d| d.effect == Effect::Adaptive)
-    {
-        (d.on, d.why) = (true, why);
+    if let Some(why) = asked {
+        plan.adaptive(why);
     }
     plan
 }

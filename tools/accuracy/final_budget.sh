@@ -6,6 +6,9 @@
 #
 #   cargo build --release && bash tools/accuracy/final_budget.sh
 #
+# The pictures are written at 1024x1024; the committed ones are halved (2x2 box means) to keep the
+# repository small.
+#
 # Run it on an idle machine: about 15 minutes on 2 cores (the references once, into
 # target/accuracy/final_budget/).
 set -euo pipefail

@@ -33,6 +33,8 @@ BIN = os.path.join(ROOT, "target", "release", "caustic")
 REFS = os.path.join(ROOT, "tools", "validate", "refs")
 OUT = os.path.join(ROOT, "target", "peers")
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "validate"))
+from regions import pixels, regions  # noqa: E402
 
 SCENES = ["cornell_diffuse", "cornell_glass", "cornell_mirror", "glass_in_water"]
 PEERS = {
@@ -86,18 +88,6 @@ def peer(key, name, xml, seconds, seed):
     return img, json.loads(line)["cpu"]
 
 
-def regions(lua_path, width, height):
-    """The scene's `-- region NAME x0 y0 x1 y1` comments as pixel boxes (as tools/validate)."""
-    out = []
-    for line in open(lua_path):
-        p = line.split()
-        if len(p) == 7 and p[0] == "--" and p[1] == "region":
-            x0, y0, x1, y1 = (float(q) for q in p[3:])
-            out.append((p[2], (round(x0 * width), round(y0 * height),
-                               round(x1 * width), round(y1 * height))))
-    return out
-
-
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--calibrate", type=float, default=0.0,
@@ -123,7 +113,7 @@ def main():
         xml = os.path.join(OUT, name, name + ".xml")
         subprocess.run([BIN, "export-mitsuba", lua, "-o", xml], check=True, capture_output=True)
         w = h = 96
-        boxes = [("image", (0, 8, w, h))] + regions(lua, w, h)
+        boxes = [("image", (0, 8, w, h))] + [(n, pixels(b, w, h)) for n, b in regions(lua)]
         if a.calibrate:
             entries = []
             seconds = a.calibrate

@@ -35,7 +35,6 @@ import argparse
 import glob
 import json
 import os
-import re
 import subprocess
 import sys
 import tempfile
@@ -43,6 +42,9 @@ import time
 
 import mitsuba as mi
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from regions import pixels, regions  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 REFS = os.path.join(ROOT, "tools", "validate", "refs")
@@ -81,15 +83,6 @@ def sidecar_regions(path, name):
     return out
 
 
-def regions(scene_path):
-    out = []
-    for line in open(scene_path):
-        m = re.match(r"--\s*region\s+(\w+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)", line)
-        if m:
-            out.append((m.group(1), tuple(float(m.group(i)) for i in range(2, 6))))
-    return out
-
-
 def load(path):
     return np.array(mi.Bitmap(path), dtype=np.float64)[..., :3]
 
@@ -105,9 +98,7 @@ def render_mitsuba(xml, spp, seed, out):
 
 def crop(img, box):
     h, w, _ = img.shape
-    x0, y0, x1, y1 = (int(round(box[0] * w)), int(round(box[1] * h)),
-                      int(round(box[2] * w)), int(round(box[3] * h)))
-    return x0, y0, x1, y1
+    return pixels(box, w, h)
 
 
 def block_means(img, box):

@@ -206,6 +206,11 @@ pub struct RenderArgs {
     /// (the caustic map's is half) [default: from the photon density, about k photons].
     #[arg(long, value_name = "F")]
     pub radius: Option<f32>,
+    /// Progressive: radii that vary over space with a pilot map's photon density, about k
+    /// photons everywhere (on), or one radius per map for the whole image (off); --radius
+    /// sets the median [default: on].
+    #[arg(long, value_enum, value_name = "SWITCH")]
+    pub local_radii: Option<Switch>,
     /// Photon mapping: plan samples, photons and cache rays for the least time to a relative
     /// RMSE of E (a pilot measures the frame; see docs/accuracy.md). Progressive: stop once
     /// the relative RMSE estimated from the even and odd passes is at most E (noise only).

@@ -110,10 +110,15 @@ pub fn print_stats(
             .estimated_error
             .map_or("none".to_string(), |e| format!("{e:.4}"));
         println!(
-            "  progressive: {} passes in {:.3} s (stopped by {:?}); radii global {:.4e} -> {:.4e}, caustic {:.4e} -> {:.4e}; estimated relative RMSE {error}",
+            "  progressive: {} passes in {:.3} s (stopped by {:?}); {}radii global {:.4e} -> {:.4e}, caustic {:.4e} -> {:.4e}; estimated relative RMSE {error}",
             p.passes,
             p.time.as_secs_f64(),
             p.stop,
+            if p.local_radii {
+                "local radii (medians), "
+            } else {
+                ""
+            },
             p.first_radii.0,
             p.last_radii.0,
             p.first_radii.1,

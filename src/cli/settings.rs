@@ -382,6 +382,7 @@ fn progressive_settings(a: &RenderArgs) -> Result<Option<ProgressiveSettings>> {
         let given = [
             ("--passes", a.passes.is_some()),
             ("--radius", a.radius.is_some()),
+            ("--local-radii", a.local_radii.is_some()),
             ("--write-every", a.write_every.is_some()),
             ("--first-pass", a.first_pass.is_some()),
             ("--save-passes", a.save_passes.is_some()),
@@ -437,5 +438,6 @@ fn progressive_settings(a: &RenderArgs) -> Result<Option<ProgressiveSettings>> {
         time_budget: a.time_budget.map(std::time::Duration::from_secs_f64),
         snapshot_every: a.write_every,
         first_pass,
+        local_radii: a.local_radii != Some(Switch::Off),
     }))
 }

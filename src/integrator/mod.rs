@@ -20,6 +20,7 @@
 
 pub mod eye;
 pub mod irradiance_cache;
+pub mod local_radii;
 pub mod maps_file;
 pub mod mis;
 pub mod passes_file;

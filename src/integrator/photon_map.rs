@@ -53,6 +53,7 @@
 
 use super::eye::{DiffuseTerm, PathState, ShadingPoint};
 use super::irradiance_cache::{CacheSettings, CacheStats, Gather, IrradianceCache};
+use super::local_radii::LocalRadii;
 pub use super::precomputed::{PRECOMPUTE_STRIDE, PointEstimate, Precomputed, is_precompute_point};
 use super::{Plan, Settings, View, camera_pass};
 use crate::accel::counters::RayKind;
@@ -72,6 +73,7 @@ use crate::stats::{RayCounts, RenderStats};
 use glam::Vec3A;
 use std::cell::RefCell;
 use std::f32::consts::FRAC_1_PI;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Deepest eye-path depth (specular bounces) at which final gathering is used; deeper points
@@ -270,6 +272,9 @@ pub struct Prepass {
     /// Whether estimates take every photon within the maps' radii (the progressive
     /// integrator's fixed radii, [`Prepass::with_fixed_radii`]) rather than the `k` nearest.
     fixed_radii: bool,
+    /// With fixed radii, radii that vary over space ([`Prepass::with_local_radii`]): the fields
+    /// and the factors (global, caustic) their values are scaled by.
+    local: Option<(Arc<LocalRadii>, (f32, f32))>,
     pub stats: GiStats,
 }
 
@@ -462,6 +467,7 @@ impl Prepass {
             global_r2: r * r,
             caustic_r2: 0.25 * r * r,
             fixed_radii: false,
+            local: None,
         };
         let gathers = matches!(settings.indirect, Indirect::Gather { .. });
         if settings.precompute && gathers && !gi.global.is_empty() {
@@ -527,6 +533,21 @@ impl Prepass {
         indirect_only: bool,
         counts: &mut RayCounts,
     ) -> Vec3A {
+        self.estimate(kind, (p, n), indirect_only, true, counts)
+    }
+
+    /// [`Prepass::irradiance`] at `at` = (point, normal), over the local radii there when
+    /// `local` (the eye path's diffuse points; a final-gather ray's end reads the radius the
+    /// fields' median shrinks to: gathers average hundreds of such reads, whose noise they
+    /// smooth, and a field lookup at each read doubled a gathered frame's time).
+    fn estimate(
+        &self,
+        kind: MapKind,
+        (p, n): (Vec3A, Vec3A),
+        indirect_only: bool,
+        local: bool,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
         let (map, max_d2) = match (kind, &self.caustic) {
             (MapKind::Global, _) => (&self.global, self.global_r2),
             (MapKind::Caustic, Some(c)) => (c, self.caustic_r2),
@@ -534,8 +555,19 @@ impl Prepass {
         };
         FOUND.with_borrow_mut(|found| {
             let r2 = if self.fixed_radii {
-                map.within(p, max_d2, found);
-                max_d2
+                let r2 = match self.local.as_ref().filter(|_| local) {
+                    Some((fields, (global, caustic))) => {
+                        let scale = if kind == MapKind::Caustic {
+                            caustic
+                        } else {
+                            global
+                        };
+                        (fields.at(kind == MapKind::Caustic, p, n) * scale).powi(2)
+                    }
+                    None => max_d2,
+                };
+                map.within(p, r2, found);
+                r2
             } else {
                 map.knn(p, self.settings.k, max_d2, found)
             };
@@ -586,6 +618,17 @@ impl Prepass {
         self.precomputed = None;
         self.cache = None;
         self
+    }
+
+    /// Returns these maps with the progressive integrator's estimates over radii that vary over
+    /// space ([`super::local_radii`]): at `p`, the fields' first-pass radius there scaled by
+    /// `radii` over the fields' medians (`radii` are what one global radius would be now).
+    pub fn with_local_radii(self, fields: Arc<LocalRadii>, radii: (f32, f32)) -> Prepass {
+        let (g, c) = fields.medians();
+        let scales = (radii.0 / g, radii.1 / c);
+        let mut maps = self.with_fixed_radii(radii.0, radii.1);
+        maps.local = Some((fields, scales));
+        maps
     }
 
     /// Returns these maps with every precomputation point estimated now, in kd-tree order, when
@@ -726,7 +769,7 @@ impl Prepass {
                 }
             }
         }
-        self.irradiance(MapKind::Global, p, n, false, counts)
+        self.estimate(MapKind::Global, (p, n), false, false, counts)
     }
 
     /// Returns the caustic and indirect light leaving the diffuse lobe of the BSDF at `at`

@@ -47,6 +47,7 @@ pub const KEYS: &[(&str, bool)] = &[
     ("passes", false),
     ("alpha", false),
     ("radius", false),
+    ("local_radii", false),
     ("target_error", false),
     ("time_budget", false),
 ];

@@ -16,6 +16,8 @@ pub struct RenderStats {
     /// Photon-map estimates made while rendering, and the photons they found.
     pub lookups: u64,
     pub photons_used: u64,
+    /// Caustic estimates taken from an earlier sample of the same pixel instead of a lookup.
+    pub reused: u64,
     /// Eye paths stopped at the hard depth cap ([`crate::integrator::eye::MAX_PATH_DEPTH`]).
     pub depth_capped: u64,
     /// Camera samples and pixels whose radiance was NaN or infinite, dropped (counted as black).
@@ -79,6 +81,7 @@ impl RenderStats {
             material_time: Duration::from_nanos(t.material_nanos),
             lookups: t.lookups,
             photons_used: t.photons_used,
+            reused: t.reused,
             depth_capped: t.depth_capped,
             nonfinite_samples: t.nonfinite,
             cached: t.cached,
@@ -97,6 +100,7 @@ impl RenderStats {
         self.material_time += o.material_time;
         self.lookups += o.lookups;
         self.photons_used += o.photons_used;
+        self.reused += o.reused;
         self.depth_capped += o.depth_capped;
         self.nonfinite_samples += o.nonfinite_samples;
         self.cached += o.cached;
@@ -120,6 +124,8 @@ pub struct RayCounts {
     /// Photon-map lookups and the photons they found.
     pub lookups: u64,
     pub photons_used: u64,
+    /// Caustic estimates taken from an earlier sample of the same pixel instead of a lookup.
+    pub reused: u64,
     /// Eye paths stopped at the hard depth cap ([`crate::integrator::eye::MAX_PATH_DEPTH`]).
     pub depth_capped: u64,
     /// Camera samples whose radiance was NaN or infinite, dropped (counted as black).
@@ -141,6 +147,7 @@ impl RayCounts {
         self.material_nanos += o.material_nanos;
         self.lookups += o.lookups;
         self.photons_used += o.photons_used;
+        self.reused += o.reused;
         self.depth_capped += o.depth_capped;
         self.nonfinite += o.nonfinite;
         self.cached += o.cached;

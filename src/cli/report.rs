@@ -341,8 +341,9 @@ fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
         s.precomputed_evaluated,
     );
     println!(
-        "  photon lookups while rendering: {lookups}, {:.1} photons per lookup",
-        used as f64 / lookups.max(1) as f64
+        "  photon lookups while rendering: {lookups}, {:.1} photons per lookup; {} caustic estimates taken from another sample of the pixel",
+        used as f64 / lookups.max(1) as f64,
+        rstats.reused,
     );
     if let Some(c) = &s.cache {
         let levels: Vec<String> = c.per_level.iter().map(|n| n.to_string()).collect();

@@ -1082,6 +1082,8 @@ fn pilot_pixels(
                 let mut rng = Rng::new(seed, Pass::Pixel, index);
                 let mut run = PixelRun::default();
                 for (set, &size) in PILOT_SETS.iter().enumerate() {
+                    // A set's samples share caustic estimates as a pixel round's do.
+                    let _scope = crate::render::scope::PixelScope::open();
                     let sharers = size.min(WEAK_SHARERS);
                     for (k, (u, v)) in stratified_2d(&mut rng, size).into_iter().enumerate() {
                         let share = match (k as u32).is_multiple_of(sharers) {

@@ -232,6 +232,7 @@ impl<'a> PixelSampler<'a> {
             stratified_2d(rng, n)
         };
         let sharers = n.min(WEAK_SHARERS);
+        let _scope = super::scope::PixelScope::open();
         for (i, &(u, v)) in positions.iter().enumerate() {
             let share = match sharers {
                 1 => Share::All,

@@ -18,6 +18,7 @@
 
 pub mod aa;
 pub mod noise;
+pub mod scope;
 
 use crate::accel::counters;
 use crate::camera::Camera;

@@ -202,6 +202,33 @@ pub fn render_frame(
     caustic::frame::render(scene, camera, window, settings, plan, progress)
 }
 
+/// [`render_frame`] with no progress, on a pool of `threads` threads.
+pub fn render_on_threads(
+    threads: usize,
+    scene: &mut Scene,
+    camera: &Camera,
+    window: Window,
+    settings: &Settings,
+) -> (Film, caustic::frame::Stats) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| render_frame(scene, camera, window, settings, &NoProgress))
+}
+
+/// Asserts that `part`, a render of `window` alone, equals that window of the full frame `full`
+/// bit for bit.
+pub fn assert_window_of(part: &Film, full: &Film, window: Window) {
+    let (w, h) = window.size();
+    for y in 0..h {
+        for x in 0..w {
+            let (fx, fy) = (x + window.x0, y + window.y0);
+            assert_eq!(part.get(x, y), full.get(fx, fy), "window pixel ({x}, {y})");
+        }
+    }
+}
+
 /// Renders a corpus script as if run from its own folder.
 pub fn render_corpus_script(path: &Path) -> Vec<(RenderDesc, Camera, Film)> {
     let src = std::fs::read(path).unwrap();

@@ -4,7 +4,7 @@
 //! `media` (the camera inside solids, relative indices, absorption), `leaks` (no light through
 //! closed walls), `deep_paths` (Russian roulette past any fixed depth), `shadow_media` (no
 //! shadow rays from inside transparent solids), `weak_branches` (weak reflections shared by a
-//! pixel's samples), `progressive` (the progressive integrator), `effect_plan` (the effects
+//! pixel's samples), `shared_caustics` (caustic estimates shared by a pixel's samples), `progressive` (the progressive integrator), `effect_plan` (the effects
 //! decided before the passes), `pixel_sampling` (determinism, crops, tiles, adaptive sampling),
 //! `spot_and_directional` (those lights' shadows and photons), `adaptive_pixels` (samples
 //! where the half-buffers see noise), `time_planner` (`--time-budget` and `--target-error` for
@@ -27,6 +27,7 @@ mod pixel_sampling;
 mod progressive;
 mod shading;
 mod shadow_media;
+mod shared_caustics;
 mod spot_and_directional;
 mod time_planner;
 mod weak_branches;

@@ -15,7 +15,7 @@ use glam::Vec3A;
 use std::sync::Mutex;
 
 /// Side of the analytic scene's image in pixels.
-const SIDE: u32 = 24;
+pub(crate) const SIDE: u32 = 24;
 
 /// A diffuse floor (kd 0.5, top face y = 0) under a point light of `rgb` 1 and physical falloff
 /// at height 10, with a small perfect mirror (ks 1, 0.2 × 0.2) facing down at height 10.5 that
@@ -81,7 +81,7 @@ fn mirror_reference(camera: &Camera) -> Vec<f32> {
 
 /// The progressive settings of the mirror scene: caustic photons only, the global map empty and
 /// seen directly (no gather rays), one jittered sample per pass.
-fn mirror_settings(seed: u64, progressive: ProgressiveSettings) -> Settings {
+pub(crate) fn mirror_settings(seed: u64, progressive: ProgressiveSettings) -> Settings {
     Settings {
         seed,
         sampling: Sampling::Stratified { spp: 1 },
@@ -111,8 +111,22 @@ impl Progress for Snapshots {
 }
 
 /// Returns the mirror scene and its camera.
-fn mirror_scene() -> (caustic::scene::Scene, Camera) {
-    let d = run_lua(&floor_scene(MIRROR_SCENE)).unwrap();
+pub(crate) fn mirror_scene() -> (caustic::scene::Scene, Camera) {
+    floor_scene_with(MIRROR_SCENE)
+}
+
+/// Returns the mirror scene, its camera, each pixel's closed form ([`mirror_reference`]) and
+/// their mean.
+pub(crate) fn mirror_with_reference() -> (caustic::scene::Scene, Camera, Vec<f32>, f64) {
+    let (scene, camera) = mirror_scene();
+    let reference = mirror_reference(&camera);
+    let mean = reference.iter().map(|&r| r as f64).sum::<f64>() / reference.len() as f64;
+    (scene, camera, reference, mean)
+}
+
+/// Returns [`floor_scene`] with `mirrors`, built, and its camera.
+fn floor_scene_with(mirrors: &str) -> (caustic::scene::Scene, Camera) {
+    let d = run_lua(&floor_scene(mirrors)).unwrap();
     let r = &d.renders[0];
     (
         build_scene(&d, r).unwrap(),
@@ -145,7 +159,7 @@ fn mirror_snapshots(
 }
 
 /// Returns the mean squared error and the mean of `film` against the per-pixel `reference`.
-fn mse_and_mean(film: &Film, reference: &[f32]) -> (f64, f64) {
+pub(crate) fn mse_and_mean(film: &Film, reference: &[f32]) -> (f64, f64) {
     let (mut se, mut sum) = (0.0f64, 0.0f64);
     for (p, &r) in film.pixels.iter().zip(reference) {
         for c in 0..3 {
@@ -164,9 +178,7 @@ fn mse_and_mean(film: &Film, reference: &[f32]) -> (f64, f64) {
 /// SPPM's α = 1/3 as −1/6; a wrong power or kernel normalisation moves the mean.
 #[test]
 fn progressive_error_falls_at_the_predicted_rate_and_converges_to_the_closed_form() {
-    let (mut scene, camera) = mirror_scene();
-    let reference = mirror_reference(&camera);
-    let ref_mean = reference.iter().map(|&r| r as f64).sum::<f64>() / reference.len() as f64;
+    let (mut scene, camera, reference, ref_mean) = mirror_with_reference();
     let seeds = 6;
     let checkpoints = [4u32, 8, 16, 32, 64];
     let mut mse = [0.0f64; 5];
@@ -244,10 +256,7 @@ fn two_mirrors_caustic(p: Vec3A) -> f32 {
 /// the bright caustic into the dim one).
 #[test]
 fn local_radii_make_dim_caustics_converge_as_bright_ones_do() {
-    let d = run_lua(&floor_scene(TWO_MIRRORS)).unwrap();
-    let r = &d.renders[0];
-    let mut scene = build_scene(&d, r).unwrap();
-    let camera = Camera::new(&r.camera, r.width, r.height);
+    let (mut scene, camera) = floor_scene_with(TWO_MIRRORS);
     let direct = |p: Vec3A| {
         let d2 = p.x * p.x + p.z * p.z + 100.0;
         0.5 * 10.0 / (d2 * d2.sqrt())
@@ -376,9 +385,7 @@ fn local_radii_make_dim_caustics_converge_as_bright_ones_do() {
 /// stops is within a factor 1.5 of the target either way, and it stopped for that reason.
 #[test]
 fn target_error_stops_near_the_error_it_asks_for() {
-    let (mut scene, camera) = mirror_scene();
-    let reference = mirror_reference(&camera);
-    let ref_mean = reference.iter().map(|&r| r as f64).sum::<f64>() / reference.len() as f64;
+    let (mut scene, camera, reference, ref_mean) = mirror_with_reference();
     for target in [0.02, 0.01] {
         for seed in [1, 2] {
             let settings = mirror_settings(
@@ -538,13 +545,7 @@ fn progressive_renders_are_deterministic_across_threads_and_tiles() {
         ..Settings::default()
     };
     let mut render = |threads: usize, window: Window| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            crate::common::render_frame(&mut scene, &camera, window, &settings, &NoProgress).0
-        })
+        crate::common::render_on_threads(threads, &mut scene, &camera, window, &settings).0
     };
     let full = Window::full(32, 32);
     let one = render(1, full);
@@ -557,16 +558,7 @@ fn progressive_renders_are_deterministic_across_threads_and_tiles() {
         y1: 20,
         ..full
     };
-    let part = render(2, tile);
-    for y in 0..8 {
-        for x in 0..16 {
-            assert_eq!(
-                part.get(x, y),
-                one.get(x + 8, y + 12),
-                "tile pixel ({x}, {y})"
-            );
-        }
-    }
+    crate::common::assert_window_of(&render(2, tile), &one, tile);
     assert!(one.pixels.iter().any(|p| p.max_element() > 0.0));
     assert_ne!(pass_seed(0, 0), pass_seed(0, 1));
 }

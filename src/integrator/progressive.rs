@@ -172,18 +172,9 @@ pub fn render(
     let start = Instant::now();
     let mut acc = Accumulator::starting_at(window, prog.first_pass);
     let (mut render_stats, mut photon_stats) = (RenderStats::default(), GiStats::default());
-    let (mut first_radii, mut radii) = ((0.0, 0.0), (0.0, 0.0));
     // A pass's phases report nothing (progress counts passes) but stop when asked.
     let inner = StopOnly(progress);
-    let local = prog
-        .local_radii
-        .then(|| Arc::new(pilot_radii(scene, settings, &plan, &inner)));
-    if let Some(fields) = &local {
-        first_radii = given_radii(scene, &prog).unwrap_or_else(|| fields.medians());
-        radii = shrunk_to(first_radii, prog.first_pass, prog.alpha);
-    } else if prog.first_pass > 0 {
-        (first_radii, radii) = radii_at(scene, settings, &plan, &prog);
-    }
+    let (local, mut first_radii, mut radii) = starting_radii(scene, settings, &plan, &inner);
     progress.start("progressive passes", prog.passes as u64);
     // The first pass's rows, when the render is stopped before it ends.
     let mut first_rows = None;
@@ -265,6 +256,32 @@ pub fn render(
         p.sums = acc;
     }
     (film, stats)
+}
+
+/// The global and the caustic map's radii.
+type Radii = (f32, f32);
+
+/// Returns a render's local radii (with `--local-radii on`), and its first pass's radii and
+/// those of pass `first_pass` as far as they are known before its first pass: both zero when
+/// pass 0, run here, will set them from its own maps.
+fn starting_radii(
+    scene: &Scene,
+    settings: &Settings,
+    plan: &Plan,
+    progress: &dyn Progress,
+) -> (Option<Arc<LocalRadii>>, Radii, Radii) {
+    let prog = settings.progressive.clone().unwrap_or_default();
+    if prog.local_radii {
+        let fields = pilot_radii(scene, settings, plan, progress);
+        let first = given_radii(scene, &prog).unwrap_or_else(|| fields.medians());
+        let now = shrunk_to(first, prog.first_pass, prog.alpha);
+        return (Some(Arc::new(fields)), first, now);
+    }
+    if prog.first_pass > 0 {
+        let (first, now) = radii_at(scene, settings, plan, &prog);
+        return (None, first, now);
+    }
+    (None, (0.0, 0.0), (0.0, 0.0))
 }
 
 /// Returns the photon settings of pass `pass` of a render with `settings` as `plan` says: the

@@ -72,21 +72,10 @@ impl RadiusField {
             .into_par_iter()
             .map_init(Vec::new, |found, i| {
                 let p = points.position(PhotonId(i as u32));
-                let r2 = pilot.knn(p, k + 1, max * max, found);
-                if found.len() <= k {
-                    max
-                } else {
-                    r2.sqrt().min(max)
-                }
+                kth_distance(pilot, p, k, max, found)
             })
             .collect();
-        let median = if radius.is_empty() {
-            max
-        } else {
-            let mut sorted = radius.clone();
-            let mid = sorted.len() / 2;
-            *sorted.select_nth_unstable_by(mid, f32::total_cmp).1
-        };
+        let median = median_or(radius.clone(), max);
         RadiusField {
             points,
             radius,
@@ -113,6 +102,33 @@ impl RadiusField {
             self.radius[id.0 as usize].max(self.median)
         })
     }
+}
+
+/// Returns the distance from photon position `p` of `map` to its `k`-th nearest other photon,
+/// at most `max` (`max` where fewer than `k` others are that near); `found` is scratch.
+pub fn kth_distance(
+    map: &PhotonMap,
+    p: Vec3A,
+    k: usize,
+    max: f32,
+    found: &mut Vec<(f32, PhotonId)>,
+) -> f32 {
+    // The photon at `p` is its own nearest: k + 1 of them.
+    let r2 = map.knn(p, k + 1, max * max, found);
+    if found.len() <= k {
+        max
+    } else {
+        r2.sqrt().min(max)
+    }
+}
+
+/// Returns the median of `values`, or `empty` when there are none.
+pub fn median_or(mut values: Vec<f32>, empty: f32) -> f32 {
+    if values.is_empty() {
+        return empty;
+    }
+    let mid = values.len() / 2;
+    *values.select_nth_unstable_by(mid, f32::total_cmp).1
 }
 
 /// The two maps' fields, and the factor every radius is scaled by (the shrink of the passes

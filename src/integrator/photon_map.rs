@@ -821,9 +821,8 @@ impl Prepass {
     /// the same round whose point lies within [`REUSE_FRACTION`] of its estimate's radius of `p`
     /// on a surface facing the same way ([`REUSE_MIN_COS`]). The module doc says why.
     fn caustic_at(&self, p: Vec3A, n: Vec3A, counts: &mut RayCounts) -> Vec3A {
-        let shares = self.settings.share_caustics && !self.fixed_radii;
-        let scope = crate::render::scope::current().filter(|_| shares);
-        let Some(scope) = scope.filter(|_| self.caustic.is_some()) else {
+        let shares = self.settings.share_caustics && !self.fixed_radii && self.caustic.is_some();
+        let Some(scope) = crate::render::scope::current().filter(|_| shares) else {
             return self.irradiance(MapKind::Caustic, p, n, false, counts);
         };
         let prepass = std::ptr::from_ref(self) as usize;

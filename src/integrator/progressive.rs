@@ -347,22 +347,15 @@ fn first_pass_radii(scene: &Scene, gi: &Prepass, prog: &ProgressiveSettings) -> 
 /// holds about `k` photons where photons typically land.
 pub fn initial_radius(map: &PhotonMap, k: usize, max: f32) -> f32 {
     let n = map.len();
-    if n == 0 {
-        return max;
-    }
     let probes = n.min(RADIUS_PROBES);
     let mut found = Vec::new();
-    let mut r: Vec<f32> = (0..probes)
+    let r: Vec<f32> = (0..probes)
         .map(|j| {
             let id = crate::photon::PhotonId((j * n / probes) as u32);
-            let r2 = map.knn(map.position(id), k + 1, max * max, &mut found);
-            // Fewer than k + 1 photons within `max`: the radius is `max`.
-            if found.len() <= k { max } else { r2.sqrt() }
+            super::local_radii::kth_distance(map, map.position(id), k, max, &mut found)
         })
         .collect();
-    let mid = r.len() / 2;
-    let (_, median, _) = r.select_nth_unstable_by(mid, f32::total_cmp);
-    median.min(max)
+    super::local_radii::median_or(r, max)
 }
 
 /// Returns why the render stops after `acc.passes` passes taking `elapsed`, or `None` to go on.

@@ -229,6 +229,76 @@ pub struct CacheStats {
     /// The pass's rays (probes' specular paths and the records' gather rays).
     pub rays: RayCounts,
     pub time: Duration,
+    /// The records a build over the whole image would make, estimated level by level from
+    /// the records each probe made (equal to `records` when it was such a build).
+    pub whole_records: f64,
+}
+
+impl CacheStats {
+    /// Returns the seconds a build over the whole image would take: this build's time per
+    /// record (each record's gather rays are its cost) times [`CacheStats::whole_records`].
+    pub fn whole_seconds(&self) -> f64 {
+        match self.records {
+            0 => self.time.as_secs_f64(),
+            n => self.time.as_secs_f64() * self.whole_records / n as f64,
+        }
+    }
+}
+
+/// Which pixels' centre rays a cache build probes: the whole image's lattices, or only the
+/// lattice points near some pixels (the planner's pilot, which reads the cache at those pixels
+/// only).
+#[derive(Clone, Copy, Debug)]
+pub enum Probes<'a> {
+    Whole,
+    Near(&'a [(u32, u32)]),
+}
+
+/// Returns the probes of each level, coarse to fine, in row-major order: every pixel of the
+/// level's lattice not on a coarser one, or with [`Probes::Near`] those within one stride
+/// (each axis) of a listed pixel; and each level's count over the whole image.
+fn level_probes(probes: Probes, (width, height): (u32, u32)) -> Vec<(Vec<(u32, u32)>, u64)> {
+    STRIDES
+        .iter()
+        .enumerate()
+        .map(|(l, &s)| {
+            let coarser =
+                |x: u32, y: u32| l > 0 && x.is_multiple_of(2 * s) && y.is_multiple_of(2 * s);
+            let lattice = |n: u32| n.div_ceil(s) as u64;
+            let coarse = |n: u32| n.div_ceil(2 * s) as u64;
+            let whole = lattice(width) * lattice(height)
+                - if l > 0 {
+                    coarse(width) * coarse(height)
+                } else {
+                    0
+                };
+            let mut pixels: Vec<(u32, u32)> = match probes {
+                Probes::Whole => (0..height)
+                    .step_by(s as usize)
+                    .flat_map(|y| (0..width).step_by(s as usize).map(move |x| (x, y)))
+                    .collect(),
+                Probes::Near(near) => {
+                    let around = |c: u32, n: u32| {
+                        let lo = c.saturating_sub(s).div_ceil(s) * s;
+                        (lo..=(c + s).min(n - 1)).step_by(s as usize)
+                    };
+                    let mut v: Vec<(u32, u32)> = near
+                        .iter()
+                        .filter(|&&(x, y)| x < width && y < height)
+                        .flat_map(|&(px, py)| {
+                            around(py, height)
+                                .flat_map(move |y| around(px, width).map(move |x| (x, y)))
+                        })
+                        .collect();
+                    v.sort_unstable_by_key(|&(x, y)| (y, x));
+                    v.dedup();
+                    v
+                }
+            };
+            pixels.retain(|&(x, y)| !coarser(x, y));
+            (pixels, whole)
+        })
+        .collect()
 }
 
 /// Records and the grid that finds them.
@@ -404,38 +474,27 @@ impl IrradianceCache {
         })
     }
 
-    /// Builds the cache of a frame of `scene` through `camera` (its whole image) with `gi`'s
-    /// maps, level by level (see the module doc).
+    /// Builds the cache of a frame of `scene` through `camera` (its whole image, or with
+    /// [`Probes::Near`] the parts near some pixels) with `gi`'s maps, level by level (see the
+    /// module doc).
     pub fn build(
         scene: &Scene,
         camera: &Camera,
         gi: &Prepass,
         settings: &CacheSettings,
-        seed: u64,
+        (seed, probes): (u64, Probes),
         progress: &dyn Progress,
     ) -> (IrradianceCache, CacheStats) {
         use rayon::prelude::*;
         let start = Instant::now();
         let (width, height) = camera.size();
         let r_range = radius_range(scene, (width, height));
-        let levels: Vec<Vec<(u32, u32)>> = STRIDES
-            .iter()
-            .enumerate()
-            .map(|(l, &s)| {
-                let coarser =
-                    |x: u32, y: u32| l > 0 && x.is_multiple_of(2 * s) && y.is_multiple_of(2 * s);
-                (0..height)
-                    .step_by(s as usize)
-                    .flat_map(|y| (0..width).step_by(s as usize).map(move |x| (x, y)))
-                    .filter(|&(x, y)| !coarser(x, y))
-                    .collect()
-            })
-            .collect();
-        let total: u64 = levels.iter().map(|l| l.len() as u64).sum();
+        let levels = level_probes(probes, (width, height));
+        let total: u64 = levels.iter().map(|l| l.0.len() as u64).sum();
         progress.start("caching irradiance", total);
         let mut cache = IrradianceCache::new(Vec::new(), settings.accuracy);
         let mut stats = CacheStats::default();
-        for pixels in &levels {
+        for (pixels, whole) in &levels {
             if progress.should_stop() {
                 break;
             }
@@ -471,8 +530,12 @@ impl IrradianceCache {
                 records.extend(r);
                 stats.rays.add(&counts);
             }
-            stats.per_level.push(records.len() - before);
+            let made = records.len() - before;
+            stats.per_level.push(made);
             stats.probes += pixels.len() as u64;
+            if !pixels.is_empty() {
+                stats.whole_records += made as f64 * *whole as f64 / pixels.len() as f64;
+            }
             cache = IrradianceCache::new(records, settings.accuracy);
         }
         stats.records = cache.len();
@@ -530,6 +593,32 @@ impl Probe<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The probes near some pixels are the whole image's probes within one stride of them
+    /// (checked against a brute-force filter of the whole lattice), in the same row-major
+    /// order, and each level's count over the whole image is the whole build's.
+    #[test]
+    fn probes_near_pixels_are_the_whole_lattices_within_a_stride() {
+        let size = (203, 97);
+        let near = [(0, 0), (100, 50), (202, 96), (37, 95), (101, 50), (500, 5)];
+        let whole = level_probes(Probes::Whole, size);
+        let part = level_probes(Probes::Near(&near), size);
+        let mut kept = 0;
+        for (l, ((all, n_all), (some, n_some))) in whole.iter().zip(&part).enumerate() {
+            assert_eq!(*n_all, all.len() as u64, "level {l}");
+            assert_eq!(n_some, n_all, "level {l}");
+            let s = STRIDES[l];
+            let close = |&(x, y): &(u32, u32)| {
+                near.iter().any(|&(px, py)| {
+                    px < size.0 && py < size.1 && x.abs_diff(px) <= s && y.abs_diff(py) <= s
+                })
+            };
+            let brute: Vec<(u32, u32)> = all.iter().copied().filter(close).collect();
+            assert_eq!(some, &brute, "level {l}");
+            kept += some.len();
+        }
+        assert!(kept > 0 && kept < whole.iter().map(|l| l.0.len()).sum::<usize>());
+    }
 
     fn record(p: Vec3A, n: Vec3A, e: f32, r: f32) -> Record {
         Record {

@@ -77,7 +77,7 @@
 //! never share (its convergence is analysed per estimate).
 
 use super::eye::{DiffuseTerm, PathState, ShadingPoint};
-use super::irradiance_cache::{CacheSettings, CacheStats, Gather, IrradianceCache};
+use super::irradiance_cache::{CacheSettings, CacheStats, Gather, IrradianceCache, Probes};
 use super::local_radii::LocalRadii;
 pub use super::precomputed::{PRECOMPUTE_STRIDE, PointEstimate, Precomputed, is_precompute_point};
 use super::{Plan, Settings, View, camera_pass};
@@ -377,7 +377,7 @@ pub fn render(
         p
     });
     let gi = match reused {
-        Some(gi) => gi,
+        Some(gi) => gi.with_whole_cache(view.scene, view.camera, progress),
         None => prepass(view.scene, view.camera, &photons, read, progress),
     };
     if let (Some(p), Some(request)) = (&mut chosen, &request) {
@@ -735,10 +735,19 @@ impl Prepass {
 
     /// Returns these maps with an irradiance cache for the frame of `scene` through `camera`
     /// when final gathering runs and the settings ask for one ([`IrradianceCache::build`]).
-    pub fn with_cache(
+    pub fn with_cache(self, scene: &Scene, camera: &Camera, progress: &dyn Progress) -> Prepass {
+        self.with_cache_over(scene, camera, Probes::Whole, progress)
+    }
+
+    /// [`Prepass::with_cache`] with the cache made only where `probes` says: the planner's
+    /// pilot reads it at a grid of pixels, and a cache near them is what those pixels see,
+    /// at a fraction of the whole image's records. Such a prepass is not a frame's: before a
+    /// render takes it, [`Prepass::with_whole_cache`].
+    pub fn with_cache_over(
         mut self,
         scene: &Scene,
         camera: &Camera,
+        probes: Probes,
         progress: &dyn Progress,
     ) -> Prepass {
         let gathers = matches!(self.settings.indirect, Indirect::Gather { .. });
@@ -753,12 +762,25 @@ impl Prepass {
             camera,
             &self,
             &self.settings.cache,
-            self.settings.seed,
+            (self.settings.seed, probes),
             progress,
         );
         self.cache = Some(cache);
         self.stats.cache = Some(stats);
         self
+    }
+
+    /// Returns these maps with their cache made afresh over the whole image (a pilot's
+    /// prepass, whose cache covered only its pixels, made ready for the frame).
+    pub fn with_whole_cache(
+        mut self,
+        scene: &Scene,
+        camera: &Camera,
+        progress: &dyn Progress,
+    ) -> Prepass {
+        self.cache = None;
+        self.stats.cache = None;
+        self.with_cache(scene, camera, progress)
     }
 
     /// Returns whether an eye path in `state` final-gathers at a diffuse surface (else it reads

@@ -35,7 +35,14 @@
 //!
 //! # The pilot
 //! Four prepasses of independent seeds, two at `F₀` and two at `4F₀`, each the real chain
-//! (maps, precomputation, cache) and timed. `F₀` is [`PILOT_EFFORT`] for a target error; for a
+//! (maps, precomputation, cache) and timed, except that each cache is made only near the
+//! pilot's pixels ([`Probes::Near`]: the lattice points of each level within one stride of
+//! them). A cache over the whole image took 70% of the pilot at 1024² on the final scene (four
+//! caches of the whole image for 1296 pixels' samples); the records near a pixel are made as
+//! a whole build would make them, from the same coarser levels nearby, and the whole build's
+//! time is extrapolated from the records each level's probes made
+//! ([`super::irradiance_cache::CacheStats::whole_seconds`]). A render that takes a pilot's
+//! prepass makes its cache afresh over the whole image. `F₀` is [`PILOT_EFFORT`] for a target error; for a
 //! time budget, the effort at which the four take about [`PILOT_SHARE`] of it (at most
 //! [`MAX_PILOT_EFFORT`]), so that a long budget measures the maps nearer the efforts it
 //! chooses from (the maps' noise on the final scene falls as effort^-1.1 between 1/32 and 1/8
@@ -98,7 +105,8 @@
 //! equally accurate plans, though far less.
 
 use super::eye::{DiffuseTerm, Tracer};
-use super::photon_map::{GiSettings, prepass};
+use super::irradiance_cache::Probes;
+use super::photon_map::{GiSettings, Prepass};
 use super::{Settings, View};
 use crate::photon::trace::{MAX_PHOTONS, MapKind};
 use crate::progress::{NoProgress, Progress};
@@ -247,8 +255,13 @@ impl Model {
 
     /// Returns the prepass's expected wall seconds at effort `f`.
     pub fn prepass_time(&self, f: f64) -> f64 {
-        let rays = cache_rays(self.cache_rays, f, self.fixed_rays);
-        self.photon_fixed + self.photon_per_effort * f + self.cache_per_ray * rays as f64
+        self.photon_fixed + self.photon_per_effort * f + self.cache_time(f)
+    }
+
+    /// Returns the irradiance cache's expected wall seconds at effort `f` (the part of the
+    /// prepass a pilot's own prepass still takes: its cache covered only the pilot's pixels).
+    pub fn cache_time(&self, f: f64) -> f64 {
+        self.cache_per_ray * cache_rays(self.cache_rays, f, self.fixed_rays) as f64
     }
 
     /// Returns the expected wall seconds of prepass and camera pass at `s` and `f`.
@@ -752,10 +765,11 @@ fn decide(
         return choice(Why::Black, 1.0, given_spp);
     }
     let efforts = efforts(request, max);
-    // An effort at or below the prepass the pilot made already is that prepass, for no time.
+    // An effort at or below the prepass the pilot made already is that prepass, for the time
+    // of its cache over the whole image.
     let reused = Some(reused_effort(&model, request)).filter(|&r| r <= max);
     let made = |f: f64| match reused {
-        Some(r) if f <= r => (r, 0.0),
+        Some(r) if f <= r => (r, model.cache_time(r)),
         _ => (f, model.prepass_time(f)),
     };
     let fixed_spp = request.fixed_spp.then_some(given_spp);
@@ -880,12 +894,17 @@ fn pilot_prepasses(
     progress: &dyn Progress,
 ) -> (Vec<super::photon_map::Prepass>, f64) {
     let seed = photons.seed;
+    // The caches are made near the pixels the pilot reads: at 1024² a whole one is most of
+    // the pilot's time, and the frame's cost is extrapolated from the records made.
+    let grid = pilot_grid(view);
     progress.start("planning: pilot prepasses", 4);
     let make = |i: u64, f: f64| {
         let mut gi = at_effort(photons, f, request);
         gi.seed = seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(i + 1));
         let start = Instant::now();
-        let p = prepass(view.scene, view.camera, &gi, None, &NoProgress);
+        let p = Prepass::build_with(view.scene, &gi, &NoProgress)
+            .precompute_for(view.camera)
+            .with_cache_over(view.scene, view.camera, Probes::Near(&grid), &NoProgress);
         progress.advance(1);
         (p, start.elapsed().as_secs_f64())
     };
@@ -917,7 +936,7 @@ fn pilot(
     for p in &prepasses[2..] {
         let st = &p.stats;
         photon_seconds += (st.trace_time + st.build_time + st.precompute_time).as_secs_f64() / 2.0;
-        cache_seconds += st.cache.as_ref().map_or(0.0, |c| c.time.as_secs_f64()) / 2.0;
+        cache_seconds += st.cache.as_ref().map_or(0.0, |c| c.whole_seconds()) / 2.0;
     }
     let step_rays = cache_rays(
         photons.cache.rays,
@@ -1051,6 +1070,23 @@ fn pilot_effort(request: &Request, seconds: f64) -> f64 {
     (PILOT_SHARE * budget.as_secs_f64() / (work * per_effort)).clamp(PILOT_EFFORT, MAX_PILOT_EFFORT)
 }
 
+/// Returns the pilot's pixels (in the full image), row by row: a grid of at most
+/// [`PILOT_GRID`]² spread evenly over `view`'s window.
+fn pilot_grid(view: View) -> Vec<(u32, u32)> {
+    let win = view.window;
+    let (w, h) = win.size();
+    let (cols, rows) = (PILOT_GRID.min(w), PILOT_GRID.min(h));
+    (0..rows)
+        .flat_map(|j| {
+            (0..cols).map(move |i| {
+                let x = win.x0 + ((2 * i + 1) * w / (2 * cols)).min(w - 1);
+                let y = win.y0 + ((2 * j + 1) * h / (2 * rows)).min(h - 1);
+                (x, y)
+            })
+        })
+        .collect()
+}
+
 /// Traces the pilot's samples: the sets of [`PILOT_SETS`] at each pixel of a grid of at most
 /// [`PILOT_GRID`]² over `view`'s window, each through every tracer with the same random
 /// numbers. Returns each pixel's running sums, the thread seconds spent tracing and the
@@ -1062,8 +1098,8 @@ fn pilot_pixels(
     progress: &dyn Progress,
 ) -> (Vec<PixelRun>, f64, u64) {
     use rayon::prelude::*;
-    let win = view.window;
-    let (w, h) = win.size();
+    let grid = pilot_grid(view);
+    let (w, h) = view.window.size();
     let (cols, rows) = (PILOT_GRID.min(w), PILOT_GRID.min(h));
     progress.start("planning: pilot pixels", rows as u64);
     // The pilot's own streams: keyed like the render's pixels, under another seed.
@@ -1075,10 +1111,8 @@ fn pilot_pixels(
             let mut runs = Vec::with_capacity(cols as usize);
             let mut seconds = 0.0;
             let mut samples = 0;
-            for i in 0..cols {
-                let x = win.x0 + ((2 * i + 1) * w / (2 * cols)).min(w - 1);
-                let y = win.y0 + ((2 * j + 1) * h / (2 * rows)).min(h - 1);
-                let index = y as u64 * win.full_width as u64 + x as u64;
+            for &(x, y) in &grid[(j * cols) as usize..((j + 1) * cols) as usize] {
+                let index = y as u64 * view.window.full_width as u64 + x as u64;
                 let mut rng = Rng::new(seed, Pass::Pixel, index);
                 let mut run = PixelRun::default();
                 for (set, &size) in PILOT_SETS.iter().enumerate() {

@@ -48,6 +48,9 @@ pub struct PixelErrors {
     pub std_error: Vec<f32>,
     /// From the samples' variance (steady: adaptive pixels' test and the error map), likewise.
     pub sample_error: Vec<f32>,
+    /// Whether a camera ray of the pixel met a light before any surface (such pixels are left
+    /// out of [`PixelErrors::relative_rmse`]), likewise.
+    pub lit: Vec<bool>,
     /// The image's mean brightness `m` from the pilot, which the test normalises by.
     pub image_mean: f32,
 }
@@ -55,19 +58,32 @@ pub struct PixelErrors {
 impl PixelErrors {
     /// Returns the image's relative RMSE estimated from the pixels' errors: the root mean
     /// square of their standard errors over the mean of `pixels` (the image they estimate, as
-    /// `caustic compare` divides by the reference's mean); `None` without estimates.
+    /// `caustic compare` divides by the reference's mean), both over the pixels that see no
+    /// light directly (as the planner's pilot measures, and `docs/`'s regions below the light);
+    /// `None` without estimates.
     pub fn relative_rmse(&self, pixels: &[glam::Vec3A]) -> Option<f64> {
-        let (mut sq, mut n) = (0.0f64, 0usize);
-        for &e in self.std_error.iter().filter(|e| e.is_finite()) {
-            sq += (e as f64).powi(2);
-            n += 1;
+        let (mut sq, mut n, mut sum, mut m) = (0.0f64, 0usize, 0.0f64, 0usize);
+        for (i, p) in pixels.iter().enumerate() {
+            if self.lit.get(i).copied().unwrap_or(false) {
+                continue;
+            }
+            sum += p.element_sum() as f64 / 3.0;
+            m += 1;
+            match self.std_error.get(i) {
+                Some(e) if e.is_finite() => {
+                    sq += (*e as f64).powi(2);
+                    n += 1;
+                }
+                _ => {}
+            }
         }
-        let mean = pixels
-            .iter()
-            .map(|p| p.element_sum() as f64 / 3.0)
-            .sum::<f64>()
-            / pixels.len().max(1) as f64;
+        let mean = sum / m.max(1) as f64;
         (n > 0 && mean > 0.0).then(|| (sq / n as f64).sqrt() / mean)
+    }
+
+    /// Returns how many pixels see a light directly.
+    pub fn lit_pixels(&self) -> usize {
+        self.lit.iter().filter(|&&l| l).count()
     }
 }
 

@@ -507,7 +507,12 @@ fn report_noise(film: &Film, errors: &crate::stats::PixelErrors, sampling: &Samp
     let estimate = errors
         .relative_rmse(&film.pixels)
         .map_or("none (a black image)".to_string(), |e| format!("{e:.4}"));
-    let mut line = format!("estimated relative RMSE {estimate} (from the pixels' half-buffers)");
+    let lit = match errors.lit_pixels() {
+        0 => String::new(),
+        n => format!("; the {n} pixels that see a light directly left out"),
+    };
+    let mut line =
+        format!("estimated relative RMSE {estimate} (from the pixels' half-buffers{lit})");
     if let Sampling::Noise {
         spp,
         max_spp,

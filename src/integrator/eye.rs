@@ -258,6 +258,9 @@ impl Tracer<'_> {
             if state.sees_emitters {
                 let tmax = hit.map_or(ray.tmax, |h| h.t * (1.0 + EMITTER_ON_SURFACE));
                 if let Some((light, seen)) = nearest_emitter(self.scene, &ray, tmax) {
+                    if state.depth == 0 {
+                        crate::render::scope::light_seen();
+                    }
                     let w = state.mis.map_or(1.0, |m| m.weight(light, &ray, &seen));
                     return w * seen_scale * scale * kept(seen.t) * seen.radiance;
                 }

@@ -150,10 +150,13 @@ impl<'a> PixelSampler<'a> {
 
     /// Returns the value of pixel `(x, y)` (full-image coordinates), never NaN or infinite,
     /// and when errors are estimated its standard errors from its half-buffers and from its
-    /// samples' variance ([`noise`]; NaN otherwise).
-    pub fn pixel(&self, x: u32, y: u32, counts: &mut RayCounts) -> (Vec3A, [f32; 2]) {
-        let (value, error) = self.pixel_mean(x, y, counts);
+    /// samples' variance ([`noise`]; NaN otherwise) and whether it sees a light directly.
+    pub fn pixel(&self, x: u32, y: u32, counts: &mut RayCounts) -> (Vec3A, PixelError) {
+        super::scope::take_light_seen();
+        let (value, [std, sample]) = self.pixel_mean(x, y, counts);
+        let lit = super::scope::take_light_seen();
         // Finite samples can still sum past the largest float.
+        let error = PixelError { std, sample, lit };
         (finite_or_dropped(value, counts), error)
     }
 
@@ -331,6 +334,25 @@ impl<'a> PixelSampler<'a> {
             ))
             * 0.25
     }
+}
+
+/// A pixel's standard errors from its half-buffers and from its samples' variance (NaN without
+/// two samples, or when errors are not estimated), and whether a camera ray of it met a light
+/// before any surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelError {
+    pub std: f32,
+    pub sample: f32,
+    pub lit: bool,
+}
+
+impl PixelError {
+    /// No estimate.
+    pub const NONE: PixelError = PixelError {
+        std: f32::NAN,
+        sample: f32::NAN,
+        lit: false,
+    };
 }
 
 /// Returns a pixel's standard errors from its half-buffers and from its samples' variance (NaN

@@ -139,14 +139,14 @@ pub fn camera_pass(
     let mut samples = vec![0u32; w as usize * h as usize];
     let sampler = aa::PixelSampler::new(camera, integrator, opts);
     let mut errors = vec![
-        [f32::NAN; 2];
+        aa::PixelError::NONE;
         if sampler.estimates_error() {
             pixels.len()
         } else {
             0
         }
     ];
-    let error_rows: Vec<Option<&mut [[f32; 2]]>> = match errors.is_empty() {
+    let error_rows: Vec<Option<&mut [aa::PixelError]>> = match errors.is_empty() {
         true => (0..h).map(|_| None).collect(),
         false => errors.chunks_mut(w as usize).map(Some).collect(),
     };
@@ -200,8 +200,9 @@ pub fn camera_pass(
         time: start.elapsed(),
         heat: opts.heatmap.then(|| heat_rows.concat()),
         error: sampler.image_mean().map(|image_mean| PixelErrors {
-            std_error: errors.iter().map(|e| e[0]).collect(),
-            sample_error: errors.iter().map(|e| e[1]).collect(),
+            std_error: errors.iter().map(|e| e.std).collect(),
+            sample_error: errors.iter().map(|e| e.sample).collect(),
+            lit: errors.iter().map(|e| e.lit).collect(),
             image_mean,
         }),
         ..RenderStats::of_counts(&t)

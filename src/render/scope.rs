@@ -8,6 +8,12 @@
 //! pixels, so the image does not depend on which pixel a thread rendered before (tiles stay
 //! bit-identical to the full frame, the thread count changes nothing). Outside a scope (the
 //! irradiance cache's probes, `--adaptive`'s corner rays) nothing is shared.
+//!
+//! The thread also notes whether a camera ray met a light before any surface
+//! ([`light_seen`]): the pixels that see a light directly are left out of the error the
+//! half-buffers estimate, as the planner's pilot and the error measures of `docs/` leave them
+//! out (a light's edge is a step of a hundred times the image's brightness, and a few such
+//! pixels would be most of the image's estimated error).
 
 use std::cell::Cell;
 
@@ -15,6 +21,19 @@ thread_local! {
     /// The open scope's id (0: none), and the last id handed out on this thread.
     static OPEN: Cell<u64> = const { Cell::new(0) };
     static LAST: Cell<u64> = const { Cell::new(0) };
+    /// Whether a camera ray met a light first since [`take_light_seen`] last ran.
+    static LIGHT_SEEN: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Notes that a camera ray met a light before any surface.
+pub fn light_seen() {
+    LIGHT_SEEN.set(true);
+}
+
+/// Returns whether a camera ray met a light first on this thread since the last call, and
+/// clears the note.
+pub fn take_light_seen() -> bool {
+    LIGHT_SEEN.replace(false)
 }
 
 /// An open pixel scope; closing it (dropping it) ends what its samples share.

@@ -149,6 +149,16 @@ pub const PILOT_SHARE: f64 = 0.15;
 pub const MAX_PILOT_EFFORT: f64 = 0.25;
 /// The pilot measures at most this many pixels across and down the window.
 pub const PILOT_GRID: u32 = 36;
+/// Largest side of the grid of pixels [`fit_samples`] traces through the chosen prepass. The
+/// camera's noise is heavy-tailed: on the final scene at 1024², 0.1% of the pixels (the glass
+/// ball's focus on the floor, where a pixel's samples straddle a caustic's sharp edge) carry
+/// 80% of its variance, and the pilot's 1296 pixels meet one of them about once, so they put
+/// the camera's part at a third of what it is. Its samples need one tracer, not four: up to
+/// 96² pixels cost a quarter of a sample of every pixel at most ([`FIT_SHARE`]).
+const FIT_GRID: u32 = 96;
+/// The most pixels [`fit_samples`] traces, as a share of the window's (its 12 samples a pixel
+/// are then a quarter of a sample of every pixel).
+const FIT_SHARE: f64 = 1.0 / 48.0;
 /// A pilot pixel's samples: four independent stratified sets of these sizes, so that each
 /// size has two replicates (see [`PixelRun`]).
 pub const PILOT_SETS: [u32; 4] = [2, 2, 4, 4];
@@ -470,10 +480,11 @@ pub fn fit_samples(
     if planned.why == Why::Black {
         return;
     }
-    let (all, thread_seconds, samples) =
-        pilot_pixels(view, seed, std::slice::from_ref(tracer), &NoProgress);
-    let runs = lit_pixels(all.clone());
     let (w, h) = view.window.size();
+    let side = ((w as f64 * h as f64 * FIT_SHARE).sqrt() as u32).clamp(PILOT_GRID, FIT_GRID);
+    let tracers = std::slice::from_ref(tracer);
+    let (all, thread_seconds, samples) = pilot_pixels(view, seed, tracers, side, &NoProgress);
+    let runs = lit_pixels(all.clone());
     // Thread seconds over the threads, not the wall time: the pilot's pixels take a tenth of a
     // second, over rows of unequal cost, and its wall time varied from 4.7 to 6.5 s a sample
     // of every pixel between runs on the final scene; the camera pass's rows share the threads
@@ -896,7 +907,7 @@ fn pilot_prepasses(
     let seed = photons.seed;
     // The caches are made near the pixels the pilot reads: at 1024² a whole one is most of
     // the pilot's time, and the frame's cost is extrapolated from the records made.
-    let grid = pilot_grid(view);
+    let grid = pilot_grid(view, PILOT_GRID);
     progress.start("planning: pilot prepasses", 4);
     let make = |i: u64, f: f64| {
         let mut gi = at_effort(photons, f, request);
@@ -953,7 +964,8 @@ fn pilot(
         })
         .collect();
     let start = Instant::now();
-    let (runs, thread_seconds, samples) = pilot_pixels(view, settings.seed, &tracers, progress);
+    let (runs, thread_seconds, samples) =
+        pilot_pixels(view, settings.seed, &tracers, PILOT_GRID, progress);
     let runs = lit_pixels(runs);
     let wall = start.elapsed().as_secs_f64();
     let n = runs.len().max(1) as f64;
@@ -1011,15 +1023,6 @@ fn pilot(
     (model, prepasses)
 }
 
-/// Returns whether `ray` meets a light (an area or sphere light, or an emissive surface)
-/// before anything else.
-fn sees_emitter(scene: &crate::scene::Scene, ray: &crate::geometry::ray::Ray) -> bool {
-    let first = scene.intersect(ray);
-    let t = first.as_ref().map_or(f32::INFINITY, |h| h.t);
-    super::eye::emitter_seen(scene, ray, t).is_some()
-        || first.is_some_and(|h| scene.materials[h.material as usize].emission != glam::Vec3A::ZERO)
-}
-
 /// Returns the pilot's pixels that saw no light directly, which its figures are taken over. A
 /// light's own pixels are thousands of times the image's mean (relative to which every error
 /// is counted), and their error is its edges' aliasing, the same for every prepass: it would
@@ -1071,11 +1074,11 @@ fn pilot_effort(request: &Request, seconds: f64) -> f64 {
 }
 
 /// Returns the pilot's pixels (in the full image), row by row: a grid of at most
-/// [`PILOT_GRID`]² spread evenly over `view`'s window.
-fn pilot_grid(view: View) -> Vec<(u32, u32)> {
+/// `side`² spread evenly over `view`'s window.
+fn pilot_grid(view: View, side: u32) -> Vec<(u32, u32)> {
     let win = view.window;
     let (w, h) = win.size();
-    let (cols, rows) = (PILOT_GRID.min(w), PILOT_GRID.min(h));
+    let (cols, rows) = (side.min(w), side.min(h));
     (0..rows)
         .flat_map(|j| {
             (0..cols).map(move |i| {
@@ -1088,19 +1091,20 @@ fn pilot_grid(view: View) -> Vec<(u32, u32)> {
 }
 
 /// Traces the pilot's samples: the sets of [`PILOT_SETS`] at each pixel of a grid of at most
-/// [`PILOT_GRID`]² over `view`'s window, each through every tracer with the same random
-/// numbers. Returns each pixel's running sums, the thread seconds spent tracing and the
+/// `side`² over `view`'s window ([`pilot_grid`]), each through every tracer with the same
+/// random numbers. Returns each pixel's running sums, the thread seconds spent tracing and the
 /// samples traced per tracer.
 fn pilot_pixels(
     view: View,
     seed: u64,
     tracers: &[Tracer],
+    side: u32,
     progress: &dyn Progress,
 ) -> (Vec<PixelRun>, f64, u64) {
     use rayon::prelude::*;
-    let grid = pilot_grid(view);
+    let grid = pilot_grid(view, side);
     let (w, h) = view.window.size();
-    let (cols, rows) = (PILOT_GRID.min(w), PILOT_GRID.min(h));
+    let (cols, rows) = (side.min(w), side.min(h));
     progress.start("planning: pilot pixels", rows as u64);
     // The pilot's own streams: keyed like the render's pixels, under another seed.
     let seed = seed ^ 0xD1B5_4A32_D192_ED03;
@@ -1125,9 +1129,10 @@ fn pilot_pixels(
                             false => Share::Skip,
                         };
                         let ray = view.camera.ray(x as f32 + u, y as f32 + v);
-                        run.light |= sees_emitter(view.scene, &ray);
+                        crate::render::scope::take_light_seen();
                         let start = Instant::now();
                         let values = trace_all(tracers, &ray, share, &mut rng, &mut counts);
+                        run.light |= crate::render::scope::take_light_seen();
                         let took = start.elapsed().as_secs_f64();
                         seconds += took;
                         run.seconds += took;
@@ -1260,8 +1265,26 @@ mod tests {
         let r = &desc.renders[0];
         let scene = crate::scene::build_scene(&desc, r).unwrap();
         let camera = crate::camera::Camera::new(&r.camera, 9, 9);
-        assert!(sees_emitter(&scene, &camera.ray(4.5, 4.5)));
-        assert!(!sees_emitter(&scene, &camera.ray(0.5, 0.5)));
+        let tracer = Tracer {
+            scene: &scene,
+            camera: &camera,
+            light_samples: 1,
+            diffuse: DiffuseTerm::Ambient(Vec3A::ZERO),
+        };
+        let sees = |x: f32, y: f32| {
+            let mut rng = Rng::new(1, Pass::Pixel, 0);
+            crate::render::scope::take_light_seen();
+            let state = super::super::eye::PathState::camera(&scene);
+            tracer.radiance(
+                &camera.ray(x, y),
+                state,
+                &mut rng,
+                &mut RayCounts::default(),
+            );
+            crate::render::scope::take_light_seen()
+        };
+        assert!(sees(4.5, 4.5));
+        assert!(!sees(0.5, 0.5));
         let lit = PixelRun {
             light: true,
             ..PixelRun::default()

@@ -146,7 +146,15 @@ pub const PILOT_STEP: f64 = 4.0;
 /// The share of a time budget the pilot's prepasses aim to take, and the largest effort of its
 /// first pair ([`pilot_effort`]).
 pub const PILOT_SHARE: f64 = 0.15;
-pub const MAX_PILOT_EFFORT: f64 = 0.25;
+/// The first pair's largest effort: its larger pair then measures the maps at up to 16 times
+/// the frame's photons. It was 0.25 (1 for the larger pair), and long budgets chose 9 to 64
+/// times the frame's photons from maps measured at most at 1: on the showcase the pilot's
+/// caustic lookups found 1.3 to 2 photons (their radius at its cap, so their noise falling as
+/// `1/F`), while at the x40 the plan chose they found 22 on average, the caustic's at `k`
+/// where the noise no longer falls, and the expected error came out half the measured. The
+/// four prepasses are held at once (`2 + 2·PILOT_STEP` times `F₀`'s photons), so `F₀` is also
+/// bounded by what the photon cap and the memory budget allow an effort ([`max_effort`]).
+pub const MAX_PILOT_EFFORT: f64 = 4.0;
 /// The pilot measures at most this many pixels across and down the window.
 pub const PILOT_GRID: u32 = 36;
 /// Largest side of the grid of pixels [`fit_samples`] traces through the chosen prepass. The
@@ -920,7 +928,7 @@ fn pilot_prepasses(
         (p, start.elapsed().as_secs_f64())
     };
     let (first, seconds) = make(0, PILOT_EFFORT);
-    let f0 = pilot_effort(request, seconds);
+    let f0 = pilot_effort(request, seconds, max_effort(view, photons, request));
     let first = match f0 > PILOT_EFFORT {
         true => make(0, f0).0,
         false => first,
@@ -1063,14 +1071,17 @@ fn trace_all(
 /// `seconds`: for a time budget, the effort at which the pilot's four prepasses (`2 + 2s` times
 /// `F₀`'s work, `s` = [`PILOT_STEP`]) take about [`PILOT_SHARE`] of it, so that a longer
 /// budget measures the maps nearer the efforts it will choose from; at least
-/// [`PILOT_EFFORT`], at most [`MAX_PILOT_EFFORT`]. A target error keeps [`PILOT_EFFORT`].
-fn pilot_effort(request: &Request, seconds: f64) -> f64 {
+/// [`PILOT_EFFORT`], at most [`MAX_PILOT_EFFORT`] and at most a `2 + 2s`-th of `most`, the
+/// largest effort the photon cap and the memory budget allow (the four are held at once). A
+/// target error keeps [`PILOT_EFFORT`].
+fn pilot_effort(request: &Request, seconds: f64, most: f64) -> f64 {
     let Goal::Time(budget) = request.goal else {
         return PILOT_EFFORT;
     };
     let per_effort = seconds.max(1e-6) / PILOT_EFFORT;
     let work = 2.0 + 2.0 * PILOT_STEP;
-    (PILOT_SHARE * budget.as_secs_f64() / (work * per_effort)).clamp(PILOT_EFFORT, MAX_PILOT_EFFORT)
+    let cap = (most / work).clamp(PILOT_EFFORT, MAX_PILOT_EFFORT);
+    (PILOT_SHARE * budget.as_secs_f64() / (work * per_effort)).clamp(PILOT_EFFORT, cap)
 }
 
 /// Returns the pilot's pixels (in the full image), row by row: a grid of at most
@@ -1433,8 +1444,26 @@ mod tests {
         assert_eq!(c.effort, PILOT_STEP * m.pilot_effort);
     }
 
-    /// A pilot whose larger prepass is what the budget can afford: the plan takes it, for no
-    /// prepass time, and spends the rest on samples (with 0.46 s left, 4 samples of 0.1 s).
+    /// The pilot's first effort follows the budget (the four prepasses take about
+    /// PILOT_SHARE of it), is at most MAX_PILOT_EFFORT, and at most a tenth of the largest
+    /// effort memory and the photon cap allow, since its four prepasses are held at once.
+    #[test]
+    fn the_pilot_effort_follows_the_budget_within_memory() {
+        let r = |s: u64| request(Goal::Time(Duration::from_secs(s)));
+        // 0.1 s at 1/32: 3.2 s per unit effort, ten F₀'s work in 15 s of a 100 s budget.
+        let f = pilot_effort(&r(100), 0.1, MAX_EFFORT);
+        assert!((f - 15.0 / 32.0).abs() < 1e-9, "{f}");
+        assert_eq!(pilot_effort(&r(100_000), 0.1, MAX_EFFORT), MAX_PILOT_EFFORT);
+        assert_eq!(pilot_effort(&r(100_000), 0.1, 10.0), 1.0);
+        assert_eq!(pilot_effort(&r(1), 0.1, MAX_EFFORT), PILOT_EFFORT);
+        assert_eq!(
+            pilot_effort(&request(Goal::Error(0.1)), 0.1, 64.0),
+            PILOT_EFFORT
+        );
+    }
+
+    /// A pilot whose larger prepass is what the budget can afford: the plan takes it, for its
+    /// cache's time only (none here), and spends the rest on samples (with 0.46 s left, 4 samples of 0.1 s).
     /// The plans that must make a prepass (1.3 s for effort 1.3 and the margin) do not fit.
     #[test]
     fn the_pilot_prepass_is_taken_when_it_is_the_best_affordable() {

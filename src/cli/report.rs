@@ -320,7 +320,7 @@ fn print_photon_stats(s: &GiStats, rstats: &RenderStats) {
     if emitted > 0 {
         let on: u64 = s.caustic.iter().map(|c| c.first_hit_specular).sum();
         println!(
-            "  caustic photons aimed at the specular objects: {:.1}% of {emitted} met a specular surface first",
+            "  caustic photons aimed at the specular objects: {:.1}% of {emitted} bounced specularly off the first surface they met",
             100.0 * on as f64 / emitted as f64
         );
     }

@@ -66,8 +66,11 @@ pub enum MapKind {
 pub struct LightCounts {
     pub emitted: u64,
     pub stored: u64,
-    /// Photons whose first surface was specular (a mirror or a dielectric): for the caustic
-    /// map, how well aiming at the specular objects works (Jensen's projection maps).
+    /// Photons that the first surface they met reflected or refracted specularly (a mirror,
+    /// a dielectric, or a Phong highlight's lobe, which photons take as a mirror's): for the
+    /// caustic map, how well aiming at the specular objects works (Jensen's projection maps).
+    /// A glossy tile is a specular object to aim at, but most photons that meet it take its
+    /// diffuse lobe: they are not counted.
     pub first_hit_specular: u64,
     /// Photons that met any surface: for the global map, how well the projection map works
     /// (not kept in photon-map files: 0 for maps read from one).
@@ -676,7 +679,7 @@ fn trace_light(
 struct InOrder {
     /// The chunk the stream takes next.
     next: u64,
-    /// Chunks finished before `next`: their photons, how many met a specular surface first and
+    /// Chunks finished before `next`: their photons, how many bounced specularly off the first surface and
     /// how many met any surface.
     waiting: BTreeMap<u64, (Vec<Staged>, (u64, u64))>,
     counts: LightCounts,
@@ -702,7 +705,7 @@ impl InOrder {
 enum FirstHit {
     /// Nothing: it left the scene, or carried no power.
     Nothing,
-    /// A mirror or a dielectric.
+    /// A surface that reflected or refracted it specularly (the lobe drawn there).
     Specular,
     /// Any other surface.
     Other,
@@ -895,12 +898,10 @@ fn bounce(
             ray = Ray::new(offset_ray_origin(surf.p, surf.ng, ray.dir), ray.dir);
             continue;
         }
-        if met == FirstHit::Nothing {
-            met = if scene.materials[hit.material as usize].is_specular() {
-                FirstHit::Specular
-            } else {
-                FirstHit::Other
-            };
+        // What the first surface did with it is known once its lobe is drawn, below.
+        let first_surface = met == FirstHit::Nothing;
+        if first_surface {
+            met = FirstHit::Other;
         }
         let store = match kind {
             MapKind::Global => true,
@@ -919,6 +920,9 @@ fn bounce(
         let Some(next) = bsdf.sample(crossing.as_ref(), rng) else {
             return met;
         };
+        if first_surface && matches!(next.lobe, Lobe::Mirror | Lobe::Dielectric) {
+            met = FirstHit::Specular;
+        }
         match next.lobe {
             // Caustic paths end at their first diffuse surface.
             Lobe::Diffuse if kind == MapKind::Caustic => return met,

@@ -12,7 +12,7 @@
 //!   under water is n² times brighter than the same light seen from air).
 //!
 //! Area and sphere lights are seen by camera rays and by the specular paths that follow them
-//! ([`emitter_seen`]): their direct light on surfaces comes from shadow rays, so seeing them
+//! ([`nearest_emitter`]): their direct light on surfaces comes from shadow rays, so seeing them
 //! only along eye paths counts nothing twice. Point lights stay invisible, as in the course.
 //! A rough dielectric (frosted glass) does both: it samples the lights and follows its drawn
 //! directions, and multiple importance sampling weighs the two ([`super::mis`]).
@@ -179,12 +179,6 @@ pub fn background(camera: &Camera, dir: Vec3A) -> Vec3A {
     let bottom = Vec3A::new(0.02, 0.02, 0.08);
     let top = Vec3A::new(0.30, 0.42, 0.75);
     bottom + (top - bottom) * s
-}
-
-/// Returns the distance along `ray` (in units of its direction) and the radiance of the nearest
-/// area or sphere light that `ray` meets before `tmax`, if any ([`crate::light::Light::seen_by`]).
-pub fn emitter_seen(scene: &Scene, ray: &Ray, tmax: f32) -> Option<(f32, Vec3A)> {
-    nearest_emitter(scene, ray, tmax).map(|(_, seen)| (seen.t, seen.radiance))
 }
 
 /// Returns the nearest light `ray` meets before `tmax` and where ([`Light::seen`]).

@@ -915,7 +915,7 @@ fn pilot_prepasses(
     let seed = photons.seed;
     // The caches are made near the pixels the pilot reads: at 1024² a whole one is most of
     // the pilot's time, and the frame's cost is extrapolated from the records made.
-    let grid = pilot_grid(view, PILOT_GRID);
+    let (grid, _) = pilot_grid(view, PILOT_GRID);
     progress.start("planning: pilot prepasses", 4);
     let make = |i: u64, f: f64| {
         let mut gi = at_effort(photons, f, request);
@@ -1085,12 +1085,12 @@ fn pilot_effort(request: &Request, seconds: f64, most: f64) -> f64 {
 }
 
 /// Returns the pilot's pixels (in the full image), row by row: a grid of at most
-/// `side`² spread evenly over `view`'s window.
-fn pilot_grid(view: View, side: u32) -> Vec<(u32, u32)> {
+/// `side`² spread evenly over `view`'s window; and its number of columns.
+fn pilot_grid(view: View, side: u32) -> (Vec<(u32, u32)>, u32) {
     let win = view.window;
     let (w, h) = win.size();
     let (cols, rows) = (side.min(w), side.min(h));
-    (0..rows)
+    let grid = (0..rows)
         .flat_map(|j| {
             (0..cols).map(move |i| {
                 let x = win.x0 + ((2 * i + 1) * w / (2 * cols)).min(w - 1);
@@ -1098,7 +1098,8 @@ fn pilot_grid(view: View, side: u32) -> Vec<(u32, u32)> {
                 (x, y)
             })
         })
-        .collect()
+        .collect();
+    (grid, cols)
 }
 
 /// Traces the pilot's samples: the sets of [`PILOT_SETS`] at each pixel of a grid of at most
@@ -1113,9 +1114,8 @@ fn pilot_pixels(
     progress: &dyn Progress,
 ) -> (Vec<PixelRun>, f64, u64) {
     use rayon::prelude::*;
-    let grid = pilot_grid(view, side);
-    let (w, h) = view.window.size();
-    let (cols, rows) = (side.min(w), side.min(h));
+    let (grid, cols) = pilot_grid(view, side);
+    let rows = grid.len() as u32 / cols.max(1);
     progress.start("planning: pilot pixels", rows as u64);
     // The pilot's own streams: keyed like the render's pixels, under another seed.
     let seed = seed ^ 0xD1B5_4A32_D192_ED03;

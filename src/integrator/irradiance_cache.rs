@@ -365,8 +365,7 @@ impl IrradianceCache {
     fn serving(&self, p: Vec3A, n: Vec3A) -> impl Iterator<Item = (u32, f32)> {
         let a = self.accuracy;
         self.grid
-            .cells(p)
-            .flatten()
+            .listed(p)
             .filter_map(move |e| e.weight(p, n, a).map(|w| (e.index, w)))
     }
 
@@ -636,7 +635,7 @@ mod tests {
             for _ in 0..5000 {
                 let p = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.4 - 0.2;
                 let n = tilted(&mut rng);
-                listed += cache.grid.cells(p).map(<[_]>::len).sum::<usize>();
+                listed += cache.grid.listed(p).count();
                 near += (cache.records().iter())
                     .filter(|r| (p - r.p).length() < 0.3 * r.r)
                     .count();

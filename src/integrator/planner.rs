@@ -1463,7 +1463,8 @@ mod tests {
     }
 
     /// A pilot whose larger prepass is what the budget can afford: the plan takes it, for its
-    /// cache's time only (none here), and spends the rest on samples (with 0.46 s left, 4 samples of 0.1 s).
+    /// cache's time only (none here), and spends the rest on samples (with 0.46 s left, 4
+    /// samples of 0.1 s).
     /// The plans that must make a prepass (1.3 s for effort 1.3 and the margin) do not fit.
     #[test]
     fn the_pilot_prepass_is_taken_when_it_is_the_best_affordable() {

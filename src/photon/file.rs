@@ -150,8 +150,9 @@ pub fn write_map<W: Write>(w: &mut W, m: &CountedMap) -> std::io::Result<()> {
 
 /// Returns what is wrong with the per-light counts of `m`, if anything: a light that stored
 /// more than `most` photons per photon it emitted (a global photon is stored at each diffuse
-/// bounce, at most [`super::trace::MAX_BOUNCES`]; a caustic photon once) or bounced specularly off the first surface
-/// more often than it emitted, or counts that stored fewer photons than the map holds.
+/// bounce, at most [`super::trace::MAX_BOUNCES`]; a caustic photon once) or bounced specularly
+/// off the first surface more often than it emitted, or counts that stored fewer photons than
+/// the map holds.
 pub fn check_counts(m: &CountedMap, most: u64) -> Result<(), String> {
     let mut stored = 0u64;
     for (l, c) in m.per_light.iter().enumerate() {

@@ -679,8 +679,8 @@ fn trace_light(
 struct InOrder {
     /// The chunk the stream takes next.
     next: u64,
-    /// Chunks finished before `next`: their photons, how many bounced specularly off the first surface and
-    /// how many met any surface.
+    /// Chunks finished before `next`: their photons, how many bounced specularly off the first
+    /// surface and how many met any surface.
     waiting: BTreeMap<u64, (Vec<Staged>, (u64, u64))>,
     counts: LightCounts,
     stream: PhotonStream,

@@ -812,8 +812,9 @@ fn tracing_threads_wait_for_a_stalled_chunk() {
 /// counts what that surface did, not what it is: a glossy tile (kd 0.7, ks 0.04) is a specular
 /// object the caustic pass aims at, but Russian roulette over its lobes sends a photon that
 /// meets it along its Phong lobe 4% of the time (binomial spread under 0.2% over the photons
-/// that meet it: the bound is [0.034, 0.046]); a glass ball bends every photon that meets it. The count used to say 100%
-/// for both, which hid the final scene's caustic photons spent on its tiled walls.
+/// that meet it: the bound is [0.034, 0.046]); a glass ball bends every photon that meets it.
+/// The count used to say 100% for both, which hid the final scene's caustic photons spent on
+/// its tiled walls.
 #[test]
 fn the_specular_first_hit_share_counts_the_bounce_the_surface_made() {
     let share = |material: &str, shape: &str| {

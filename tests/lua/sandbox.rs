@@ -9,15 +9,43 @@ use caustic::lua::{ScriptOptions, run_source_with};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-/// Returns a fresh, empty folder for one test outside any git checkout (a scene inside one may
-/// read the whole checkout, so `target/test-output` would not test the folder boundary).
-fn out_dir(name: &str) -> PathBuf {
+/// A fresh, empty folder for one test outside any git checkout (a scene inside one may read the
+/// whole checkout, so `target/test-output` would not test the folder boundary). Dropping it
+/// removes the folder, and the process's parent folder once the last test's is gone, so runs
+/// leave nothing in the system's temporary folder.
+struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+        // Fails while another test's folder is still there; the last one to go removes it.
+        if let Some(parent) = self.0.parent() {
+            let _ = std::fs::remove_dir(parent);
+        }
+    }
+}
+
+/// Returns a fresh, empty [`Scratch`] folder named `name` for this test process.
+fn out_dir(name: &str) -> Scratch {
     let dir = std::env::temp_dir()
         .join(format!("caustic-sandbox-{}", std::process::id()))
         .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    Scratch(dir)
 }
 
 /// Runs `src` as `test.lua` in `dir` with `options`, without rendering.
@@ -233,7 +261,7 @@ fn files_outside_the_scene_folder_are_refused_however_they_are_named() {
     }
     // The user can widen the folders: the same mesh then loads.
     let options = ScriptOptions {
-        allow_read: vec![outside.clone()],
+        allow_read: vec![outside.to_path_buf()],
         ..quick()
     };
     run_in(format!("gr.mesh('m', '{mesh}')").as_bytes(), &dir, options).unwrap();
@@ -443,7 +471,7 @@ fn files_a_mesh_names_outside_the_scene_folder_are_refused() {
         );
         // Named by the user, the same folder is readable.
         let options = ScriptOptions {
-            allow_read: vec![outside.clone()],
+            allow_read: vec![outside.to_path_buf()],
             ..quick()
         };
         let hook = Box::new(
@@ -467,7 +495,7 @@ fn run_from_the_home_folder_a_scene_writes_only_in_it_not_below_it() {
     let render = |script: &str| {
         caustic()
             .current_dir(&home)
-            .env("HOME", &home)
+            .env("HOME", &*home)
             .args(["render", "-q"])
             .arg(scenes.join(script))
             .output()
@@ -491,4 +519,16 @@ fn run_from_the_home_folder_a_scene_writes_only_in_it_not_below_it() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(home.join("here.png").exists());
+}
+
+/// A test's scratch folder is gone once the test drops it: runs used to leave one
+/// `caustic-sandbox-PID` tree in the system's temporary folder each.
+#[test]
+fn a_scratch_folder_is_removed_when_dropped() {
+    let dir = out_dir("sandbox-scratch");
+    std::fs::write(dir.join("f.txt"), "x").unwrap();
+    let path = dir.to_path_buf();
+    assert!(path.join("f.txt").exists());
+    drop(dir);
+    assert!(!path.exists(), "{} is still there", path.display());
 }

@@ -456,15 +456,26 @@ mod tests {
         }
     }
 
-    fn dir(name: &str) -> std::path::PathBuf {
+    /// A test's folder in the system's temporary folder, removed when dropped (a failing test's
+    /// too), so test runs leave nothing behind.
+    struct Dir(std::path::PathBuf);
+
+    impl Drop for Dir {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn dir(name: &str) -> Dir {
         let d = std::env::temp_dir().join(format!("caustic-pm-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
-        d
+        Dir(d)
     }
 
     #[test]
     fn a_saved_map_reads_back_identical() {
-        let path = dir("round").join("m.bin");
+        let d = dir("round");
+        let path = d.0.join("m.bin");
         let m = maps(3 * CHUNK + 5);
         write(&path, &m).unwrap();
         let r = read(&path).unwrap();
@@ -485,7 +496,8 @@ mod tests {
 
     #[test]
     fn a_cache_record_that_is_not_finite_is_refused() {
-        let path = dir("record").join("m.bin");
+        let d = dir("record");
+        let path = d.0.join("m.bin");
         for bad in [f32::NAN, f32::INFINITY] {
             let mut m = maps(100);
             let mut records = m.cache.as_ref().unwrap().records().to_vec();

@@ -99,6 +99,117 @@ fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
     dx * dx + dy * dy + dz * dz
 }
 
+/// Most photons one [`scan`] takes: a leaf bucket's.
+const SCAN: usize = LEAF_SIZE;
+
+/// Writes the squared distance from `q` to each photon of `pos` (at most [`SCAN`]) to the same
+/// index of `d2`, computed as [`dist2`] computes it (no fused multiply-adds, so bit for bit the
+/// same), and returns the bit mask of those `<= bound` (NaN: not). Eight at a time where the CPU
+/// has AVX: a leaf's distances were half of a `k`-nearest search's time, one at a time.
+#[inline(always)]
+fn scan(pos: &[[f32; 3]], q: [f32; 3], bound: f32, d2: &mut [f32; SCAN]) -> u32 {
+    debug_assert!(pos.len() <= SCAN);
+    #[cfg(test)]
+    tests::DIST2_CALLS.with(|c| c.set(c.get() + pos.len()));
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU has AVX (checked just above).
+        return unsafe { scan_avx(pos, q, bound, d2) };
+    }
+    scan_scalar(pos, q, bound, d2)
+}
+
+/// [`scan`], one photon at a time.
+#[inline(always)]
+fn scan_scalar(pos: &[[f32; 3]], q: [f32; 3], bound: f32, d2: &mut [f32; SCAN]) -> u32 {
+    let mut mask = 0;
+    for (j, &x) in pos.iter().enumerate() {
+        let (dx, dy, dz) = (x[0] - q[0], x[1] - q[1], x[2] - q[2]);
+        d2[j] = dx * dx + dy * dy + dz * dz;
+        mask |= u32::from(d2[j] <= bound) << j;
+    }
+    mask
+}
+
+/// [`scan`] with AVX: eight photons' 24 coordinates are loaded as six 4-float quarters and
+/// shuffled into eight x, eight y and eight z (Intel's AoS-to-SoA transpose), so the array keeps
+/// its layout; the photons past the last multiple of eight go one at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn scan_avx(pos: &[[f32; 3]], q: [f32; 3], bound: f32, d2: &mut [f32; SCAN]) -> u32 {
+    use std::arch::x86_64::*;
+    /// `_MM_SHUFFLE(a, b, c, d)`.
+    const fn order(a: i32, b: i32, c: i32, d: i32) -> i32 {
+        (a << 6) | (b << 4) | (c << 2) | d
+    }
+    let n = pos.len().min(SCAN);
+    let full = n / 8 * 8;
+    let (qx, qy, qz) = (
+        _mm256_set1_ps(q[0]),
+        _mm256_set1_ps(q[1]),
+        _mm256_set1_ps(q[2]),
+    );
+    let b = _mm256_set1_ps(bound);
+    let mut mask = 0u32;
+    let mut i = 0;
+    while i < full {
+        // SAFETY: photons i..i + 8 are in `pos` (i + 8 <= full <= len), so the 24 floats read
+        // are, and `d2` has room for them (full <= SCAN).
+        unsafe {
+            let p = pos.as_ptr().add(i).cast::<f32>();
+            let quarter = |k: usize| _mm_loadu_ps(p.add(4 * k));
+            // Lanes 0-3 hold photons i..i + 4, lanes 4-7 photons i + 4..i + 8.
+            let m03 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(quarter(0)), quarter(3));
+            let m14 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(quarter(1)), quarter(4));
+            let m25 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(quarter(2)), quarter(5));
+            let xy = _mm256_shuffle_ps::<{ order(2, 1, 3, 2) }>(m14, m25);
+            let yz = _mm256_shuffle_ps::<{ order(1, 0, 2, 1) }>(m03, m14);
+            let x = _mm256_shuffle_ps::<{ order(2, 0, 3, 0) }>(m03, xy);
+            let y = _mm256_shuffle_ps::<{ order(3, 1, 2, 0) }>(yz, xy);
+            let z = _mm256_shuffle_ps::<{ order(3, 0, 3, 1) }>(yz, m25);
+            let (dx, dy, dz) = (
+                _mm256_sub_ps(x, qx),
+                _mm256_sub_ps(y, qy),
+                _mm256_sub_ps(z, qz),
+            );
+            let s = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                _mm256_mul_ps(dz, dz),
+            );
+            _mm256_storeu_ps(d2.as_mut_ptr().add(i), s);
+            let within = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(s, b)) as u32;
+            mask |= within << i;
+        }
+        i += 8;
+    }
+    for j in full..n {
+        let x = pos[j];
+        let (dx, dy, dz) = (x[0] - q[0], x[1] - q[1], x[2] - q[2]);
+        d2[j] = dx * dx + dy * dy + dz * dz;
+        mask |= u32::from(d2[j] <= bound) << j;
+    }
+    mask
+}
+
+/// Offers `sink` the photons of the array range starting at `lo` whose positions are `pos`,
+/// in order, each within the sink's bound at the time it is offered: as a loop of [`dist2`] and
+/// `offer` would, [`SCAN`] distances at a time (a sink's bound never grows, so the photons a
+/// scan passes against its bound at the start are the only ones that can pass later).
+#[inline(always)]
+fn offer_all<S: Sink>(pos: &[[f32; 3]], lo: usize, q: [f32; 3], sink: &mut S) {
+    let mut d2 = [0.0; SCAN];
+    for (c, chunk) in pos.chunks(SCAN).enumerate() {
+        let mut mask = scan(chunk, q, sink.bound(), &mut d2);
+        while mask != 0 {
+            let j = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if d2[j] <= sink.bound() {
+                sink.offer(d2[j], lo + c * SCAN + j);
+            }
+        }
+    }
+}
+
 /// Returns `v` with lane `a` (0, 1 or 2) replaced by `x`, without a round trip through memory.
 #[inline(always)]
 fn with_lane(v: Vec3A, a: usize, x: f32) -> Vec3A {
@@ -322,15 +433,10 @@ impl PhotonMap {
         // linear scan and one selection instead of a heap insertion per photon).
         let seed = self.seed_node(q, k);
         out.reserve(k.max(seed.len()));
+        let mut all = Within { r2: max_d2, out };
         if seed.top == 0 {
-            for (i, &x) in self.pos[seed.lo..seed.hi].iter().enumerate() {
-                let d2 = dist2(x, q);
-                if d2 <= max_d2 {
-                    out.push((d2, PhotonId((seed.lo + i) as u32)));
-                }
-            }
+            offer_all(&self.pos[seed.lo..seed.hi], seed.lo, q, &mut all);
         } else {
-            let mut all = Within { r2: max_d2, out };
             self.search(seed, q, Vec3A::ZERO, NO_SKIP, &mut all);
         }
         if out.len() > k {
@@ -436,12 +542,7 @@ impl PhotonMap {
             }
             if node.len() <= LEAF_SIZE {
                 // Only bottom subtrees are this small: lo..hi is an array range.
-                for (i, &x) in pos[node.lo..node.hi].iter().enumerate() {
-                    let d2 = dist2(x, q);
-                    if d2 <= sink.bound() {
-                        sink.offer(d2, node.lo + i);
-                    }
-                }
+                offer_all(&pos[node.lo..node.hi], node.lo, q, sink);
                 return;
             }
             let (m, left, right) = self.split(node);
@@ -747,6 +848,36 @@ mod tests {
             dir: Vec3A::Y,
             normal: Vec3A::Y,
             direct: false,
+        }
+    }
+
+    /// The eight-wide scan returns what the one-at-a-time scan does, bit for bit, for every
+    /// length up to a bucket's (the tail past a multiple of eight included), NaN coordinates,
+    /// ties at the bound and a NaN bound; and both agree with `dist2`.
+    #[test]
+    fn the_wide_scan_matches_the_scalar_one_bit_for_bit() {
+        let mut rng = crate::sampling::Rng::new(7, crate::sampling::Pass::Photon, 0);
+        let mut pos: Vec<[f32; 3]> = (0..SCAN)
+            .map(|_| std::array::from_fn(|_| rng.next_f32() * 2.0 - 1.0))
+            .collect();
+        pos[5] = [f32::NAN, 0.0, 0.0];
+        pos[13] = [1e30, -1e30, 3.0];
+        let q = [0.1, -0.2, 0.3];
+        // A bound equal to one photon's distance: that photon passes (`<=`).
+        let tie = dist2(pos[9], q);
+        for bound in [0.0, 0.5, tie, 1.5, f32::INFINITY, f32::NAN] {
+            for n in 0..=SCAN {
+                let (mut a, mut b) = ([0.0; SCAN], [0.0; SCAN]);
+                let want = scan_scalar(&pos[..n], q, bound, &mut a);
+                let got = scan(&pos[..n], q, bound, &mut b);
+                assert_eq!(got, want, "n {n}, bound {bound}");
+                for j in 0..n {
+                    assert_eq!(a[j].to_bits(), b[j].to_bits(), "n {n}, photon {j}");
+                    assert_eq!(a[j].to_bits(), dist2(pos[j], q).to_bits());
+                }
+                let expect = (0..n).filter(|&j| a[j] <= bound).fold(0, |m, j| m | 1 << j);
+                assert_eq!(want, expect);
+            }
         }
     }
 

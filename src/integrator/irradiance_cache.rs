@@ -459,11 +459,20 @@ impl IrradianceCache {
 
     /// Returns the records that serve `p` (unit geometric normal `n`) with their weights
     /// `1 − ε/a > 0`, in the order of the grid cell's list (see the module doc).
+    ///
+    /// Most of a cell's records are too far to serve (a cell is as wide as the largest region),
+    /// so each is first tested by its squared distance against `(a R)²`, grown by a few ulps so
+    /// that no record the exact weight would take is dropped by rounding: the weight's two
+    /// square roots and division are then only computed for the few that may serve.
     fn serving(&self, p: Vec3A, n: Vec3A) -> impl Iterator<Item = (&Record, f32)> {
         let a = self.accuracy;
         self.grid.cell(p).iter().filter_map(move |&i| {
             let r = &self.records[i as usize];
             let d = p - r.p;
+            let reach = a * r.r;
+            if d.length_squared() > reach * reach * (1.0 + 1e-5) {
+                return None;
+            }
             let cos = n.dot(r.n);
             if cos <= 0.0 || d.dot(n + r.n) * 0.5 < -0.1 * a * r.r {
                 return None;
@@ -700,6 +709,50 @@ mod tests {
             );
             last = v;
         }
+    }
+
+    /// The distance pre-test drops no record the weight itself would take: at points within a
+    /// few ulps of a region's edge, over radii from 10⁻³ to 10³ and tilted normals, a record
+    /// serves exactly when Ward's weight `1 − ε/a`, computed in full, is positive, and with that
+    /// weight.
+    #[test]
+    fn records_at_the_edge_of_their_region_serve_exactly_when_their_weight_is_positive() {
+        let mut rng = Rng::new(11, Pass::Cache, 0);
+        let a = 0.3;
+        let (mut inside, mut outside) = (0, 0);
+        for trial in 0..400 {
+            let r = 10f32.powf(rng.next_f32() * 6.0 - 3.0);
+            let centre = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 10.0;
+            // Half with the record's own normal, where the edge is the distance test's (aR).
+            let tilt = Vec3A::new(rng.next_f32() - 0.5, 0.0, rng.next_f32() - 0.5);
+            let n = if trial % 2 == 0 {
+                Vec3A::Y
+            } else {
+                (Vec3A::Y + tilt).normalize()
+            };
+            let cache = IrradianceCache::new(vec![record(centre, Vec3A::Y, 1.0, r)], a);
+            let along = Vec3A::new(rng.next_f32() - 0.5, 0.0, rng.next_f32() - 0.5).normalize();
+            for k in -40..=40 {
+                let reach = a * r * (1.0 - (1.0 - n.dot(Vec3A::Y)).max(0.0).sqrt() / a);
+                let p = centre + along * (reach * (1.0 + k as f32 * 2e-7));
+                let d = p - centre;
+                let eps = d.length() / r + (1.0 - n.dot(Vec3A::Y)).max(0.0).sqrt();
+                let w = 1.0 - eps / a;
+                let in_front = d.dot(n + Vec3A::Y) * 0.5 < -0.1 * a * r;
+                let got: Vec<f32> = cache.serving(p, n).map(|(_, w)| w).collect();
+                if w > 0.0 && !in_front {
+                    assert_eq!(got, vec![w], "r {r}, k {k}");
+                    inside += 1;
+                } else {
+                    assert!(got.is_empty(), "r {r}, k {k}: served with {got:?}");
+                    outside += 1;
+                }
+            }
+        }
+        assert!(
+            inside > 1000 && outside > 1000,
+            "{inside} inside, {outside} outside"
+        );
     }
 
     #[test]

@@ -70,16 +70,35 @@ pub fn interval(o: Vec3A, d: Vec3A, o_size: Vec3A) -> Option<Interval> {
     })
 }
 
-/// Returns the outward unit normal of face `face`.
+/// The outward unit normals of the six faces, by face number.
+const FACE_NORMALS: [Vec3A; 6] = [
+    Vec3A::NEG_X,
+    Vec3A::X,
+    Vec3A::NEG_Y,
+    Vec3A::Y,
+    Vec3A::NEG_Z,
+    Vec3A::Z,
+];
+
+/// Returns the outward unit normal of face `face` (0 to 5), read from a table: writing one lane
+/// of a vector on the stack and reading the vector back stalled the store forwarding, the
+/// largest cost in `interval`'s profile.
 pub fn face_normal(face: u8) -> Vec3A {
-    let mut n = Vec3A::ZERO;
-    n[(face / 2) as usize] = if face.is_multiple_of(2) { -1.0 } else { 1.0 };
-    n
+    FACE_NORMALS[face as usize]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_face_normal_points_out_along_its_axis() {
+        for face in 0..6u8 {
+            let mut n = Vec3A::ZERO;
+            n[(face / 2) as usize] = if face % 2 == 0 { -1.0 } else { 1.0 };
+            assert_eq!(face_normal(face), n, "face {face}");
+        }
+    }
 
     #[test]
     fn slab_entry_and_exit_faces() {

@@ -599,8 +599,10 @@ pub fn trace_map_part(
     out
 }
 
-/// Photons a tracing thread claims at a time.
-const CHUNK: u64 = 4096;
+/// Photons a tracing thread claims at a time: enough that, sorted ([`Coherent`]), one photon's
+/// neighbour lands a few triangles away on the final scene's water (4096 left them tens of
+/// triangles apart and gained nothing; 262144 was no faster and balances small maps worse).
+const CHUNK: u64 = 65536;
 
 /// Traces the photons of indices `mine` of `pass`'s light (light `l`, streams keyed by `seed`)
 /// on every thread, appending them to `stream` in index order; returns the stream and the
@@ -638,6 +640,7 @@ fn trace_light(
     rayon::broadcast(|_| {
         // The cones a chunk's caustic photons aim through (see `trace_one`).
         let mut cones = Vec::new();
+        let mut coherent = Coherent::default();
         loop {
             let c = next.fetch_add(1, Ordering::Relaxed);
             if c >= chunks {
@@ -656,13 +659,17 @@ fn trace_light(
             // Asked to stop: the chunks left are not traced (the frame is dropped).
             if !progress.should_stop() {
                 let first = mine.start + c * CHUNK;
-                for k in first..(first + CHUNK).min(mine.end) {
-                    let key = ((l as u64) << 40) | ((kind as u64) << 39) | k;
-                    let mut rng = Rng::new(seed, Pass::Photon, key);
-                    let hit = trace_one(pass, &mut cones, &mut rng, &mut photons);
-                    on_specular += u64::from(hit == FirstHit::Specular);
-                    met += u64::from(hit != FirstHit::Nothing);
-                }
+                let keys = first..(first + CHUNK).min(mine.end);
+                let rng = |k: u64| {
+                    Rng::new(
+                        seed,
+                        Pass::Photon,
+                        ((l as u64) << 40) | ((kind as u64) << 39) | k,
+                    )
+                };
+                let hits = coherent.trace(pass, &mut cones, keys.map(rng), &mut photons);
+                on_specular += hits.0;
+                met += hits.1;
                 progress.advance(CHUNK.min(mine.end - first));
             }
             let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
@@ -673,6 +680,92 @@ fn trace_light(
     let done = done.into_inner().unwrap_or_else(|e| e.into_inner());
     debug_assert!(done.waiting.is_empty() && done.next == chunks);
     (done.stream, done.counts)
+}
+
+/// A chunk's photons traced in an order that keeps neighbours near (see [`Coherent::trace`]),
+/// with the buffers it reuses from chunk to chunk.
+#[derive(Default)]
+struct Coherent {
+    /// Each photon's ray and power as it leaves the light, with its stream, its index in the
+    /// chunk and its sort key.
+    starts: Vec<(u32, u32, Ray, Vec3A, Rng)>,
+    /// The photons stored, in tracing order, and each photon's range of them by index.
+    traced: Vec<Staged>,
+    spans: Vec<(u32, std::ops::Range<usize>)>,
+}
+
+impl Coherent {
+    /// Traces one photon for each of `rngs` (each photon's own stream, in index order),
+    /// appending what they store to `out` in index order, as [`trace_one`] one after another
+    /// would; returns how many bounced specularly off the first surface and how many met one.
+    ///
+    /// Why not one after another: photons drawn at random land at random on a 2M-triangle water
+    /// mesh and on the textures under it, and every hit waited for its triangle's vertices and
+    /// its texels from memory (`Scene::surface` and `bilinear_bytes` were a quarter of the
+    /// caustic pass). So all of a chunk's photons first leave the light (in index order, as
+    /// the streams and a point light's shared cones require), then are traced sorted by the
+    /// Morton code of where each would be after half the scene's size along its ray: photons
+    /// traced one after another meet the same triangles, texels and BVH nodes. Each photon's
+    /// path depends only on its own stream, so the photons stored are the same, and they are
+    /// put back in index order: the map is the same bit for bit.
+    fn trace(
+        &mut self,
+        pass: &LightPass,
+        cones: &mut Vec<Cone>,
+        rngs: impl Iterator<Item = Rng>,
+        out: &mut Vec<Staged>,
+    ) -> (u64, u64) {
+        self.starts.clear();
+        for (i, mut rng) in rngs.enumerate() {
+            if let Some((ray, power)) = leave_light(pass, cones, &mut rng) {
+                self.starts.push((0, i as u32, ray, power, rng));
+            }
+        }
+        let reach = match pass.scene.extent() {
+            e if e.is_finite() && e > 0.0 => 0.5 * e,
+            _ => 1.0,
+        };
+        let ahead = |r: &Ray| r.origin + r.dir * reach;
+        let (lo, hi) = self
+            .starts
+            .iter()
+            .fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(lo, hi), s| {
+                (lo.min(ahead(&s.2)), hi.max(ahead(&s.2)))
+            });
+        let scale = Vec3A::splat(1023.0) / (hi - lo).max(Vec3A::splat(f32::MIN_POSITIVE));
+        for s in &mut self.starts {
+            s.0 = morton3(((ahead(&s.2) - lo) * scale).to_array());
+        }
+        self.starts.sort_unstable_by_key(|s| (s.0, s.1));
+        self.traced.clear();
+        self.spans.clear();
+        let (mut on_specular, mut met) = (0, 0);
+        for (_, i, ray, power, rng) in &mut self.starts {
+            let begin = self.traced.len();
+            let hit = bounce(pass, *ray, *power, rng, &mut self.traced);
+            on_specular += u64::from(hit == FirstHit::Specular);
+            met += u64::from(hit != FirstHit::Nothing);
+            self.spans.push((*i, begin..self.traced.len()));
+        }
+        self.spans.sort_unstable_by_key(|s| s.0);
+        for (_, span) in &self.spans {
+            out.extend_from_slice(&self.traced[span.clone()]);
+        }
+        (on_specular, met)
+    }
+}
+
+/// Returns the 30-bit Morton code of a point whose coordinates are in `[0, 1023]` (outside:
+/// clamped; NaN: 0).
+fn morton3(p: [f32; 3]) -> u32 {
+    let spread = |x: f32| {
+        let mut v = x.clamp(0.0, 1023.0) as u32;
+        v = (v | (v << 16)) & 0x0300_00ff;
+        v = (v | (v << 8)) & 0x0300_f00f;
+        v = (v | (v << 4)) & 0x030c_30c3;
+        (v | (v << 2)) & 0x0924_9249
+    };
+    spread(p[0]) | (spread(p[1]) << 1) | (spread(p[2]) << 2)
 }
 
 /// The chunks of one light's photons, taken into the stream in chunk order as they finish.
@@ -731,6 +824,7 @@ struct LightPass<'a> {
 /// ([`ProjectionMap`]). A caustic photon aims through the cones around the pass's targets from
 /// where it leaves the light, kept in `cones`: made afresh for each photon of an area or sphere
 /// light, and once for a point light, whose photons all leave from the same place.
+#[cfg(test)]
 fn trace_one(
     pass: &LightPass,
     cones: &mut Vec<Cone>,
@@ -941,6 +1035,75 @@ fn bounce(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Tracing a chunk sorted by where its photons head ([`Coherent`]) stores exactly what
+    /// tracing them one after another in index order does, photon for photon and in the same
+    /// order, for caustic photons of an area light (cones made per photon) and of a point light
+    /// (cones shared by the chunk) and for global photons, with the same first-hit counts.
+    #[test]
+    fn a_sorted_chunk_stores_what_one_photon_after_another_does() {
+        let src = b"floor = gr.cube('floor') floor:set_material(gr.material({0.6, 0.5, 0.4}, {0, 0, 0}, 0))
+            floor:scale(4, 0.1, 4) floor:translate(-2, -1.1, -2)
+            glass = gr.sphere('glass') glass:set_material(gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5))
+            glass:scale(0.4, 0.4, 0.4) glass:translate(-0.5, -0.5, 0)
+            mirror = gr.sphere('mirror') mirror:set_material(gr.material({0, 0, 0}, {0.9, 0.9, 0.9}, 500))
+            mirror:scale(0.3, 0.3, 0.3) mirror:translate(0.6, -0.7, 0.2)
+            root = gr.node('root') root:add_child(floor) root:add_child(glass) root:add_child(mirror)
+            gr.render(root, 'x.png', 8, 8, {0, 0, 4}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0},
+              {gr.area_light({0, 1.5, 0}, {4, 4, 4}, {1, 0, 0}, nil, 1000, {0.4, 0, 0}, {0, 0, 0.4}),
+               gr.light({0.3, 1.2, 0.5}, {2, 2, 2}, {1, 0, 0})})";
+        let no_render = Box::new(|_: &_, _: &_| Ok(()));
+        let desc = crate::lua::run_source(src, "t.lua", ".".as_ref(), no_render).unwrap();
+        let scene = crate::scene::build_scene(&desc, &desc.renders[0]).unwrap();
+        let targets = specular_targets(&scene);
+        assert_eq!(targets.len(), 2);
+        let mut coherent = Coherent::default();
+        for (l, light) in scene.lights.iter().enumerate() {
+            for kind in [MapKind::Caustic, MapKind::Global] {
+                let pass = LightPass {
+                    scene: &scene,
+                    light,
+                    n: 3000,
+                    kind,
+                    targets: &targets,
+                    projection: None,
+                    media: scene.light_media.get(l).copied().unwrap_or_default(),
+                };
+                let rngs = || (0..3000).map(|k| Rng::new(9, Pass::Photon, k));
+                let (mut want, mut cones) = (Vec::new(), Vec::new());
+                let (mut on_specular, mut met) = (0, 0);
+                for mut rng in rngs() {
+                    let hit = trace_one(&pass, &mut cones, &mut rng, &mut want);
+                    on_specular += u64::from(hit == FirstHit::Specular);
+                    met += u64::from(hit != FirstHit::Nothing);
+                }
+                let mut got = Vec::new();
+                cones.clear();
+                let counts = coherent.trace(&pass, &mut cones, rngs(), &mut got);
+                assert!(
+                    want.len() > 100,
+                    "light {l} {kind:?}: {} stored",
+                    want.len()
+                );
+                assert_eq!(got, want, "light {l}, {kind:?}");
+                assert_eq!(counts, (on_specular, met), "light {l}, {kind:?}");
+            }
+        }
+    }
+
+    /// The Morton code interleaves the three coordinates' bits, x lowest, and clamps.
+    #[test]
+    fn morton_codes_interleave_x_y_z() {
+        assert_eq!(morton3([1.0, 0.0, 0.0]), 0b001);
+        assert_eq!(morton3([0.0, 1.0, 0.0]), 0b010);
+        assert_eq!(morton3([0.0, 0.0, 1.0]), 0b100);
+        assert_eq!(morton3([2.0, 3.0, 0.0]), 0b011_010);
+        assert_eq!(morton3([1023.0; 3]), (1 << 30) - 1);
+        assert_eq!(
+            morton3([5000.0, -3.0, f32::NAN]),
+            morton3([1023.0, 0.0, 0.0])
+        );
+    }
 
     /// The parts of a pass cover each light's photons once, in order: part `i`'s range ends
     /// where part `i + 1`'s starts, the first starts at 0 and the last ends at `n`, for counts

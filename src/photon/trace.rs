@@ -638,7 +638,7 @@ fn trace_light(
     let ahead = 2 * rayon::current_num_threads() as u64 + 2;
     let caught_up = Condvar::new();
     rayon::broadcast(|_| {
-        // The cones a chunk's caustic photons aim through (see `trace_one`).
+        // The cones a chunk's caustic photons aim through (see `leave_light`).
         let mut cones = Vec::new();
         let mut coherent = Coherent::default();
         loop {
@@ -696,8 +696,9 @@ struct Coherent {
 
 impl Coherent {
     /// Traces one photon for each of `rngs` (each photon's own stream, in index order),
-    /// appending what they store to `out` in index order, as [`trace_one`] one after another
-    /// would; returns how many bounced specularly off the first surface and how many met one.
+    /// appending what they store to `out` in index order, as leaving the light and [`bounce`]
+    /// one photon after another would; returns how many bounced specularly off the first
+    /// surface and how many met one.
     ///
     /// Why not one after another: photons drawn at random land at random on a 2M-triangle water
     /// mesh and on the textures under it, and every hit waited for its triangle's vertices and
@@ -819,11 +820,8 @@ struct LightPass<'a> {
     media: MediumStack,
 }
 
-/// Traces one photon of `pass`, appending what it stores to `out`; returns what it met first.
-/// A global photon of a point light leaves through the light's projection map when it has one
-/// ([`ProjectionMap`]). A caustic photon aims through the cones around the pass's targets from
-/// where it leaves the light, kept in `cones`: made afresh for each photon of an area or sphere
-/// light, and once for a point light, whose photons all leave from the same place.
+/// Traces one photon of `pass` ([`leave_light`], then [`bounce`]), appending what it stores to
+/// `out`; returns what it met first. The tests' reference for [`Coherent::trace`].
 #[cfg(test)]
 fn trace_one(
     pass: &LightPass,
@@ -838,7 +836,11 @@ fn trace_one(
 }
 
 /// Returns the ray a photon of `pass` leaves its light along and the power it carries, or
-/// `None` when it carries none (see [`trace_one`] for `cones`).
+/// `None` when it carries none. A global photon of a point light leaves through the light's
+/// projection map when it has one ([`ProjectionMap`]). A caustic photon aims through the cones
+/// around the pass's targets from where it leaves the light, kept in `cones`: made afresh for
+/// each photon of an area or sphere light, and once for a point light, whose photons all leave
+/// from the same place (so a chunk's photons leave in index order).
 fn leave_light(pass: &LightPass, cones: &mut Vec<Cone>, rng: &mut Rng) -> Option<(Ray, Vec3A)> {
     let LightPass {
         light,

@@ -599,10 +599,23 @@ pub fn trace_map_part(
     out
 }
 
-/// Photons a tracing thread claims at a time: enough that, sorted ([`Coherent`]), one photon's
-/// neighbour lands a few triangles away on the final scene's water (4096 left them tens of
-/// triangles apart and gained nothing; 262144 was no faster and balances small maps worse).
+/// Photons a tracing thread claims at a time, at most: enough that, sorted ([`Coherent`]), one
+/// photon's neighbour lands a few triangles away on the final scene's water (4096 left them
+/// tens of triangles apart and gained nothing; 262144 was no faster and balances small maps
+/// worse).
 const CHUNK: u64 = 65536;
+/// Fewest photons a thread claims at a time.
+const MIN_CHUNK: u64 = 4096;
+/// Photons in flight, all threads together, that the chunk size keeps under: a sorted chunk
+/// holds about 100 bytes a photon besides what it stores, and up to `2T + 2` finished chunks
+/// wait for the stream, so on a machine of many threads the chunks shrink instead of the
+/// memory growing with the threads (64 threads: 16384 photons a chunk).
+const IN_FLIGHT: u64 = 1 << 20;
+
+/// Returns the photons a thread claims at a time with `threads` threads (see [`CHUNK`]).
+fn chunk_size(threads: usize) -> u64 {
+    (IN_FLIGHT / threads.max(1) as u64).clamp(MIN_CHUNK, CHUNK)
+}
 
 /// Traces the photons of indices `mine` of `pass`'s light (light `l`, streams keyed by `seed`)
 /// on every thread, appending them to `stream` in index order; returns the stream and the
@@ -615,7 +628,8 @@ fn trace_light(
     progress: &dyn Progress,
 ) -> (PhotonStream, LightCounts) {
     let kind = pass.kind;
-    let chunks = (mine.end - mine.start).div_ceil(CHUNK);
+    let chunk = chunk_size(rayon::current_num_threads());
+    let chunks = (mine.end - mine.start).div_ceil(chunk);
     // Every thread claims the next chunk in turn, and whoever finishes the chunk next in
     // order appends it and any finished after it: the stream takes the chunks in order,
     // and only the few chunks in flight wait outside it (see `crate::photon::stream`).
@@ -658,8 +672,8 @@ fn trace_light(
             cones.clear();
             // Asked to stop: the chunks left are not traced (the frame is dropped).
             if !progress.should_stop() {
-                let first = mine.start + c * CHUNK;
-                let keys = first..(first + CHUNK).min(mine.end);
+                let first = mine.start + c * chunk;
+                let keys = first..(first + chunk).min(mine.end);
                 let rng = |k: u64| {
                     Rng::new(
                         seed,
@@ -670,7 +684,7 @@ fn trace_light(
                 let hits = coherent.trace(pass, &mut cones, keys.map(rng), &mut photons);
                 on_specular += hits.0;
                 met += hits.1;
-                progress.advance(CHUNK.min(mine.end - first));
+                progress.advance(chunk.min(mine.end - first));
             }
             let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
             done.finish(c, photons, (on_specular, met));
@@ -1090,6 +1104,25 @@ mod tests {
                 assert_eq!(got, want, "light {l}, {kind:?}");
                 assert_eq!(counts, (on_specular, met), "light {l}, {kind:?}");
             }
+        }
+    }
+
+    /// Chunks are as large as [`CHUNK`] on a few threads and shrink with many, keeping the
+    /// photons in flight under [`IN_FLIGHT`], never below [`MIN_CHUNK`].
+    #[test]
+    fn chunks_shrink_with_many_threads() {
+        assert_eq!(chunk_size(0), CHUNK);
+        assert_eq!(chunk_size(2), CHUNK);
+        assert_eq!(chunk_size(16), CHUNK);
+        assert_eq!(chunk_size(64), 16384);
+        assert_eq!(chunk_size(100_000), MIN_CHUNK);
+        for t in 1..512 {
+            let c = chunk_size(t);
+            assert!((MIN_CHUNK..=CHUNK).contains(&c));
+            assert!(
+                c * t as u64 <= IN_FLIGHT.max(MIN_CHUNK * t as u64),
+                "{t} threads"
+            );
         }
     }
 

@@ -27,6 +27,10 @@
 //! - Media are tracked as for eye rays ([`MediumStack`]); false interfaces are crossed unchanged.
 //! - Photon `k` of light `l` draws from the stream `(seed, Pass::Photon, l·2⁴⁰ + map·2³⁹ + k)`:
 //!   the maps do not depend on the thread count, and tracing runs on all cores.
+//! - A thread traces its chunk of photons sorted by where they head ([`Coherent`]), so that
+//!   photons traced one after another meet the same triangles and texels instead of waiting on
+//!   memory for each, and stores them back in index order: the maps are the same as tracing one
+//!   photon after another.
 
 use super::Photon;
 use super::stream::{PhotonStream, Staged};

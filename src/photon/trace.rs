@@ -655,10 +655,11 @@ fn trace_light(
     // others finish and hold chunk after chunk outside the stream, unbounded.
     let ahead = 2 * rayon::current_num_threads() as u64 + 2;
     let caught_up = Condvar::new();
+    let reach = Coherent::reach(pass.scene);
     rayon::broadcast(|_| {
         // The cones a chunk's caustic photons aim through (see `leave_light`).
         let mut cones = Vec::new();
-        let mut coherent = Coherent::default();
+        let mut coherent = Coherent::new(reach);
         loop {
             let c = next.fetch_add(1, Ordering::Relaxed);
             if c >= chunks {
@@ -702,8 +703,9 @@ fn trace_light(
 
 /// A chunk's photons traced in an order that keeps neighbours near (see [`Coherent::trace`]),
 /// with the buffers it reuses from chunk to chunk.
-#[derive(Default)]
 struct Coherent {
+    /// How far along its ray a photon's sort key is taken ([`Coherent::reach`]).
+    reach: f32,
     /// Each photon's ray and power as it leaves the light, with its stream, its index in the
     /// chunk and its sort key.
     starts: Vec<(u32, u32, Ray, Vec3A, Rng)>,
@@ -713,6 +715,25 @@ struct Coherent {
 }
 
 impl Coherent {
+    /// Returns a tracer of chunks whose keys are taken `reach` along each ray.
+    fn new(reach: f32) -> Coherent {
+        Coherent {
+            reach,
+            starts: Vec::new(),
+            traced: Vec::new(),
+            spans: Vec::new(),
+        }
+    }
+
+    /// Returns half of `scene`'s size (1 when it has none): how far along its ray a photon's
+    /// sort key is taken. Made once a pass: the size is a fold over every instance.
+    fn reach(scene: &Scene) -> f32 {
+        match scene.extent() {
+            e if e.is_finite() && e > 0.0 => 0.5 * e,
+            _ => 1.0,
+        }
+    }
+
     /// Traces one photon for each of `rngs` (each photon's own stream, in index order),
     /// appending what they store to `out` in index order, as leaving the light and [`bounce`]
     /// one photon after another would; returns how many bounced specularly off the first
@@ -740,10 +761,7 @@ impl Coherent {
                 self.starts.push((0, i as u32, ray, power, rng));
             }
         }
-        let reach = match pass.scene.extent() {
-            e if e.is_finite() && e > 0.0 => 0.5 * e,
-            _ => 1.0,
-        };
+        let reach = self.reach;
         let ahead = |r: &Ray| r.origin + r.dir * reach;
         let (lo, hi) = self
             .starts
@@ -1077,7 +1095,7 @@ mod tests {
         let scene = crate::scene::build_scene(&desc, &desc.renders[0]).unwrap();
         let targets = specular_targets(&scene);
         assert_eq!(targets.len(), 2);
-        let mut coherent = Coherent::default();
+        let mut coherent = Coherent::new(Coherent::reach(&scene));
         for (l, light) in scene.lights.iter().enumerate() {
             for kind in [MapKind::Caustic, MapKind::Global] {
                 let pass = LightPass {

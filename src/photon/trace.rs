@@ -616,9 +616,19 @@ const MIN_CHUNK: u64 = 4096;
 /// memory growing with the threads (64 threads: 16384 photons a chunk).
 const IN_FLIGHT: u64 = 1 << 20;
 
-/// Returns the photons a thread claims at a time with `threads` threads (see [`CHUNK`]).
-fn chunk_size(threads: usize) -> u64 {
-    (IN_FLIGHT / threads.max(1) as u64).clamp(MIN_CHUNK, CHUNK)
+/// Fewest chunks a thread gets of a light's photons, where they are enough for [`MIN_CHUNK`]:
+/// a small pass (a progressive pass's 100k photons) keeps small chunks, so the threads share
+/// it evenly and few photons wait for the stream (a 64-pass render's peak memory then does not
+/// depend on how the threads were scheduled in its worst pass).
+const CHUNKS_PER_THREAD: u64 = 16;
+
+/// Returns the photons a thread claims at a time of a light's `photons` with `threads`
+/// threads (see [`CHUNK`], [`IN_FLIGHT`] and [`CHUNKS_PER_THREAD`]).
+fn chunk_size(threads: usize, photons: u64) -> u64 {
+    let threads = threads.max(1) as u64;
+    (IN_FLIGHT / threads)
+        .min(photons / (CHUNKS_PER_THREAD * threads))
+        .clamp(MIN_CHUNK, CHUNK)
 }
 
 /// Traces the photons of indices `mine` of `pass`'s light (light `l`, streams keyed by `seed`)
@@ -632,7 +642,7 @@ fn trace_light(
     progress: &dyn Progress,
 ) -> (PhotonStream, LightCounts) {
     let kind = pass.kind;
-    let chunk = chunk_size(rayon::current_num_threads());
+    let chunk = chunk_size(rayon::current_num_threads(), mine.end - mine.start);
     let chunks = (mine.end - mine.start).div_ceil(chunk);
     // Every thread claims the next chunk in turn, and whoever finishes the chunk next in
     // order appends it and any finished after it: the stream takes the chunks in order,
@@ -1130,16 +1140,20 @@ mod tests {
     }
 
     /// Chunks are as large as [`CHUNK`] on a few threads and shrink with many, keeping the
-    /// photons in flight under [`IN_FLIGHT`], never below [`MIN_CHUNK`].
+    /// photons in flight under [`IN_FLIGHT`], and with small passes, giving each thread
+    /// [`CHUNKS_PER_THREAD`]; never below [`MIN_CHUNK`].
     #[test]
     fn chunks_shrink_with_many_threads() {
-        assert_eq!(chunk_size(0), CHUNK);
-        assert_eq!(chunk_size(2), CHUNK);
-        assert_eq!(chunk_size(16), CHUNK);
-        assert_eq!(chunk_size(64), 16384);
-        assert_eq!(chunk_size(100_000), MIN_CHUNK);
+        let many = 4_000_000;
+        assert_eq!(chunk_size(0, many), CHUNK);
+        assert_eq!(chunk_size(2, many), CHUNK);
+        assert_eq!(chunk_size(16, many), 15625);
+        assert_eq!(chunk_size(64, 1 << 30), 16384);
+        assert_eq!(chunk_size(100_000, many), MIN_CHUNK);
+        assert_eq!(chunk_size(2, 200_000), 6250);
+        assert_eq!(chunk_size(2, 10), MIN_CHUNK);
         for t in 1..512 {
-            let c = chunk_size(t);
+            let c = chunk_size(t, 1 << 30);
             assert!((MIN_CHUNK..=CHUNK).contains(&c));
             assert!(
                 c * t as u64 <= IN_FLIGHT.max(MIN_CHUNK * t as u64),

@@ -767,8 +767,8 @@ fn global_photons_of_a_small_lamp_go_where_the_scene_is() {
 /// A tracing thread the system stops while it holds a chunk of photons does not let the others
 /// run ahead without bound: while the first chunk's report sleeps (half a second, the chunk not
 /// yet in the stream), the other thread finishes at most a few chunks (2 × threads + 2, whose
-/// photons wait outside the stream), not the rest of the light's 16 chunks (of 65536 photons on
-/// two threads), which take it under that half second: without the bound, 15 finish.
+/// photons wait outside the stream), not the rest of the light's 32 chunks (of 32768 photons on
+/// two threads), which take it under that half second.
 #[test]
 fn tracing_threads_wait_for_a_stalled_chunk() {
     use std::sync::atomic::{AtomicU64, Ordering::SeqCst};

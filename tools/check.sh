@@ -4,6 +4,9 @@
 # what the gate needs and the machine may lack, and says what it adds:
 # - a C compiler (Rust links with it; mlua builds its vendored Lua with it): build-essential
 #   through apt-get, as root or with passwordless sudo;
+# - rustup when there is neither cargo nor rustup: the distribution's rustup package through
+#   apt-get where it has one (Debian 13, Ubuntu 24.04), else rustup's own installer
+#   (https://sh.rustup.rs, through curl, which apt-get adds if it must), into CARGO_HOME;
 # - a Rust toolchain when rustup is there but no toolchain is, and a toolchain older than the
 #   crate's rust-version is updated through rustup;
 # - rustfmt and clippy, through rustup.
@@ -40,6 +43,36 @@ fi
 
 # The crate's minimum Rust (Cargo.toml's rust-version).
 need=$(sed -n 's/^rust-version = "\([0-9.]*\)"/\1/p' Cargo.toml)
+
+# Where rustup's installer puts cargo and rustup; on PATH whether or not they are there yet.
+cargo_bin="${CARGO_HOME:-${HOME:-}/.cargo}/bin"
+export PATH="$cargo_bin:$PATH"
+# Neither cargo nor rustup: add rustup (the toolchain itself is added below).
+if ! cargo --version >/dev/null 2>&1 && ! command -v rustup >/dev/null 2>&1; then
+  if command -v apt-get >/dev/null 2>&1 && as_root true &&
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get update -qq &&
+    [ -n "$(apt-cache policy rustup 2>/dev/null | sed -n 's/^ *Candidate: \([^(].*\)/\1/p')" ]; then
+    say "no Rust; installing the distribution's rustup"
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq rustup >/dev/null || true
+  fi
+  if ! command -v rustup >/dev/null 2>&1; then
+    if ! command -v curl >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1 && as_root true; then
+      say "no curl to fetch rustup with; installing curl"
+      as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq curl ca-certificates \
+        >/dev/null || true
+    fi
+    if command -v curl >/dev/null 2>&1; then
+      say "no Rust; installing rustup from https://sh.rustup.rs into $cargo_bin"
+      curl --proto '=https' --tlsv1.2 -sSf --max-time 300 https://sh.rustup.rs |
+        sh -s -- -y --no-modify-path --profile minimal --default-toolchain none >&2 || true
+    fi
+  fi
+  if ! command -v rustup >/dev/null 2>&1; then
+    say "no cargo and no rustup, and rustup could not be installed (no apt package, no curl," \
+      "or https://sh.rustup.rs unreachable): install Rust $need or later (https://rustup.rs)"
+    exit 1
+  fi
+fi
 # `cargo --version`, not `command -v cargo`: rustup's cargo is on PATH even with no toolchain
 # installed, and only fails when run.
 if ! cargo --version >/dev/null 2>&1; then

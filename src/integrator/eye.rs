@@ -206,6 +206,7 @@ pub enum DiffuseTerm<'a> {
 }
 
 /// Everything an eye path needs besides the ray.
+#[derive(Clone, Copy)]
 pub struct Tracer<'a> {
     pub scene: &'a Scene,
     pub camera: &'a Camera,

@@ -367,17 +367,16 @@ pub fn render(
     let mut photons = planned(&settings.photons, plan);
     let mut settings = std::borrow::Cow::Borrowed(settings);
     let request = settings.budget.filter(|_| read.is_none());
-    // The planner's pilot may have made the chosen prepass already.
-    let mut reused = None;
+    // The planner may have made the chosen prepass already (its pilot's, or a short budget's).
+    let (mut reused, mut timing) = (None, None);
     let mut chosen = request.map(|request| {
-        let (p, pilot_made) =
-            super::planner::choose(view, &settings, &photons, &request, started, progress);
-        photons = super::planner::at_effort(&photons, p.effort, &request);
-        reused = pilot_made;
-        p
+        let c = super::planner::choose(view, &settings, &photons, &request, started, progress);
+        photons = super::planner::at_effort(&photons, c.planned.effort, &request);
+        (reused, timing) = (c.prepass, c.coarse);
+        c.planned
     });
     let gi = match reused {
-        Some(gi) => gi.with_whole_cache(view.scene, view.camera, progress),
+        Some(gi) => gi,
         None => prepass(view.scene, view.camera, &photons, read, progress),
     };
     if let (Some(p), Some(request)) = (&mut chosen, &request) {
@@ -387,7 +386,15 @@ pub fn render(
             light_samples: settings.light_samples,
             diffuse: DiffuseTerm::Photons(&gi),
         };
-        super::planner::fit_samples(p, view, settings.seed, &tracer, request, started);
+        // With a short budget's timing prepass, the pixels are traced through it too.
+        let coarse = timing.as_ref().map(|c| super::eye::Tracer {
+            diffuse: DiffuseTerm::Photons(c),
+            ..tracer
+        });
+        let tracers: Vec<_> = std::iter::once(tracer).chain(coarse).collect();
+        super::planner::fit_samples(p, view, settings.seed, &tracers, request, started);
+        drop(tracers);
+        drop(timing.take());
         let s = settings.to_mut();
         s.sampling = match p.adaptive {
             Some(a) => crate::render::Sampling::Noise {

@@ -70,6 +70,16 @@
 //! edge, a firefly path): both make the measured error larger than the expected one.
 //! `docs/accuracy/budget.md` has the figures.
 //!
+//! # A budget too short for a pilot
+//! The pilot's first prepass is timed before the rest is made. When the rest would take more
+//! than [`PILOT_MOST`] of the time left, no plan it finds can win back what it costs: on the
+//! final scene at 256² with 2.5 s, a pilot of 1.2 s left a plan of 0.102 where the defaults,
+//! their samples fitted to the time, made 0.087. The planner then makes the frame's own
+//! prepass, scaled down to fit ([`quick`]), and fits the samples to the time left as after a
+//! pilot; the first prepass, of an independent seed at a thirty-second of the effort, gives the
+//! maps' part of the expected error by one difference ([`fit_samples`]), with how it falls
+//! with effort assumed, not measured, and the plan says so.
+//!
 //! # The choice
 //! With a time budget, over 97 efforts from `F₀/4` to 64 (log-spaced) the planner takes the most
 //! samples the time left after the pilot and that prepass allows and keeps the pair of least
@@ -303,6 +313,11 @@ pub enum Why {
     BudgetSpent,
     /// The pilot found a black image: nothing to plan for; the frame's own settings.
     Black,
+    /// The budget is too short for a pilot: the rest of it would take more than
+    /// [`PILOT_MOST`] of the time left (`pilot` seconds, as predicted from the first pilot
+    /// prepass). The frame's own prepass, scaled down to fit ([`quick`]), and the samples the
+    /// time left takes.
+    ShortBudget { pilot: f64 },
 }
 
 /// Adaptive pixels as the planner chose them: after the plan's samples a pixel takes rounds
@@ -352,11 +367,17 @@ impl fmt::Display for Planned {
             Goal::Error(e) => format!("--target-error {e}"),
         };
         let why = match self.why {
-            Why::LeastError => "the least expected error in the time left",
-            Why::LeastTime => "the least expected time to the target",
-            Why::TargetOutOfReach => "the target is out of reach; the least error considered",
-            Why::BudgetSpent => "the pilot left too little time; its own prepass",
-            Why::Black => "a black image; the frame's own settings",
+            Why::LeastError => "the least expected error in the time left".to_string(),
+            Why::LeastTime => "the least expected time to the target".to_string(),
+            Why::TargetOutOfReach => {
+                "the target is out of reach; the least error considered".to_string()
+            }
+            Why::BudgetSpent => "the pilot left too little time; its own prepass".to_string(),
+            Why::Black => "a black image; the frame's own settings".to_string(),
+            Why::ShortBudget { pilot } => format!(
+                "the budget is too short for a pilot (it would take {pilot:.2} s more); the \
+                 frame's own prepass, scaled to fit"
+            ),
         };
         let (c, m, b) = self.parts;
         let model = &self.model;
@@ -368,14 +389,30 @@ impl fmt::Display for Planned {
             ),
             None => String::new(),
         };
+        let quick = matches!(self.why, Why::ShortBudget { .. });
+        let parts = match quick {
+            true => format!(
+                "camera {c:.4}, maps {m:.4} from the timing prepass, their bias not measured"
+            ),
+            false => format!("camera {c:.4}, maps {m:.4}, bias {b:.4}"),
+        };
+        let maps = match quick {
+            true => format!(
+                " maps {:.2e} at x{:.3}, falling as effort^-{:.2} assumed;",
+                model.map_var, model.pilot_effort, model.beta
+            ),
+            false => format!(
+                " maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e};",
+                model.map_var, model.pilot_effort, model.beta, model.bias2
+            ),
+        };
         write!(
             f,
             "{goal}: {} spp{rounds}, prepass effort x{:.3} (photon scale {:.4}, {} cache rays a \
-             record{}): {why}; expected relative RMSE {:.4} (camera {c:.4}, maps {m:.4}, bias \
-             {b:.4}; lights seen directly left out) in {:.2} s after a {:.2} s pilot (measured: camera variance {:.3} a \
-             4-sample pixel at effort 1 falling as spp^-{:.2}, maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e}; photons \
-             {:.3} s per unit effort, cache {:.2e} s per ray a record, {:.4} s a sample of \
-             every pixel)",
+             record{}): {why}; expected relative RMSE {:.4} ({parts}; lights seen directly left \
+             out) in {:.2} s after a {:.2} s {} (measured: camera variance {:.3} a 4-sample \
+             pixel at effort 1 falling as spp^-{:.2};{maps} photons {:.3} s per unit effort, \
+             cache {:.2e} s per ray a record, {:.4} s a sample of every pixel)",
             self.spp,
             self.effort,
             self.photon_scale,
@@ -387,12 +424,12 @@ impl fmt::Display for Planned {
             self.expected,
             self.expected_seconds,
             self.pilot_seconds,
+            match quick {
+                true => "timing prepass",
+                false => "pilot",
+            },
             model.camera_var_at(1.0),
             model.gamma,
-            model.map_var,
-            model.pilot_effort,
-            model.beta,
-            model.bias2,
             model.photon_per_effort,
             model.cache_per_ray,
             model.per_spp,
@@ -425,9 +462,19 @@ fn cache_rays(rays: u32, f: f64, fixed: bool) -> u32 {
     }
 }
 
+/// What [`choose`] returns: the plan, and the prepasses it made that the render takes.
+pub struct Chosen {
+    pub planned: Planned,
+    /// The frame's prepass, when the planner made it (its pilot's, or a short budget's).
+    pub prepass: Option<Prepass>,
+    /// A short budget's timing prepass, for [`fit_samples`] to measure the maps' part with.
+    pub coarse: Option<Prepass>,
+}
+
 /// Runs the pilot for the frame `view` with `settings` (its photon settings `photons`, as the
 /// plan made them) and returns the plan for `request`, reporting the pilot's phases to
-/// `progress`. `started` is when the budget's clock started.
+/// `progress`. `started` is when the budget's clock started. A budget too short for the pilot
+/// gets a plan without one ([`quick`]).
 pub fn choose(
     view: View,
     settings: &Settings,
@@ -435,8 +482,21 @@ pub fn choose(
     request: &Request,
     started: Instant,
     progress: &dyn Progress,
-) -> (Planned, Option<super::photon_map::Prepass>) {
-    let (model, mut prepasses) = pilot(view, settings, photons, request, progress);
+) -> Chosen {
+    let (grid, _) = pilot_grid(view, PILOT_GRID);
+    progress.start("planning: pilot prepasses", 4);
+    let first = pilot_prepass(view, photons, request, &grid, 0, PILOT_EFFORT);
+    progress.advance(1);
+    let short = quick(view, photons, request, &first, started, progress);
+    if let Some((mut planned, prepass)) = short {
+        planned.spp = given_spp(settings);
+        return Chosen {
+            planned,
+            prepass: Some(prepass),
+            coarse: Some(first.prepass),
+        };
+    }
+    let (model, mut prepasses) = pilot(view, settings, photons, request, first, progress);
     let pilot_seconds = started.elapsed().as_secs_f64();
     let max_effort = max_effort(view, photons, request);
     let mut choice = decide(model, request, max_effort, settings, pilot_seconds);
@@ -453,11 +513,148 @@ pub fn choose(
             choice.effort = 1.0;
         }
     }
-    let reused =
-        (reused_effort(&model, request) == choice.effort).then(|| prepasses.swap_remove(2));
+    // The pilot's prepass made ready for the frame: its cache covered only the pilot's pixels.
+    let reused = (reused_effort(&model, request) == choice.effort).then(|| {
+        prepasses
+            .swap_remove(2)
+            .with_whole_cache(view.scene, view.camera, progress)
+    });
     let mut planned = choice.with_settings(photons, request, pilot_seconds);
     planned.pilot_prepass = reused.is_some();
-    (planned, reused)
+    Chosen {
+        planned,
+        prepass: reused,
+        coarse: None,
+    }
+}
+
+/// The most of a time budget's time left the rest of the pilot may be expected to take; a
+/// budget that short gets the frame's own prepass scaled to fit instead ([`quick`]). On the
+/// final scene at 256² a pilot takes 1.2 s, and with 2.5 s the defaults' 5 samples a pixel
+/// (relative RMSE 0.0865) beat any plan the 1.3 s left could make (0.1018):
+/// `docs/accuracy/budget.md`.
+const PILOT_MOST: f64 = 0.25;
+/// Without a pilot, the photons may take this share of the time left, and the cache this
+/// share of what is left after them: the frame's own balance (at 256² on the final scene,
+/// with 4 samples a pixel, the photons take 0.4 s and the cache 1.25 s of the 2.4 s).
+const QUICK_PHOTONS: f64 = 0.4;
+const QUICK_CACHE: f64 = 0.6;
+/// The maps' noise is taken to fall as `effort^-QUICK_BETA` where no pilot measured it
+/// ([`fit_samples`]): the value that puts the maps' variance at the geometric middle of what
+/// `β` = 0.2 and `β` = 1, the ends of the pilot's range, would make of the same difference, at
+/// the efforts a short budget chooses (8 to 32 times [`PILOT_EFFORT`]). Its part of the error
+/// is then within a factor 1.4 of either end's at 8 times, 1.85 at 32. The final scene's noise
+/// falls as effort^-1.1 from 1/32 to 1/8 of its photons and ^-0.4 from 1/8 to 1, 0.68 over
+/// the whole; the glass in water's as ^-0.37 (`docs/accuracy.md`).
+const QUICK_BETA: f64 = 0.63;
+
+/// Returns the plan for a budget too short for the pilot, and its prepass made, or `None`
+/// when the pilot fits. `first` is the pilot's first prepass, at [`PILOT_EFFORT`]: by its
+/// phases' times the rest of the pilot (one more prepass at `F₀` = [`PILOT_EFFORT`], two at
+/// `4F₀`, whose photons take 4 times as long and caches twice, with `√4` times the rays)
+/// would take `9p + 5c` seconds, `p` the photons' and `c` the rest; a pilot above
+/// [`PILOT_MOST`] of the time left is skipped. The plan then is the frame's own: effort 1,
+/// scaled down so that the photons take at most [`QUICK_PHOTONS`] of the time left (their
+/// time per unit effort extrapolated from `first` in proportion, which overestimates it:
+/// part of a pass's time is fixed), and the cache's rays cut so that it takes at most
+/// [`QUICK_CACHE`] of the time left after them ([`fit_samples`] then fits the samples to the
+/// rest, and measures the maps' noise against `first`, which the render keeps for it). No
+/// pilot measures how the maps' noise falls with effort, nor their bias: the plan says so.
+fn quick(
+    view: View,
+    photons: &GiSettings,
+    request: &Request,
+    first: &Timed,
+    started: Instant,
+    progress: &dyn Progress,
+) -> Option<(Planned, Prepass)> {
+    let Goal::Time(budget) = request.goal else {
+        return None;
+    };
+    let budget = budget.as_secs_f64() * (1.0 - RESERVE);
+    let stats = &first.prepass.stats;
+    let photon_seconds =
+        (stats.trace_time + stats.build_time + stats.precompute_time).as_secs_f64();
+    let rest = (first.seconds - photon_seconds).max(0.0);
+    let pilot = pilot_rest(photon_seconds, rest, request.fixed_photons);
+    let decided = started.elapsed().as_secs_f64();
+    let left = budget - decided;
+    if pilot <= PILOT_MOST * left {
+        return None;
+    }
+    let per_effort = photon_seconds / PILOT_EFFORT;
+    let effort = match request.fixed_photons {
+        true => 1.0,
+        false => (QUICK_PHOTONS * left / per_effort.max(1e-12)).clamp(PILOT_EFFORT, 1.0),
+    };
+    let mut gi = at_effort(photons, effort, request);
+    let prepass = Prepass::build_with(view.scene, &gi, progress).precompute_for(view.camera);
+    let first_rays = first.prepass.settings.cache.rays.max(1) as f64;
+    let per_ray = stats.cache.as_ref().map_or(0.0, |c| c.whole_seconds()) / first_rays;
+    if !request.fixed_cache_rays && per_ray > 0.0 {
+        let left = budget - started.elapsed().as_secs_f64();
+        let most = (QUICK_CACHE * left / per_ray)
+            .floor()
+            .max(MIN_CACHE_RAYS as f64);
+        gi.cache.rays = gi.cache.rays.min(most as u32);
+    }
+    let mut prepass = prepass;
+    prepass.settings.cache.rays = gi.cache.rays;
+    let prepass = prepass.with_cache(view.scene, view.camera, progress);
+    let model = Model {
+        mean: 0.0,
+        camera_var: 0.0,
+        camera_sparse: 0.0,
+        gamma: 1.0,
+        map_var: 0.0,
+        beta: 1.0,
+        bias2: 0.0,
+        pilot_effort: PILOT_EFFORT,
+        photon_per_effort: per_effort,
+        photon_fixed: 0.0,
+        cache_per_ray: per_ray,
+        cache_rays: photons.cache.rays,
+        fixed_rays: request.fixed_cache_rays,
+        per_spp: 0.0,
+    };
+    let planned = Planned {
+        goal: request.goal,
+        why: Why::ShortBudget { pilot },
+        effort,
+        photon_scale: gi.photon_scale,
+        pilot_prepass: false,
+        cache_rays: gi.cache.rays,
+        // `choose` gives the frame's; [`fit_samples`] fits them, unless `--spp` fixed them.
+        spp: 1,
+        adaptive: None,
+        expected: 0.0,
+        parts: (0.0, 0.0, 0.0),
+        expected_seconds: 0.0,
+        pilot_seconds: decided,
+        model,
+    };
+    Some((planned, prepass))
+}
+
+/// Returns the seconds the rest of the pilot is expected to take after its first prepass (at
+/// [`PILOT_EFFORT`], `photons` seconds of photons and `rest` of the rest, mostly its cache):
+/// one more such, and two at [`PILOT_STEP`] times the effort, whose photons take `PILOT_STEP`
+/// times as long (as long, when `fixed_photons`) and caches `√PILOT_STEP` times (their rays
+/// per record).
+fn pilot_rest(photons: f64, rest: f64, fixed_photons: bool) -> f64 {
+    let step = match fixed_photons {
+        true => 1.0,
+        false => PILOT_STEP,
+    };
+    (1.0 + 2.0 * step) * photons + (1.0 + 2.0 * PILOT_STEP.sqrt()) * rest
+}
+
+/// Returns the maps' relative variance at effort `F` from `d2`, the mean squared difference of
+/// pixels traced through prepasses of independent seeds at `F` and at `r·F` (see
+/// [`fit_samples`]), with the noise falling as `effort^-QUICK_BETA`.
+fn maps_from_difference(d2: f64, r: f64) -> f64 {
+    let x = r.powf(QUICK_BETA);
+    d2 * x / (1.0 + x)
 }
 
 /// Returns the effort whose prepass the pilot has made already and the render may take as its
@@ -470,18 +667,26 @@ fn reused_effort(model: &Model, request: &Request) -> f64 {
     }
 }
 
-/// Measures the camera pass with the planned prepass made (`tracer` reads it): traces the
+/// Measures the camera pass with the planned prepass made (`tracers[0]` reads it): traces the
 /// pilot's pixels once more through it alone, for the cost of a sample and the camera's
 /// variance at the chosen effort (the pilot's small prepasses measure it through coarser maps),
 /// and re-chooses the samples per pixel (unless `--spp` fixed them): for a time budget the most
 /// the time left since `started` allows, for a target error the fewest that reach it. The
 /// prepass is made, so only the samples can still move; the plan's samples, expected error,
 /// time and model are updated.
+///
+/// A second tracer reads a short budget's timing prepass ([`quick`], no pilot): the pixels are traced
+/// through it too, with the same random numbers, for the maps' part of the error, which no
+/// pilot measured. Their mean squared difference (less the samples' noise) is
+/// `V(F₀) + V(F)` for prepasses of independent seeds at `F₀` ([`PILOT_EFFORT`]) and the
+/// plan's `F`; with `V` falling as `F^-β`, `V(F) = D²·r^β / (1 + r^β)`, `r = F₀/F`. Without
+/// a second effort `β` is not measured: it is taken as [`QUICK_BETA`]. The difference of the
+/// two kernels' blur is counted with the noise.
 pub fn fit_samples(
     planned: &mut Planned,
     view: View,
     seed: u64,
-    tracer: &Tracer,
+    tracers: &[Tracer],
     request: &Request,
     started: Instant,
 ) {
@@ -490,8 +695,7 @@ pub fn fit_samples(
     }
     let (w, h) = view.window.size();
     let side = ((w as f64 * h as f64 * FIT_SHARE).sqrt() as u32).clamp(PILOT_GRID, FIT_GRID);
-    let tracers = std::slice::from_ref(tracer);
-    let (all, thread_seconds, samples) = pilot_pixels(view, seed, tracers, side, &NoProgress);
+    let (all, [_, thread_seconds], samples) = pilot_pixels(view, seed, tracers, side, &NoProgress);
     let runs = lit_pixels(all.clone());
     // Thread seconds over the threads, not the wall time: the pilot's pixels take a tenth of a
     // second, over rows of unequal cost, and its wall time varied from 4.7 to 6.5 s a sample
@@ -509,12 +713,22 @@ pub fn fit_samples(
         per_spp,
         ..planned.model
     };
+    let f = planned.effort;
     if mean > 0.0 {
         model.camera_var = v4 / (mean * mean);
         model.camera_sparse = 0.0;
         model.gamma = stratification(v2, v4);
+        if tracers.len() == 2 {
+            let d2 = (runs.iter().map(|r| r.mean2(1)).sum::<f64>() / n / (mean * mean)).max(0.0);
+            let r = match request.fixed_photons {
+                true => 1.0,
+                false => (PILOT_EFFORT / f).min(1.0),
+            };
+            model.map_var = maps_from_difference(d2, r);
+            model.pilot_effort = f;
+            model.beta = QUICK_BETA;
+        }
     }
-    let f = planned.effort;
     let (_, maps2, bias2) = model.parts2(1, f);
     let (spp, need) = match request.goal {
         _ if request.fixed_spp => (planned.spp, None),
@@ -761,6 +975,14 @@ fn efforts(request: &Request, max: f64) -> Vec<f64> {
         .collect()
 }
 
+/// Returns the samples per pixel `settings` give (`--spp`, or the default).
+fn given_spp(settings: &Settings) -> u32 {
+    match settings.sampling {
+        crate::render::Sampling::Stratified { spp } => spp,
+        _ => super::DEFAULT_SPP,
+    }
+}
+
 /// Chooses effort and samples for `request` by `model` (see the module doc).
 fn decide(
     model: Model,
@@ -769,10 +991,7 @@ fn decide(
     settings: &Settings,
     pilot_seconds: f64,
 ) -> Choice {
-    let given_spp = match settings.sampling {
-        crate::render::Sampling::Stratified { spp } => spp,
-        _ => super::DEFAULT_SPP,
-    };
+    let given_spp = given_spp(settings);
     let choice = |why, effort, spp| Choice {
         why,
         effort,
@@ -867,7 +1086,7 @@ struct PixelRun {
     /// 4-sample replicates): their channel variance, as adaptive pixels test it
     /// ([`crate::render::noise::Halves::sample_error`]; see [`fit_adaptive`]).
     noise: Halves,
-    /// The thread seconds its samples took.
+    /// The thread seconds its samples took through the first tracer.
     seconds: f64,
 }
 
@@ -903,40 +1122,57 @@ impl PixelRun {
     }
 }
 
-/// Makes the pilot's four prepasses of independent seeds, two at `F₀` and two at
-/// [`PILOT_STEP`]`·F₀` ([`pilot_effort`] chooses `F₀` from the first one's time at
+/// A prepass the planner made, and its wall seconds.
+struct Timed {
+    prepass: Prepass,
+    seconds: f64,
+}
+
+/// Makes the pilot's prepass number `i` (its seed the frame's, mixed with `i`) at effort `f`,
+/// its cache made near the pixels of `grid` only, and times it.
+fn pilot_prepass(
+    view: View,
+    photons: &GiSettings,
+    request: &Request,
+    grid: &[(u32, u32)],
+    i: u64,
+    f: f64,
+) -> Timed {
+    let mut gi = at_effort(photons, f, request);
+    gi.seed = photons.seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(i + 1));
+    let start = Instant::now();
+    // The caches are made near the pixels the pilot reads: at 1024² a whole one is most of
+    // the pilot's time, and the frame's cost is extrapolated from the records made.
+    let prepass = Prepass::build_with(view.scene, &gi, &NoProgress)
+        .precompute_for(view.camera)
+        .with_cache_over(view.scene, view.camera, Probes::Near(grid), &NoProgress);
+    Timed {
+        prepass,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// Makes the rest of the pilot's four prepasses of independent seeds, two at `F₀` and two at
+/// [`PILOT_STEP`]`·F₀` ([`pilot_effort`] chooses `F₀` from `first`, the first one's at
 /// [`PILOT_EFFORT`]), and returns them with `F₀`.
 fn pilot_prepasses(
     view: View,
     photons: &GiSettings,
     request: &Request,
+    first: Timed,
     progress: &dyn Progress,
-) -> (Vec<super::photon_map::Prepass>, f64) {
-    let seed = photons.seed;
-    // The caches are made near the pixels the pilot reads: at 1024² a whole one is most of
-    // the pilot's time, and the frame's cost is extrapolated from the records made.
+) -> (Vec<Prepass>, f64) {
     let (grid, _) = pilot_grid(view, PILOT_GRID);
-    progress.start("planning: pilot prepasses", 4);
-    let make = |i: u64, f: f64| {
-        let mut gi = at_effort(photons, f, request);
-        gi.seed = seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(i + 1));
-        let start = Instant::now();
-        let p = Prepass::build_with(view.scene, &gi, &NoProgress)
-            .precompute_for(view.camera)
-            .with_cache_over(view.scene, view.camera, Probes::Near(&grid), &NoProgress);
-        progress.advance(1);
-        (p, start.elapsed().as_secs_f64())
-    };
-    let (first, seconds) = make(0, PILOT_EFFORT);
-    let f0 = pilot_effort(request, seconds, max_effort(view, photons, request));
+    let f0 = pilot_effort(request, first.seconds, max_effort(view, photons, request));
     let first = match f0 > PILOT_EFFORT {
-        true => make(0, f0).0,
-        false => first,
+        true => pilot_prepass(view, photons, request, &grid, 0, f0).prepass,
+        false => first.prepass,
     };
     let mut prepasses = vec![first];
     for i in 1..4u64 {
         let f = if i < 2 { f0 } else { PILOT_STEP * f0 };
-        prepasses.push(make(i, f).0);
+        prepasses.push(pilot_prepass(view, photons, request, &grid, i, f).prepass);
+        progress.advance(1);
     }
     (prepasses, f0)
 }
@@ -947,9 +1183,10 @@ fn pilot(
     settings: &Settings,
     photons: &GiSettings,
     request: &Request,
+    first: Timed,
     progress: &dyn Progress,
-) -> (Model, Vec<super::photon_map::Prepass>) {
-    let (prepasses, f0) = pilot_prepasses(view, photons, request, progress);
+) -> (Model, Vec<Prepass>) {
+    let (prepasses, f0) = pilot_prepasses(view, photons, request, first, progress);
     // The larger pair's phases: photons scale with the effort, the cache with its rays.
     let (mut photon_seconds, mut cache_seconds) = (0.0, 0.0);
     for p in &prepasses[2..] {
@@ -972,7 +1209,7 @@ fn pilot(
         })
         .collect();
     let start = Instant::now();
-    let (runs, thread_seconds, samples) =
+    let (runs, [thread_seconds, _], samples) =
         pilot_pixels(view, settings.seed, &tracers, PILOT_GRID, progress);
     let runs = lit_pixels(runs);
     let wall = start.elapsed().as_secs_f64();
@@ -1042,20 +1279,23 @@ fn lit_pixels(runs: Vec<PixelRun>) -> Vec<PixelRun> {
 
 /// Returns the radiance along `ray` through each of `tracers`, all drawing the same random
 /// numbers (a NaN or infinite value counts as black, as the camera pass drops it); `rng` ends
-/// where the last tracer left it.
+/// where the last tracer left it. Also returns the seconds the first tracer took.
 fn trace_all(
     tracers: &[Tracer],
     ray: &crate::geometry::ray::Ray,
     share: Share,
     rng: &mut Rng,
     counts: &mut RayCounts,
-) -> Vec<Vec3A> {
+) -> (Vec<Vec3A>, f64) {
     let mut last = rng.clone();
+    let mut first = None;
     let l = tracers
         .iter()
         .map(|t| {
             let mut r = rng.clone();
+            let start = Instant::now();
             let value = crate::render::Radiance::radiance(t, ray, share, &mut r, counts);
+            first.get_or_insert(start.elapsed().as_secs_f64());
             last = r;
             match value.is_finite() {
                 true => value,
@@ -1064,7 +1304,7 @@ fn trace_all(
         })
         .collect();
     *rng = last;
-    l
+    (l, first.unwrap_or(0.0))
 }
 
 /// Returns the pilot's smaller effort `F₀`, given that a prepass at [`PILOT_EFFORT`] took
@@ -1104,27 +1344,27 @@ fn pilot_grid(view: View, side: u32) -> (Vec<(u32, u32)>, u32) {
 
 /// Traces the pilot's samples: the sets of [`PILOT_SETS`] at each pixel of a grid of at most
 /// `side`² over `view`'s window ([`pilot_grid`]), each through every tracer with the same
-/// random numbers. Returns each pixel's running sums, the thread seconds spent tracing and the
-/// samples traced per tracer.
+/// random numbers. Returns each pixel's running sums, the thread seconds spent tracing (through
+/// every tracer, and through the first alone) and the samples traced per tracer.
 fn pilot_pixels(
     view: View,
     seed: u64,
     tracers: &[Tracer],
     side: u32,
     progress: &dyn Progress,
-) -> (Vec<PixelRun>, f64, u64) {
+) -> (Vec<PixelRun>, [f64; 2], u64) {
     use rayon::prelude::*;
     let (grid, cols) = pilot_grid(view, side);
     let rows = grid.len() as u32 / cols.max(1);
     progress.start("planning: pilot pixels", rows as u64);
     // The pilot's own streams: keyed like the render's pixels, under another seed.
     let seed = seed ^ 0xD1B5_4A32_D192_ED03;
-    let per_row: Vec<(Vec<PixelRun>, f64, u64)> = (0..rows)
+    let per_row: Vec<(Vec<PixelRun>, [f64; 2], u64)> = (0..rows)
         .into_par_iter()
         .map(|j| {
             let mut counts = RayCounts::default();
             let mut runs = Vec::with_capacity(cols as usize);
-            let mut seconds = 0.0;
+            let (mut seconds, mut first_seconds) = (0.0, 0.0);
             let mut samples = 0;
             for &(x, y) in &grid[(j * cols) as usize..((j + 1) * cols) as usize] {
                 let index = y as u64 * view.window.full_width as u64 + x as u64;
@@ -1142,11 +1382,12 @@ fn pilot_pixels(
                         let ray = view.camera.ray(x as f32 + u, y as f32 + v);
                         crate::render::scope::take_light_seen();
                         let start = Instant::now();
-                        let values = trace_all(tracers, &ray, share, &mut rng, &mut counts);
+                        let (values, first) =
+                            trace_all(tracers, &ray, share, &mut rng, &mut counts);
                         run.light |= crate::render::scope::take_light_seen();
-                        let took = start.elapsed().as_secs_f64();
-                        seconds += took;
-                        run.seconds += took;
+                        seconds += start.elapsed().as_secs_f64();
+                        first_seconds += first;
+                        run.seconds += first;
                         samples += 1;
                         if set < 2 {
                             run.noise.add(values[0]);
@@ -1157,6 +1398,7 @@ fn pilot_pixels(
                             .collect();
                         let q = match l[..] {
                             [a, b, c, d] => [a, a - b, c - d, (a + b - c - d) / 2.0, c],
+                            [a, b] => [a, a - b, 0.0, 0.0, b],
                             _ => [l[0], 0.0, 0.0, 0.0, 0.0],
                         };
                         run.add(q);
@@ -1167,14 +1409,15 @@ fn pilot_pixels(
                 runs.push(run);
             }
             progress.advance(1);
-            (runs, seconds, samples)
+            (runs, [seconds, first_seconds], samples)
         })
         .collect();
     let mut runs = Vec::new();
-    let (mut seconds, mut samples) = (0.0, 0);
+    let (mut seconds, mut samples) = ([0.0; 2], 0);
     for (r, s, n) in per_row {
         runs.extend(r);
-        seconds += s;
+        seconds[0] += s[0];
+        seconds[1] += s[1];
         samples += n;
     }
     (runs, seconds, samples)
@@ -1460,6 +1703,41 @@ mod tests {
             pilot_effort(&request(Goal::Error(0.1)), 0.1, 64.0),
             PILOT_EFFORT
         );
+    }
+
+    /// The rest of a pilot whose first prepass took 0.03 s of photons and 0.2 s of cache: one
+    /// more (0.23 s) and two at 4 times the effort (0.12 + 0.4 s each), 1.27 s. That is the
+    /// final scene at 256²: with 2.5 s it is more than [`PILOT_MOST`] of the time left, with
+    /// 10 s it is not.
+    #[test]
+    fn a_pilot_too_long_for_the_budget_is_predicted() {
+        let rest = pilot_rest(0.03, 0.2, false);
+        assert!((rest - 1.27).abs() < 1e-12, "{rest}");
+        // Photons a user typed are the same in all four: 0.09 + 1 s.
+        assert!((pilot_rest(0.03, 0.2, true) - 1.09).abs() < 1e-12);
+        assert!(rest > PILOT_MOST * 2.5 * (1.0 - RESERVE));
+        assert!(rest <= PILOT_MOST * 10.0 * (1.0 - RESERVE));
+    }
+
+    /// Two prepasses of independent seeds at `F` and `rF` differ by `V(F) + V(rF)`: with the
+    /// noise falling as `QUICK_BETA` assumes, the split gives `V(F)` back; with `β` at either
+    /// end of the pilot's range [0.2, 1] it is off by at most the factors `QUICK_BETA`'s doc
+    /// names, in RMS: 1.4 at `r` = 1/8, 1.85 at 1/32.
+    #[test]
+    fn the_maps_part_from_one_difference() {
+        for r in [1.0f64 / 8.0, 1.0 / 32.0] {
+            let bound = if r > 0.1 { 1.4 } else { 1.85 };
+            for beta in [0.2, QUICK_BETA, 1.0] {
+                // Normalised at F: V(F) = 1, V(rF) = r^-β.
+                let d2 = 1.0 + r.powf(-beta);
+                let got = maps_from_difference(d2, r);
+                let ratio = got.sqrt().max(1.0 / got.sqrt());
+                match beta == QUICK_BETA {
+                    true => assert!((got - 1.0).abs() < 1e-12, "{got}"),
+                    false => assert!(ratio <= bound, "r {r} beta {beta}: {got}"),
+                }
+            }
+        }
     }
 
     /// A pilot whose larger prepass is what the budget can afford: the plan takes it, for its

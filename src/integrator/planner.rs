@@ -712,32 +712,9 @@ pub fn fit_samples(
     // estimates further (its 512-sample rounds took 0.6 of a 4-sample set's time a sample),
     // which this does not count.
     let shared = sharing_seconds(&all).map(|t| t * w as f64 * h as f64 / threads);
-    let n = runs.len().max(1) as f64;
-    let mean = runs.iter().map(|r| r.mean[0]).sum::<f64>() / n;
-    let (v2, v4) = runs.iter().fold((0.0, 0.0), |(a, b), r| {
-        let (x, y) = r.set_vars(0);
-        (a + x / n, b + y / n)
-    });
-    let mut model = Model {
-        per_spp,
-        ..planned.model
-    };
     let f = planned.effort;
-    if mean > 0.0 {
-        model.camera_var = v4 / (mean * mean);
-        model.camera_sparse = 0.0;
-        model.gamma = stratification(v2, v4);
-        if tracers.len() == 2 {
-            let d2 = (runs.iter().map(|r| r.mean2(1)).sum::<f64>() / n / (mean * mean)).max(0.0);
-            let r = match request.fixed_photons {
-                true => 1.0,
-                false => (PILOT_EFFORT / f).min(1.0),
-            };
-            model.map_var = maps_from_difference(d2, r);
-            model.pilot_effort = f;
-            model.beta = QUICK_BETA;
-        }
-    }
+    let timing = (tracers.len() == 2).then_some(request.fixed_photons);
+    let (model, mean) = measured(planned.model, &runs, per_spp, f, timing);
     let (_, maps2, bias2) = model.parts2(1, f);
     // The first round's samples share as the pilot's sets of `WEAK_SHARERS` did when it has as
     // many (`shared` seconds a sample of every pixel; `per_spp` over all the sets). The rounds
@@ -788,6 +765,43 @@ pub fn fit_samples(
     planned.expected_seconds =
         started.elapsed().as_secs_f64() - planned.pilot_seconds + camera_samples * per_spp;
     planned.model = model;
+}
+
+/// Returns `model` with what the pixels `runs` traced through the chosen prepass (at effort
+/// `f`) measured: the camera's variance and its fall with samples, and `per_spp`; with a
+/// short budget's timing prepass traced beside it (`timing`: whether the photons were typed),
+/// the maps' part from their difference ([`maps_from_difference`]). Also returns the pixels'
+/// mean.
+fn measured(
+    model: Model,
+    runs: &[PixelRun],
+    per_spp: f64,
+    f: f64,
+    timing: Option<bool>,
+) -> (Model, f64) {
+    let n = runs.len().max(1) as f64;
+    let mean = runs.iter().map(|r| r.mean[0]).sum::<f64>() / n;
+    let (v2, v4) = runs.iter().fold((0.0, 0.0), |(a, b), r| {
+        let (x, y) = r.set_vars(0);
+        (a + x / n, b + y / n)
+    });
+    let mut model = Model { per_spp, ..model };
+    if mean > 0.0 {
+        model.camera_var = v4 / (mean * mean);
+        model.camera_sparse = 0.0;
+        model.gamma = stratification(v2, v4);
+        if let Some(fixed_photons) = timing {
+            let d2 = (runs.iter().map(|r| r.mean2(1)).sum::<f64>() / n / (mean * mean)).max(0.0);
+            let r = match fixed_photons {
+                true => 1.0,
+                false => (PILOT_EFFORT / f).min(1.0),
+            };
+            model.map_var = maps_from_difference(d2, r);
+            model.pilot_effort = f;
+            model.beta = QUICK_BETA;
+        }
+    }
+    (model, mean)
 }
 
 /// Returns the samples a plan's first round of `first` saves by sharing, in samples that share

@@ -485,8 +485,11 @@ pub fn choose(
 ) -> Chosen {
     let (grid, _) = pilot_grid(view, PILOT_GRID);
     progress.start("planning: pilot prepasses", 4);
-    let first = pilot_prepass(view, photons, request, &grid, 0, PILOT_EFFORT);
+    let mut first = pilot_prepass(view, photons, request, &grid, 0, PILOT_EFFORT);
     progress.advance(1);
+    if matches!(request.goal, Goal::Time(_)) {
+        first.pixels = pixels_seconds(view, settings, &first.prepass);
+    }
     let short = quick(view, photons, request, &first, started, progress);
     if let Some((mut planned, prepass)) = short {
         planned.spp = given_spp(settings);
@@ -552,8 +555,8 @@ const QUICK_BETA: f64 = 0.63;
 /// when the pilot fits. `first` is the pilot's first prepass, at [`PILOT_EFFORT`]: by its
 /// phases' times the rest of the pilot (one more prepass at `F₀` = [`PILOT_EFFORT`], two at
 /// `4F₀`, whose photons take 4 times as long and caches twice, with `√4` times the rays)
-/// would take `9p + 5c` seconds, `p` the photons' and `c` the rest; a pilot above
-/// [`PILOT_MOST`] of the time left is skipped. The plan then is the frame's own: effort 1,
+/// would take `9p + 5c` seconds, `p` the photons' and `c` the rest, and its pixels what
+/// [`pixels_seconds`] times; a pilot above [`PILOT_MOST`] of the time left is skipped. The plan then is the frame's own: effort 1,
 /// scaled down so that the photons take at most [`QUICK_PHOTONS`] of the time left (their
 /// time per unit effort extrapolated from `first` in proportion, which overestimates it:
 /// part of a pass's time is fixed), and the cache's rays cut so that it takes at most
@@ -576,7 +579,7 @@ fn quick(
     let photon_seconds =
         (stats.trace_time + stats.build_time + stats.precompute_time).as_secs_f64();
     let rest = (first.seconds - photon_seconds).max(0.0);
-    let pilot = pilot_rest(photon_seconds, rest, request.fixed_photons);
+    let pilot = pilot_rest(photon_seconds, rest, request.fixed_photons) + first.pixels;
     let decided = started.elapsed().as_secs_f64();
     let left = budget - decided;
     if pilot <= PILOT_MOST * left {
@@ -634,6 +637,33 @@ fn quick(
         model,
     };
     Some((planned, prepass))
+}
+
+/// The side of the grid of pixels [`pixels_seconds`] times.
+const PIXELS_PROBE: u32 = 4;
+
+/// Returns the wall seconds the pilot's pixels are expected to take (their samples through
+/// four prepasses like `prepass`), from [`PIXELS_PROBE`]² of them traced through it once. Where
+/// the prepasses are cheap, the pixels are most of a pilot: on a box of 40×40 pixels with a
+/// thousandth of its photons, 0.15 s of a 0.02 s budget.
+fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> f64 {
+    let tracer = Tracer {
+        scene: view.scene,
+        camera: view.camera,
+        light_samples: settings.light_samples,
+        diffuse: DiffuseTerm::Photons(prepass),
+    };
+    let (probe, [thread_seconds, _], _) = pilot_pixels(
+        view,
+        settings.seed,
+        std::slice::from_ref(&tracer),
+        PIXELS_PROBE,
+        &NoProgress,
+    );
+    let (pilot, _) = pilot_grid(view, PILOT_GRID);
+    let threads = rayon::current_num_threads().max(1) as f64;
+    let tracers = 4.0;
+    thread_seconds / probe.len().max(1) as f64 * pilot.len() as f64 * tracers / threads
 }
 
 /// Returns the seconds the rest of the pilot is expected to take after its first prepass (at
@@ -1195,6 +1225,9 @@ impl PixelRun {
 struct Timed {
     prepass: Prepass,
     seconds: f64,
+    /// The wall seconds the pilot's pixels are expected to take ([`pixels_seconds`]; zero
+    /// until measured).
+    pixels: f64,
 }
 
 /// Makes the pilot's prepass number `i` (its seed the frame's, mixed with `i`) at effort `f`,
@@ -1218,6 +1251,7 @@ fn pilot_prepass(
     Timed {
         prepass,
         seconds: start.elapsed().as_secs_f64(),
+        pixels: 0.0,
     }
 }
 

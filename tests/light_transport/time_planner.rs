@@ -91,6 +91,31 @@ fn target_error_is_met_and_the_expected_error_is_close() {
     measure(&said);
 }
 
+/// A pilot whose prepasses are cheap (a thousandth of the photons, typed, and one cache ray a
+/// record) is still too long for 20 ms: its pixels (1296 of them, 12 samples each through four
+/// prepasses) are most of it, and the planner times them before it starts (0.13 s predicted,
+/// 0.15 s taken, when written). It used to count the prepasses only, run the pilot and report
+/// the budget spent.
+#[test]
+fn a_pilot_whose_pixels_outlast_the_budget_is_skipped() {
+    let dir = out_dir("time_planner_pixels");
+    std::fs::write(dir.join("b.lua"), BOX).unwrap();
+    let out = run_ok(caustic().current_dir(&dir).args([
+        "render",
+        "b.lua",
+        "--time-budget",
+        "0.02",
+        "--photon-scale",
+        "0.001",
+        "--cache-rays",
+        "1",
+        "-o",
+        "x.png",
+    ]));
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(said.contains("too short for a pilot"), "{said}");
+}
+
 /// The flags typed on the command line stay as typed; the planner moves the rest.
 #[test]
 fn typed_flags_stay() {

@@ -653,7 +653,7 @@ fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> f64 {
         light_samples: settings.light_samples,
         diffuse: DiffuseTerm::Photons(prepass),
     };
-    let (probe, [thread_seconds, _], _) = pilot_pixels(
+    let (probe, _, _) = pilot_pixels(
         view,
         settings.seed,
         std::slice::from_ref(&tracer),
@@ -663,6 +663,7 @@ fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> f64 {
     let (pilot, _) = pilot_grid(view, PILOT_GRID);
     let threads = rayon::current_num_threads().max(1) as f64;
     let tracers = 4.0;
+    let thread_seconds: f64 = probe.iter().map(PixelRun::seconds).sum();
     thread_seconds / probe.len().max(1) as f64 * pilot.len() as f64 * tracers / threads
 }
 
@@ -725,7 +726,8 @@ pub fn fit_samples(
     }
     let (w, h) = view.window.size();
     let side = ((w as f64 * h as f64 * FIT_SHARE).sqrt() as u32).clamp(PILOT_GRID, FIT_GRID);
-    let (all, [_, thread_seconds], samples) = pilot_pixels(view, seed, tracers, side, &NoProgress);
+    let (all, _, samples) = pilot_pixels(view, seed, tracers, side, &NoProgress);
+    let thread_seconds: f64 = all.iter().map(PixelRun::seconds).sum();
     let runs = lit_pixels(all.clone());
     // Thread seconds over the threads, not the wall time: the pilot's pixels take a tenth of a
     // second, over rows of unequal cost, and its wall time varied from 4.7 to 6.5 s a sample
@@ -741,7 +743,9 @@ pub fn fit_samples(
     // so, 26.5 and 26.7 s (24.6 with the rounds charged as below). Larger rounds share caustic
     // estimates further (its 512-sample rounds took 0.6 of a 4-sample set's time a sample),
     // which this does not count.
-    let shared = sharing_seconds(&all).map(|t| t * w as f64 * h as f64 / threads);
+    let shared = sharing_seconds(&all)
+        .map_or(per_spp, |t| t * w as f64 * h as f64 / threads)
+        .min(per_spp);
     let f = planned.effort;
     let timing = (tracers.len() == 2).then_some(request.fixed_photons);
     let (model, mean) = measured(planned.model, &runs, per_spp, f, timing);
@@ -751,7 +755,6 @@ pub fn fit_samples(
     // after it are charged as samples that share little: the pilot pixels predict them short
     // where the noise is heavy-tailed (the final scene at 256² and 10 s: 28.3 samples a pixel
     // taken against 23.2 expected), and the difference is their margin.
-    let shared = shared.unwrap_or(per_spp).min(per_spp);
     let credit = 1.0 - shared / per_spp.max(1e-300);
     let (spp, need) = match request.goal {
         _ if request.fixed_spp => (planned.spp, None),
@@ -893,7 +896,10 @@ impl PilotPixels {
     fn of(all: &[PixelRun], mean: f64) -> PilotPixels {
         let n = all.len().max(1) as f64;
         let m2 = mean * mean;
-        let per_sample: Vec<f64> = all.iter().map(|r| r.seconds / r.n.max(1) as f64).collect();
+        let per_sample: Vec<f64> = all
+            .iter()
+            .map(|r| r.seconds() / r.n.max(1) as f64)
+            .collect();
         let average = per_sample.iter().sum::<f64>() / n;
         PilotPixels {
             cost: per_sample
@@ -1184,12 +1190,16 @@ struct PixelRun {
     /// 4-sample replicates): their channel variance, as adaptive pixels test it
     /// ([`crate::render::noise::Halves::sample_error`]; see [`fit_adaptive`]).
     noise: Halves,
-    /// The thread seconds its samples took through the first tracer, and those of each set.
-    seconds: f64,
+    /// The thread seconds each set's samples took through the first tracer.
     set_seconds: [f64; 4],
 }
 
 impl PixelRun {
+    /// Returns the thread seconds its samples took through the first tracer.
+    fn seconds(&self) -> f64 {
+        self.set_seconds.iter().sum()
+    }
+
     fn add(&mut self, x: [f64; 5]) {
         self.n += 1;
         for (i, &x) in x.iter().enumerate() {
@@ -1312,7 +1322,7 @@ fn pilot(
         })
         .collect();
     let start = Instant::now();
-    let (runs, [thread_seconds, _], samples) =
+    let (runs, thread_seconds, samples) =
         pilot_pixels(view, settings.seed, &tracers, PILOT_GRID, progress);
     let runs = lit_pixels(runs);
     let wall = start.elapsed().as_secs_f64();
@@ -1447,27 +1457,27 @@ fn pilot_grid(view: View, side: u32) -> (Vec<(u32, u32)>, u32) {
 
 /// Traces the pilot's samples: the sets of [`PILOT_SETS`] at each pixel of a grid of at most
 /// `side`² over `view`'s window ([`pilot_grid`]), each through every tracer with the same
-/// random numbers. Returns each pixel's running sums, the thread seconds spent tracing (through
-/// every tracer, and through the first alone) and the samples traced per tracer.
+/// random numbers. Returns each pixel's running sums (with the first tracer's seconds), the
+/// thread seconds spent tracing through every tracer and the samples traced per tracer.
 fn pilot_pixels(
     view: View,
     seed: u64,
     tracers: &[Tracer],
     side: u32,
     progress: &dyn Progress,
-) -> (Vec<PixelRun>, [f64; 2], u64) {
+) -> (Vec<PixelRun>, f64, u64) {
     use rayon::prelude::*;
     let (grid, cols) = pilot_grid(view, side);
     let rows = grid.len() as u32 / cols.max(1);
     progress.start("planning: pilot pixels", rows as u64);
     // The pilot's own streams: keyed like the render's pixels, under another seed.
     let seed = seed ^ 0xD1B5_4A32_D192_ED03;
-    let per_row: Vec<(Vec<PixelRun>, [f64; 2], u64)> = (0..rows)
+    let per_row: Vec<(Vec<PixelRun>, f64, u64)> = (0..rows)
         .into_par_iter()
         .map(|j| {
             let mut counts = RayCounts::default();
             let mut runs = Vec::with_capacity(cols as usize);
-            let (mut seconds, mut first_seconds) = (0.0, 0.0);
+            let mut seconds = 0.0;
             let mut samples = 0;
             for &(x, y) in &grid[(j * cols) as usize..((j + 1) * cols) as usize] {
                 let index = y as u64 * view.window.full_width as u64 + x as u64;
@@ -1489,8 +1499,6 @@ fn pilot_pixels(
                             trace_all(tracers, &ray, share, &mut rng, &mut counts);
                         run.light |= crate::render::scope::take_light_seen();
                         seconds += start.elapsed().as_secs_f64();
-                        first_seconds += first;
-                        run.seconds += first;
                         run.set_seconds[set] += first;
                         samples += 1;
                         if set < 2 {
@@ -1513,15 +1521,14 @@ fn pilot_pixels(
                 runs.push(run);
             }
             progress.advance(1);
-            (runs, [seconds, first_seconds], samples)
+            (runs, seconds, samples)
         })
         .collect();
     let mut runs = Vec::new();
-    let (mut seconds, mut samples) = ([0.0; 2], 0);
+    let (mut seconds, mut samples) = (0.0, 0);
     for (r, s, n) in per_row {
         runs.extend(r);
-        seconds[0] += s[0];
-        seconds[1] += s[1];
+        seconds += s;
         samples += n;
     }
     (runs, seconds, samples)

@@ -91,6 +91,19 @@ fn target_error_is_met_and_the_expected_error_is_close() {
     measure(&said);
 }
 
+/// Renders the box in a folder of its own (`name`) with `args`, and returns what it printed.
+fn render_box(name: &str, args: &[&str]) -> String {
+    let dir = out_dir(name);
+    std::fs::write(dir.join("b.lua"), BOX).unwrap();
+    let out = run_ok(
+        caustic()
+            .current_dir(&dir)
+            .args(["render", "b.lua"])
+            .args(args),
+    );
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
 /// A pilot whose prepasses are cheap (a thousandth of the photons, typed, and one cache ray a
 /// record) is still too long for 20 ms: its pixels (1296 of them, 12 samples each through four
 /// prepasses) are most of it, and the planner times them before it starts (0.13 s predicted,
@@ -98,43 +111,39 @@ fn target_error_is_met_and_the_expected_error_is_close() {
 /// the budget spent.
 #[test]
 fn a_pilot_whose_pixels_outlast_the_budget_is_skipped() {
-    let dir = out_dir("time_planner_pixels");
-    std::fs::write(dir.join("b.lua"), BOX).unwrap();
-    let out = run_ok(caustic().current_dir(&dir).args([
-        "render",
-        "b.lua",
-        "--time-budget",
-        "0.02",
-        "--photon-scale",
-        "0.001",
-        "--cache-rays",
-        "1",
-        "-o",
-        "x.png",
-    ]));
-    let said = String::from_utf8_lossy(&out.stderr);
+    let said = render_box(
+        "time_planner_pixels",
+        &[
+            "--time-budget",
+            "0.02",
+            "--photon-scale",
+            "0.001",
+            "--cache-rays",
+            "1",
+            "-o",
+            "x.png",
+        ],
+    );
     assert!(said.contains("too short for a pilot"), "{said}");
 }
 
 /// The flags typed on the command line stay as typed; the planner moves the rest.
 #[test]
 fn typed_flags_stay() {
-    let dir = out_dir("time_planner_typed");
-    std::fs::write(dir.join("b.lua"), BOX).unwrap();
-    let out = run_ok(caustic().current_dir(&dir).args([
-        "render",
-        "b.lua",
-        "--time-budget",
-        "3",
-        "--spp",
-        "3",
-        "--photon-scale",
-        "0.5",
-        "-q",
-        "-o",
-        "x.png",
-    ]));
-    let said = String::from_utf8_lossy(&out.stderr);
+    let said = render_box(
+        "time_planner_typed",
+        &[
+            "--time-budget",
+            "3",
+            "--spp",
+            "3",
+            "--photon-scale",
+            "0.5",
+            "-q",
+            "-o",
+            "x.png",
+        ],
+    );
     assert!(said.contains(": 3 spp,"), "{said}");
     assert!(said.contains("photon scale 0.5000"), "{said}");
     // Cache rays were not typed: they move with the effort, whatever it is.

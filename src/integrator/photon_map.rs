@@ -91,7 +91,7 @@ use crate::photon::file::CountedMap;
 use crate::photon::trace::{LightCounts, MapKind, photon_budget, trace_map_with};
 use crate::photon::{PhotonId, PhotonMap};
 use crate::progress::{NoProgress, Progress};
-use crate::sampling::{Rng, stratified_2d};
+use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::scene::interaction::Needs;
 use crate::stats::{RayCounts, RenderStats};
@@ -798,14 +798,14 @@ impl Prepass {
             && state.weight >= GATHER_MIN_WEIGHT
     }
 
-    /// Returns the final gather at `at`: `rays` stratified cosine-distributed rays about its
-    /// `around`, those below the surface skipped, summed ([`Gather`]: the irradiance, its
-    /// rotational gradient and `R`).
+    /// Returns the final gather `g` at `at`: its stratified cosine-distributed rays about
+    /// `at`'s `around` ([`Gather::points`]), those below the surface skipped, summed ([`Gather`]:
+    /// the irradiance, its gradients and `R`).
     pub fn gather(
         &self,
         scene: &Scene,
         at: GatherAt,
-        rays: u32,
+        mut g: Gather,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Gather {
@@ -815,8 +815,7 @@ impl Prepass {
             ng,
             media,
         } = at;
-        let mut g = Gather::new(around, rays);
-        for u in stratified_2d(rng, rays) {
+        for (i, u) in g.points(rng).into_iter().enumerate() {
             let d = crate::sampling::cosine_around(around, u);
             if d.dot(ng) <= 0.0 {
                 continue;
@@ -824,7 +823,7 @@ impl Prepass {
             counts.secondary += 1;
             let ray = Ray::new(offset_ray_origin(p, ng, d), d);
             let (l, t) = self.gathered_radiance(scene, &ray, media, rng, counts);
-            g.add(d, l, t);
+            g.add(i, d, l, t);
         }
         g
     }
@@ -939,7 +938,8 @@ impl Prepass {
                 ng,
                 media: state.media,
             };
-            self.gather(scene, at, rays, rng, counts).irradiance()
+            self.gather(scene, at, Gather::new(at.around, rays), rng, counts)
+                .irradiance()
         } else {
             self.irradiance(MapKind::Global, p, ng, true, counts)
         };

@@ -455,8 +455,9 @@ type Forgery = (&'static str, fn(&mut [u8], &MapFile), &'static str);
 /// range, and the error expected: every one was read and rendered (infinite pixels from a
 /// power base of 900, black ones from -900, caustics from photons moved out of the scene, a
 /// cache interpolating irradiance of 1e30 or -1, a normal of length 5, a radius a thousand
-/// times the scene). The file is damaged only in the field named.
-const FORGERIES: [Forgery; 11] = [
+/// times the scene), and a translational gradient of 1e30, which would extrapolate a record's
+/// light to a glare. The file is damaged only in the field named.
+const FORGERIES: [Forgery; 12] = [
     (
         "base 900",
         |b, f| b[f.maps[0].base..][..4].copy_from_slice(&900i32.to_le_bytes()),
@@ -510,8 +511,13 @@ const FORGERIES: [Forgery; 11] = [
         "the irradiance cache: record 0: its normal",
     ),
     (
+        "translation",
+        |b, f| put_f32s(b, f.cache.unwrap().1 + 84, &[1e30]),
+        "the irradiance cache: record 0: its gradient",
+    ),
+    (
         "radius",
-        |b, f| put_f32s(b, f.cache.unwrap().1 + 72, &[1e4]),
+        |b, f| put_f32s(b, f.cache.unwrap().1 + 108, &[1e4]),
         "the irradiance cache: record 0's radius 10000 is outside this frame's",
     ),
     (
@@ -598,7 +604,8 @@ fn small_maps(n: usize) -> caustic::integrator::maps_file::SavedMaps {
         p: Vec3A::splat(i as f32),
         n: Vec3A::Y,
         e: Vec3A::new(0.5, 0.25, 1.0),
-        t: [Vec3A::X, Vec3A::Y, Vec3A::Z],
+        rotation: [Vec3A::X, Vec3A::Y, Vec3A::Z],
+        translation: [Vec3A::Z, Vec3A::X, Vec3A::Y],
         r: 0.5,
     };
     SavedMaps {

@@ -15,7 +15,7 @@ use std::path::Path;
 /// The file's first eight bytes.
 const MAGIC: &[u8; 8] = b"CAUSTPM\0";
 /// The format version this program reads and writes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// Longest settings text read.
 pub const MAX_TEXT: u32 = 1 << 16;
 
@@ -152,12 +152,14 @@ pub fn write(path: &Path, maps: &SavedMaps) -> std::io::Result<()> {
     })
 }
 
-/// Floats per cache record: position, normal, irradiance, three gradients, radius.
-const RECORD_FLOATS: usize = 3 * 6 + 1;
+/// Floats per cache record: position, normal, irradiance, three rotational and three
+/// translational gradients, radius.
+const RECORD_FLOATS: usize = 3 * 9 + 1;
 
 fn record_floats(r: &Record) -> [f32; RECORD_FLOATS] {
-    let v = [r.p, r.n, r.e, r.t[0], r.t[1], r.t[2]];
-    std::array::from_fn(|i| if i < 18 { v[i / 3][i % 3] } else { r.r })
+    let (t, g) = (&r.rotation, &r.translation);
+    let v = [r.p, r.n, r.e, t[0], t[1], t[2], g[0], g[1], g[2]];
+    std::array::from_fn(|i| if i < 27 { v[i / 3][i % 3] } else { r.r })
 }
 
 fn write_cache<W: Write>(w: &mut W, cache: Option<&IrradianceCache>) -> std::io::Result<()> {
@@ -206,8 +208,9 @@ fn read_cache<R: Read>(r: &mut CrcReader<R>, size: u64) -> Result<Option<Irradia
             p: v(0),
             n: v(1),
             e: v(2),
-            t: [v(3), v(4), v(5)],
-            r: f(18),
+            rotation: [v(3), v(4), v(5)],
+            translation: [v(6), v(7), v(8)],
+            r: f(27),
         };
         check_record(&rec).map_err(|e| format!("{what}: record {}: {e}", records.len()))?;
         records.push(rec);
@@ -242,7 +245,12 @@ fn check_record(r: &Record) -> Result<(), String> {
             r.e
         ));
     }
-    if let Some(t) = r.t.iter().find(|t| !within(**t)) {
+    if let Some(t) = r
+        .rotation
+        .iter()
+        .chain(&r.translation)
+        .find(|t| !within(**t))
+    {
         return Err(format!(
             "its gradient {t} is not finite or beyond {MAX_RECORD_VALUE:e}"
         ));
@@ -447,7 +455,8 @@ mod tests {
                         p: Vec3A::splat(i as f32),
                         n: Vec3A::Y,
                         e: Vec3A::new(0.5, 0.25, i as f32),
-                        t: [Vec3A::X, Vec3A::Y * -2.0, Vec3A::Z * 1e-7],
+                        rotation: [Vec3A::X, Vec3A::Y * -2.0, Vec3A::Z * 1e-7],
+                        translation: [Vec3A::Z * 3.0, Vec3A::X * -0.5, Vec3A::Y * 1e-6],
                         r: 0.125 + i as f32,
                     })
                     .collect(),
@@ -490,7 +499,7 @@ mod tests {
         // 20 bytes a photon, 76 a cache record, and a small header.
         let photons = (3 * CHUNK + 5) + (3 * CHUNK + 5) / 3;
         let size = std::fs::metadata(&path).unwrap().len() as usize;
-        let data = 20 * photons + 5 * 76;
+        let data = 20 * photons + 5 * 112;
         assert!(size >= data && size < data + 200, "{size} bytes");
     }
 
@@ -498,10 +507,17 @@ mod tests {
     fn a_cache_record_that_is_not_finite_is_refused() {
         let d = dir("record");
         let path = d.0.join("m.bin");
-        for bad in [f32::NAN, f32::INFINITY] {
+        for (i, bad) in [f32::NAN, f32::INFINITY].into_iter().enumerate() {
             let mut m = maps(100);
             let mut records = m.cache.as_ref().unwrap().records().to_vec();
-            records[3].t[1].y = bad;
+            // The rotational gradient, then the translational one.
+            let r = &mut records[3];
+            let gradient = if i == 0 {
+                &mut r.rotation
+            } else {
+                &mut r.translation
+            };
+            gradient[1].y = bad;
             m.cache = Some(IrradianceCache::new(records.clone(), 0.3));
             write(&path, &m).unwrap();
             let e = read(&path).unwrap_err();
@@ -509,7 +525,7 @@ mod tests {
                 e.starts_with("the irradiance cache: record 3: its gradient"),
                 "{e}"
             );
-            records[3].t[1].y = 0.0;
+            (records[3].rotation[1].y, records[3].translation[1].y) = (0.0, 0.0);
             records[4].r = bad;
             m.cache = Some(IrradianceCache::new(records, 0.3));
             write(&path, &m).unwrap();

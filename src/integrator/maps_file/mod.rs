@@ -47,7 +47,7 @@
 //! | 4 + n | settings text, UTF-8, length first (at most [`MAX_TEXT`]) |
 //! | 1 | maps: 1 (global) or 2 (global and caustic) |
 //! | per map | light count (4), then per light emitted, stored, first-hit-specular (8 each); photon count (8, at most `u32::MAX`); top nodes (8); power base exponent (4); positions (12 per photon); codes (4 per photon); powers (4 per photon) |
-//! | 1 | irradiance cache: 0 (none) or 1, then its accuracy (f32), record count (8) and per record position, normal, irradiance, the three gradients and the radius (19 f32) |
+//! | 1 | irradiance cache: 0 (none) or 1, then its accuracy (f32), record count (8) and per record position, normal, irradiance, the three rotational and three translational gradients and the radius (28 f32) |
 //! | 4 | CRC-32 (IEEE) of everything before it |
 pub(crate) mod format;
 pub mod parts;

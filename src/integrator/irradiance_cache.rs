@@ -89,8 +89,10 @@ pub const DEFAULT_ACCURACY: f32 = 0.3;
 pub const DEFAULT_RECORD_RAYS: u32 = 256;
 /// The pixel strides of the record levels, coarse to fine.
 const STRIDES: [u32; 5] = [32, 16, 8, 4, 2];
-/// Smallest `R`, in pixels' worth of the scene's diagonal.
-const R_MIN_PIXELS: f32 = 4.0;
+/// Smallest `R`, in pixels' worth of the scene's diagonal. It was 4 before the translational
+/// gradient; at 2 the validation boxes' ceilings, whose concave edges the records at the
+/// smallest `R` serve, lost a fifth to a third of their bias (`docs/validation.md`).
+const R_MIN_PIXELS: f32 = 2.0;
 /// Largest `R`, as a fraction of the scene's diagonal.
 const R_MAX_FRACTION: f32 = 0.1;
 /// Smallest image side (pixels) for which a frame builds a cache. Below it a record's smallest

@@ -1071,6 +1071,57 @@ mod tests {
         assert!(worst[1] <= 0.6 * worst[0], "worst errors {worst:?}");
     }
 
+    /// Records every 0.2 along a line under the half-plane light of the test above (`x` from
+    /// −2 to 0, regions 0.3 wide), each with the closed form's irradiance and gradient, and
+    /// lookups from −2 to 0.25, the last stretch served from one side only (a record region's
+    /// edge, as at a wall). With the gradient the lookups follow `E(x)` to within 0.5% of its
+    /// largest value, and the worst error is at most a tenth of the same records' without it
+    /// (the weighted mean of neighbours' values; measured 0.0117 against 0.381, at the edge).
+    /// Between records on both sides the mean of neighbours already cancels most of the
+    /// first-order change (on a line of records from −2 to 2: 0.0103 against 0.0169), so the
+    /// gain is at the edges of the records' regions. The shading point's normal is the records', so only the translational
+    /// term acts.
+    #[test]
+    fn records_moved_by_their_gradient_follow_the_light_between_them() {
+        let half_pi = std::f32::consts::FRAC_PI_2;
+        let e = |x: f32| half_pi * (1.0 + x / (x * x + 1.0).sqrt());
+        let de = |x: f32| half_pi / (x * x + 1.0).powf(1.5);
+        let cache = |gradient: bool| {
+            let records = (-10..=0)
+                .map(|i| {
+                    let x = i as f32 * 0.2;
+                    let g = if gradient {
+                        Vec3A::X * de(x)
+                    } else {
+                        Vec3A::ZERO
+                    };
+                    Record {
+                        translation: [g; 3],
+                        ..record(Vec3A::new(x, 0.0, 0.0), Vec3A::Z, e(x), 1.0)
+                    }
+                })
+                .collect();
+            IrradianceCache::new(records, 0.3)
+        };
+        let worst = |c: &IrradianceCache| {
+            (0..=225)
+                .map(|k| -2.0 + k as f32 * 0.01)
+                .map(|x| {
+                    let got = c
+                        .lookup(Vec3A::new(x, 0.0, 0.0), Vec3A::Z, Vec3A::Z)
+                        .unwrap();
+                    (got.x - e(x)).abs()
+                })
+                .fold(0.0f32, f32::max)
+        };
+        let (with, without) = (worst(&cache(true)), worst(&cache(false)));
+        assert!(
+            with < 0.005 * 2.0 * half_pi,
+            "with the gradient {with}, without {without}"
+        );
+        assert!(with < 0.1 * without, "with {with}, without {without}");
+    }
+
     /// A gather sampled as n-rooks has no translational gradient; the grid's rays number at
     /// most the rays asked for, with `N ≈ πM`.
     #[test]

@@ -234,10 +234,21 @@ impl Gather {
         }
     }
 
+    /// Returns the gather's rays: unit directions cosine-distributed about its normal, from its
+    /// sample points ([`crate::sampling::cosine_around`], whose frame about the normal
+    /// [`Gather::translation`] shares). [`Gather::add`] takes each ray with its index.
+    pub fn directions(&self, rng: &mut Rng) -> Vec<Vec3A> {
+        let n = self.n;
+        let points = self.points(rng);
+        points
+            .into_iter()
+            .map(|u| crate::sampling::cosine_around(n, u))
+            .collect()
+    }
+
     /// Returns the gather's sample points in `[0, 1)²`, the first coordinate `sin²θ` and the
-    /// second `φ/2π` ([`crate::sampling::cosine_around`]); [`Gather::add`] takes each ray with
-    /// its point's index.
-    pub fn points(&self, rng: &mut Rng) -> Vec<(f32, f32)> {
+    /// second `φ/2π`: n-rooks, or with a grid one point in each cell, ring-major.
+    fn points(&self, rng: &mut Rng) -> Vec<(f32, f32)> {
         let Some(g) = &self.grid else {
             return crate::sampling::stratified_2d(rng, self.rays);
         };
@@ -252,8 +263,8 @@ impl Gather {
             .collect()
     }
 
-    /// Adds ray `i` of [`Gather::points`], along unit `d`, which brought radiance `l` and first
-    /// met a surface at distance `t`.
+    /// Adds ray `i` of [`Gather::directions`], along unit `d`, which brought radiance `l` and
+    /// first met a surface at distance `t`.
     pub fn add(&mut self, i: usize, d: Vec3A, l: Vec3A, t: f32) {
         self.sum += l;
         let cos = d.dot(self.n);
@@ -338,12 +349,12 @@ impl Gather {
             let u = (t * mid.cos() + b * mid.sin()) * (2.0 * (0.5 * wedge).sin() / wedge);
             let edge = k as f32 * wedge;
             let v = b * edge.cos() - t * edge.sin();
+            let prev = (k + n - 1) % n;
             for j in 0..m {
                 if j > 0 {
                     let (s, c2) = (sin(j), 1.0 - j as f32 / m as f32);
                     push(u, wedge * s * c2, cell(j, k), cell(j - 1, k));
                 }
-                let prev = (k + n - 1) % n;
                 if n > 1 {
                     push(v, sin(j + 1) - sin(j), cell(j, k), cell(j, prev));
                 }
@@ -721,12 +732,7 @@ impl Probe<'_> {
         let (ng, media) = (bsdf.ng, at.state.media);
         let g = self.gi.gather(
             scene,
-            GatherAt {
-                p,
-                around: ng,
-                ng,
-                media,
-            },
+            GatherAt { p, ng, media },
             Gather::with_translation(ng, self.rays),
             rng,
             counts,
@@ -989,8 +995,7 @@ mod tests {
         let rays = 1 << 16;
         let mut g = Gather::new(Vec3A::Z, rays);
         let mut rng = Rng::new(3, Pass::Cache, 1);
-        for (i, u) in g.points(&mut rng).into_iter().enumerate() {
-            let d = crate::sampling::cosine_around(Vec3A::Z, u);
+        for (i, d) in g.directions(&mut rng).into_iter().enumerate() {
             g.add(i, d, radiance(d), 2.0);
         }
         let e0 = truth(Vec3A::Z);
@@ -1043,8 +1048,7 @@ mod tests {
                     let tries = 64;
                     for _ in 0..tries {
                         let mut g = Gather::with_translation(Vec3A::Z, rays);
-                        for (i, u) in g.points(&mut rng).into_iter().enumerate() {
-                            let d = crate::sampling::cosine_around(Vec3A::Z, u);
+                        for (i, d) in g.directions(&mut rng).into_iter().enumerate() {
                             let t = h / d.z;
                             let lit = (p + d * t).dot(e) > 0.0;
                             g.add(i, d, Vec3A::splat(if lit { 1.0 } else { 0.0 }), t);
@@ -1128,8 +1132,7 @@ mod tests {
     fn only_a_grid_gather_has_a_translational_gradient() {
         let mut rng = Rng::new(1, Pass::Cache, 3);
         let mut g = Gather::new(Vec3A::Z, 64);
-        for (i, u) in g.points(&mut rng).into_iter().enumerate() {
-            let d = crate::sampling::cosine_around(Vec3A::Z, u);
+        for (i, d) in g.directions(&mut rng).into_iter().enumerate() {
             g.add(i, d, Vec3A::splat(d.x.max(0.0)), 1.0);
         }
         assert_eq!(g.translation(0.0), [Vec3A::ZERO; 3]);
@@ -1137,7 +1140,7 @@ mod tests {
             let g = Gather::with_translation(Vec3A::Z, rays);
             let c = g.grid.as_ref().unwrap();
             assert_eq!((c.rings, c.wedges, g.rays), (rings, wedges, rings * wedges));
-            assert_eq!(g.points(&mut rng).len() as u32, rings * wedges);
+            assert_eq!(g.directions(&mut rng).len() as u32, rings * wedges);
         }
     }
 

@@ -170,9 +170,6 @@ pub enum Indirect {
 #[derive(Clone, Copy, Debug)]
 pub struct GatherAt {
     pub p: Vec3A,
-    /// The unit axis its rays are cosine-distributed about: the shading normal for a point's
-    /// own gather, `ng` for an irradiance-cache record.
-    pub around: Vec3A,
     /// The unit geometric normal: rays below the surface it bounds are skipped.
     pub ng: Vec3A,
     /// The media the point lies in.
@@ -798,9 +795,10 @@ impl Prepass {
             && state.weight >= GATHER_MIN_WEIGHT
     }
 
-    /// Returns the final gather `g` at `at`: its stratified cosine-distributed rays about
-    /// `at`'s `around` ([`Gather::points`]), those below the surface skipped, summed ([`Gather`]:
-    /// the irradiance, its gradients and `R`).
+    /// Returns the final gather `g` at `at`: its stratified cosine-distributed rays about its
+    /// own axis ([`Gather::directions`]: the shading normal for a point's own gather, `ng` for
+    /// an irradiance-cache record), those below the surface skipped, summed ([`Gather`]: the
+    /// irradiance, its gradients and `R`).
     pub fn gather(
         &self,
         scene: &Scene,
@@ -809,14 +807,8 @@ impl Prepass {
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Gather {
-        let GatherAt {
-            p,
-            around,
-            ng,
-            media,
-        } = at;
-        for (i, u) in g.points(rng).into_iter().enumerate() {
-            let d = crate::sampling::cosine_around(around, u);
+        let GatherAt { p, ng, media } = at;
+        for (i, d) in g.directions(rng).into_iter().enumerate() {
             if d.dot(ng) <= 0.0 {
                 continue;
             }
@@ -934,11 +926,10 @@ impl Prepass {
             counts.gathered += 1;
             let at = GatherAt {
                 p,
-                around: bsdf.n,
                 ng,
                 media: state.media,
             };
-            self.gather(scene, at, Gather::new(at.around, rays), rng, counts)
+            self.gather(scene, at, Gather::new(bsdf.n, rays), rng, counts)
                 .irradiance()
         } else {
             self.irradiance(MapKind::Global, p, ng, true, counts)

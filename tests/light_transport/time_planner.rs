@@ -265,6 +265,55 @@ fn the_plan_reports_the_sampling_the_frame_had() {
     }
 }
 
+/// A target error's plan always ends in rounds to at most the camera's share of the target
+/// (`target_rounds` in `src/integrator/planner.rs` says why: the pilot's pixels miss rare
+/// fireflies, and a uniform plan cannot see them afterwards). On the box (even noise: the plan
+/// was 4 uniform samples) and the penumbra (1 uniform sample) with `--target-error 0.1`: the
+/// plan line says "spp then rounds" with a first round of at least 2 samples and a noise
+/// target at most 0.1, the frame was adaptive, and no pixel took fewer than the first round.
+#[test]
+fn a_target_errors_plan_ends_in_rounds() {
+    let dir = out_dir("time_planner_target_rounds");
+    std::fs::write(dir.join("b.lua"), BOX).unwrap();
+    std::fs::write(dir.join("p.lua"), PENUMBRA).unwrap();
+    for script in ["b.lua", "p.lua"] {
+        let out = run_ok(caustic().current_dir(&dir).args([
+            "render",
+            script,
+            "--target-error",
+            "0.1",
+            "--stats",
+            "-o",
+            "x.png",
+        ]));
+        let said = String::from_utf8_lossy(&out.stdout).to_string()
+            + &String::from_utf8_lossy(&out.stderr);
+        let line = said
+            .lines()
+            .find(|l| l.contains("planned --target-error"))
+            .unwrap_or_else(|| panic!("no plan in {said}"));
+        let first = line
+            .split(" spp then rounds")
+            .next()
+            .filter(|head| head.len() < line.len())
+            .and_then(|head| head.rsplit(' ').next())
+            .and_then(|n| n.parse::<f64>().ok())
+            .unwrap_or_else(|| panic!("{script}: no rounds planned: {line}"));
+        assert!(first >= 2.0, "{script}: {line}");
+        let target = number_after(line, "noise target of");
+        assert!(target > 0.0 && target <= 0.1, "{script}: {line}");
+        assert!(
+            said.contains("adaptive: on (the time planner's rounds)"),
+            "{script}: {said}"
+        );
+        let rays = said
+            .lines()
+            .find(|l| l.contains("camera rays per pixel"))
+            .unwrap_or_default();
+        assert!(number_after(rays, "min") >= first, "{script}: {rays}");
+    }
+}
+
 /// The pilot makes its caches only near its pixels (`src/integrator/planner.rs` says why). On
 /// the box at 512² with the pilot's 36 × 36 grid of pixels: the records such a cache estimates
 /// a whole build would make are within 15% of what the whole build made (3296 against 3490

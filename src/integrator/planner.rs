@@ -883,6 +883,12 @@ enum Need {
 /// `docs/accuracy/adaptive.md`) all reach it, they add 1.6% to the camera pass.
 const ADAPTIVE_CAP: u32 = 16;
 
+/// Returns the most samples a planned adaptive pixel may take when the uniform plan has `spp`:
+/// [`ADAPTIVE_CAP`] times them (at least 4), within [`noise::MAX_SPP`].
+fn most_spp(spp: u32) -> u32 {
+    (ADAPTIVE_CAP * spp.max(4)).min(noise::MAX_SPP)
+}
+
 /// The pilot's pixels as adaptive rounds see them: each one's variance of a single sample as
 /// the rounds' test measures it (over its channels, from 4 samples), and, for the pixels the
 /// error is counted over (no light seen directly), its 4-sample pixel's variance relative to
@@ -982,7 +988,7 @@ fn fit_adaptive(
     (spp, uniform2): (u32, f64),
     need: Need,
 ) -> Option<(u32, Adaptive, f64)> {
-    let max = (ADAPTIVE_CAP * spp.max(4)).min(noise::MAX_SPP);
+    let max = most_spp(spp);
     let firsts = (1..16).map(|k| 1u32 << k).take_while(|&s| s <= spp.max(2));
     let mut best: Option<(f64, u32, Adaptive, f64)> = None;
     for first in firsts {
@@ -1015,7 +1021,7 @@ fn fit_adaptive(
 /// Returns the rounds a target error's plan takes: `fitted` ([`fit_adaptive`]'s plan, if any)
 /// when its noise target is at most the camera's share of the target, else a first round of
 /// its samples (or the uniform plan's `spp`; at least 2, so that each pixel has two
-/// half-buffers) with rounds to that share, up to [`ADAPTIVE_CAP`] times `spp` (at least 4).
+/// half-buffers) with rounds to that share, up to [`most_spp`] (as [`fit_adaptive`]'s).
 /// The share is `√room` (`room`: the squared relative error the maps and their bias leave)
 /// over the image's mean, in the rounds' test's units (it divides by the mean with the lights,
 /// [`PilotPixels::test_mean`]). Where every pixel's standard error ends below it, so does the
@@ -1039,9 +1045,7 @@ fn target_rounds(
         return plan;
     }
     let first = fitted.map_or(spp, |p| p.0).max(2);
-    let max_spp = fitted.map_or((ADAPTIVE_CAP * spp.max(4)).min(noise::MAX_SPP), |p| {
-        p.1.max_spp
-    });
+    let max_spp = most_spp(spp);
     let (mean_spp, cost, error2) = pixels.predict(first, max_spp, share, gamma);
     let rounds = Adaptive {
         target: share as f32,

@@ -279,12 +279,15 @@ impl Gather {
                 self.tangential[2] += l.z * u;
             }
         }
-        if t > 0.0 {
+        let t = if t > 0.0 {
             self.inverse += 1.0 / t;
             self.nearest = self.nearest.min(t);
-        }
+            t
+        } else {
+            f32::INFINITY
+        };
         if let Some(cell) = self.grid.as_mut().and_then(|g| g.cells.get_mut(i)) {
-            *cell = (l, if t > 0.0 { t } else { f32::INFINITY });
+            *cell = (l, t);
         }
     }
 

@@ -198,6 +198,31 @@ const PENUMBRA: &str = "
       {gr.area_light({0, 2.8, -4}, {6, 6, 6}, {1, 0, 0}, nil, 200000, {2, 0, 0}, {0, 0, 2})})
 ";
 
+/// Writes the box (`b.lua`) and the penumbra (`p.lua`) into a folder of its own (`name`) and
+/// returns a renderer of them: `--stats` with `args`, what it printed (standard output, then
+/// standard error).
+fn stats_renderer(name: &str) -> impl Fn(&str, &[&str]) -> String {
+    let dir = out_dir(name);
+    std::fs::write(dir.join("b.lua"), BOX).unwrap();
+    std::fs::write(dir.join("p.lua"), PENUMBRA).unwrap();
+    move |script: &str, args: &[&str]| {
+        let out = run_ok(
+            caustic()
+                .current_dir(&dir)
+                .args(["render", script, "--stats", "-o", "x.png"])
+                .args(args),
+        );
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr)
+    }
+}
+
+/// The first round's samples of a plan line that takes rounds ("N spp then rounds"); None
+/// without rounds.
+fn first_round(planned: &str) -> Option<f64> {
+    let (head, _) = planned.split_once(" spp then rounds")?;
+    head.rsplit(' ').next()?.parse().ok()
+}
+
 /// The effect plan `--stats` prints says what sampling the frame had: `--noise-target` and a
 /// budget's rounds are adaptive, and a budget's rounds are really taken exactly when the budget
 /// line says so, whichever the planner chose: every pixel takes at least the first round, and
@@ -206,18 +231,7 @@ const PENUMBRA: &str = "
 /// On the box (even noise) and on the penumbra (rounds).
 #[test]
 fn the_plan_reports_the_sampling_the_frame_had() {
-    let dir = out_dir("time_planner_rounds");
-    std::fs::write(dir.join("b.lua"), BOX).unwrap();
-    std::fs::write(dir.join("p.lua"), PENUMBRA).unwrap();
-    let stats = |script: &str, args: &[&str]| {
-        let out = run_ok(
-            caustic()
-                .current_dir(&dir)
-                .args(["render", script, "--stats", "-o", "x.png"])
-                .args(args),
-        );
-        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr)
-    };
+    let stats = stats_renderer("time_planner_rounds");
     let noise = stats("b.lua", &["--noise-target", "0.05"]);
     assert!(noise.contains("adaptive: on (--noise-target)"), "{noise}");
     let fixed = stats("b.lua", &["--spp", "4"]);
@@ -239,13 +253,8 @@ fn the_plan_reports_the_sampling_the_frame_had() {
                     planned.contains("adaptive: on (the time planner's rounds)"),
                     "{planned}"
                 );
-                // The first round's samples, as the plan line gives them ("N spp then rounds").
-                let first = planned
-                    .split(" spp then rounds")
-                    .next()
-                    .and_then(|head| head.rsplit(' ').next())
-                    .and_then(|n| n.parse::<f64>().ok())
-                    .unwrap_or_else(|| panic!("no first round in {planned}"));
+                let first =
+                    first_round(&planned).unwrap_or_else(|| panic!("no first round in {planned}"));
                 assert!(
                     lo >= first,
                     "a pixel took fewer than the first round: {line}"
@@ -273,32 +282,15 @@ fn the_plan_reports_the_sampling_the_frame_had() {
 /// target at most 0.1, the frame was adaptive, and no pixel took fewer than the first round.
 #[test]
 fn a_target_errors_plan_ends_in_rounds() {
-    let dir = out_dir("time_planner_target_rounds");
-    std::fs::write(dir.join("b.lua"), BOX).unwrap();
-    std::fs::write(dir.join("p.lua"), PENUMBRA).unwrap();
+    let stats = stats_renderer("time_planner_target_rounds");
     for script in ["b.lua", "p.lua"] {
-        let out = run_ok(caustic().current_dir(&dir).args([
-            "render",
-            script,
-            "--target-error",
-            "0.1",
-            "--stats",
-            "-o",
-            "x.png",
-        ]));
-        let said = String::from_utf8_lossy(&out.stdout).to_string()
-            + &String::from_utf8_lossy(&out.stderr);
+        let said = stats(script, &["--target-error", "0.1"]);
         let line = said
             .lines()
             .find(|l| l.contains("planned --target-error"))
             .unwrap_or_else(|| panic!("no plan in {said}"));
-        let first = line
-            .split(" spp then rounds")
-            .next()
-            .filter(|head| head.len() < line.len())
-            .and_then(|head| head.rsplit(' ').next())
-            .and_then(|n| n.parse::<f64>().ok())
-            .unwrap_or_else(|| panic!("{script}: no rounds planned: {line}"));
+        let first =
+            first_round(line).unwrap_or_else(|| panic!("{script}: no rounds planned: {line}"));
         assert!(first >= 2.0, "{script}: {line}");
         let target = number_after(line, "noise target of");
         assert!(target > 0.0 && target <= 0.1, "{script}: {line}");

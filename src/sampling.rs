@@ -71,6 +71,25 @@ impl Rng {
         rng
     }
 
+    /// Returns a stream keyed by this one's state and `salt`, leaving this one as it is: a side
+    /// computation's draws (the planner's fresh gathers) then leave the path's own draws alone.
+    pub fn fork(&self, salt: u64) -> Rng {
+        Rng::new(self.state ^ self.inc.rotate_left(32), Pass::Pixel, salt)
+    }
+
+    /// Returns the stream's whole state, to draw the same numbers again ([`Rng::resume`]).
+    pub fn state(&self) -> [u64; 2] {
+        [self.state, self.inc]
+    }
+
+    /// Returns the stream whose state [`Rng::state`] gave.
+    pub fn resume(state: [u64; 2]) -> Rng {
+        Rng {
+            state: state[0],
+            inc: state[1],
+        }
+    }
+
     /// Returns the next 32 random bits.
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;

@@ -200,6 +200,10 @@ pub enum DiffuseTerm<'a> {
     Ambient(Vec3A),
     /// Caustics and indirect light from photon maps (Jensen).
     Photons(&'a Prepass),
+    /// [`DiffuseTerm::Photons`] with the cache's interpolation error taken out where it serves,
+    /// one record at a time, drawn with the salt ([`Prepass::diffuse_with`]): the planner's
+    /// pilot.
+    Unbiased(&'a Prepass, u64),
     /// No light: the irradiance cache's record pass, which only follows the eye paths to find
     /// where final gathering happens ([`super::irradiance_cache`]).
     Caching(&'a Probe<'a>),
@@ -408,6 +412,11 @@ impl Tracer<'_> {
             DiffuseTerm::Photons(gi) => {
                 if bsdf.kd.max_element() > 0.0 {
                     colour += gi.diffuse(self.scene, &at, rng, counts);
+                }
+            }
+            DiffuseTerm::Unbiased(gi, salt) => {
+                if bsdf.kd.max_element() > 0.0 {
+                    colour += gi.diffuse_with(self.scene, &at, rng, Some(salt), counts);
                 }
             }
             DiffuseTerm::Caching(probe) => {

@@ -911,25 +911,55 @@ impl Prepass {
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Vec3A {
+        self.diffuse_with(scene, at, rng, None, counts)
+    }
+
+    /// [`Prepass::diffuse`]; with `unbiased`, a point the cache serves takes, instead of the
+    /// cache's value, that value less one serving record's error there: the record (chosen
+    /// by its weight, with a stream forked from `rng` by the salt, so that the path's own draws
+    /// stay the same) moved to the point, less a gather at the point with the record's own
+    /// random numbers. The two gathers see nearly the same light along nearly the same rays,
+    /// so their difference is nearly noiseless, and its expectation is the cache's
+    /// interpolation bias at the point: the planner's pilot measures it so
+    /// ([`super::planner`]).
+    pub fn diffuse_with(
+        &self,
+        scene: &Scene,
+        at: &ShadingPoint,
+        rng: &mut Rng,
+        unbiased: Option<u64>,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
         let (p, bsdf, state) = (at.p(), at.bsdf(), &at.state);
         let ng = bsdf.ng;
         let mut e = self.caustic_at(p, ng, counts);
+        let gather_at = GatherAt {
+            p,
+            ng,
+            media: state.media,
+        };
         // Where a cache record serves the point, its gather stands for the indirect light of
         // every eye path, those too weak to be gathered included (they would read the map
         // directly, blotchier and slower: a 50-nearest estimate against a grid cell's records).
         e += if let Some(cached) = self.cache.as_ref().and_then(|c| c.lookup(p, ng, bsdf.n)) {
             counts.cached += 1;
-            cached
+            let picked = unbiased.and_then(|salt| {
+                let cache = self.cache.as_ref()?;
+                cache.pick(p, ng, rng.fork(salt).next_f32())
+            });
+            match picked {
+                Some((record, mut stream)) => {
+                    let g = Gather::with_translation(ng, self.settings.cache.rays);
+                    let fresh = self.gather(scene, gather_at, g, &mut stream, counts);
+                    cached - (record.at(p, ng) - fresh.irradiance())
+                }
+                None => cached,
+            }
         } else if let Indirect::Gather { rays } = self.settings.indirect
             && self.gathers(state)
         {
             counts.gathered += 1;
-            let at = GatherAt {
-                p,
-                ng,
-                media: state.media,
-            };
-            self.gather(scene, at, Gather::new(bsdf.n, rays), rng, counts)
+            self.gather(scene, gather_at, Gather::new(bsdf.n, rays), rng, counts)
                 .irradiance()
         } else {
             self.irradiance(MapKind::Global, p, ng, true, counts)

@@ -10,7 +10,7 @@
 //! diff` and `--noise-target` count it) of
 //!
 //! ```text
-//! E²(s, F) = V_cam(F) · (4/s)^γ  +  V_map · (F₀/F)^β  +  b² · (F₀/F)²
+//! E²(s, F) = V_cam(F) · (4/s)^γ  +  V_map · (F₀/F)^β  +  b² · (F₀/F)²  +  b_c²
 //! ```
 //!
 //! - `V_cam(F) (4/s)^γ`: the camera pass's Monte Carlo noise (pixel position, shadow rays,
@@ -28,6 +28,9 @@
 //!   `docs/accuracy.md`, near 1 for the diffuse box's global map.
 //! - `b (F₀/F)`: the density estimates' blur, the bias that the seed-pair column of
 //!   `docs/accuracy.md` shows: proportional to the squared radius, so to `1/F`.
+//! - `b_c`: the irradiance cache's interpolation bias, which its accuracy (the records'
+//!   spacing) sets, not the effort: the undershoot in a box's concave corners, the largest part
+//!   of caustic's converged difference from Mitsuba on the boxes at long budgets.
 //!
 //! Time is `T(s, F) = c_p·F + c_r·R(F) + s·N·τ`: photons (tracing, kd-trees, precomputed
 //! points) in proportion to the effort, the cache in proportion to its rays per record `R(F)`,
@@ -56,7 +59,16 @@
 //!   4-sample pixel's variance);
 //! - `V_map` at `F₀` and at `4F₀`: half the squared difference of each pair (so `β`);
 //! - the bias change between `F₀` and `4F₀`: the squared difference of the two pairs' means,
-//!   less their noise (so `b`, as `b(F₀) − b(4F₀) = 3b/4`).
+//!   less their noise (so `b`, as `b(F₀) − b(4F₀) = 3b/4`);
+//! - `b_c²`: each sample of the first set traced again through the first pair with the
+//!   cache's interpolation error taken out where it serves ([`DiffuseTerm::Unbiased`]: a
+//!   record chosen by its weight, moved to the point, less a gather at the point with the
+//!   record's own random numbers, so that the difference holds the light's change between the
+//!   two points and little noise); per pixel the product of the two prepasses' mean
+//!   differences, whose noises are independent, so that only the bias both share is left.
+//!   A difference against a fresh gather of independent rays was tried first: its noise
+//!   buried the bias, and on the showcase a gather's glimpse of the caustic made it ten times
+//!   the whole error (`docs/accuracy/budget.md`).
 //!
 //! and the larger pair's phase times and the samples' time give `c_p`, `c_r` and `τ`. `β` is
 //! clamped to [0.2, 1] (1 where the pilot's difference is lost in its noise). A mean of the
@@ -64,10 +76,10 @@
 //! through it alone measure `V_cam` and `τ` at the chosen effort, and the samples are fitted to
 //! them ([`fit_samples`]): for a budget, to the time actually left.
 //!
-//! What the pilot cannot see: error that no two seeds differ by (an estimator's systematic
-//! difference from the truth at a fixed cache accuracy or `k`, or a difference between caustic
-//! and the reference it is measured against), and pixels too rare for its grid (a light's
-//! edge, a firefly path): both make the measured error larger than the expected one.
+//! What the pilot cannot see: error that no two seeds differ by besides the cache's (an
+//! estimator's systematic difference from the truth at a fixed `k`, or a difference between
+//! caustic and the reference it is measured against), and pixels too rare for its grid (a
+//! light's edge, a firefly path): both make the measured error larger than the expected one.
 //! `docs/accuracy/budget.md` has the figures.
 //!
 //! # A budget too short for a pilot
@@ -91,9 +103,10 @@
 //!
 //! What the planner leaves alone: shadow rays per light (`--light-samples`) and gather rays
 //! for points the cache does not serve are re-drawn by every camera sample, so more samples buy
-//! the same; the cache's accuracy (its record spacing) and `k` change the estimators' bias in
-//! ways the pilot's two effort levels cannot see. `--noise-target` cannot be typed with a
-//! budget: the planner sets its own (below).
+//! the same; `k` changes the estimators' bias in ways the pilot's two effort levels cannot
+//! see, and the cache's accuracy (its record spacing) is measured at one value only: its bias
+//! counts in the expected error, but choosing it would take the bias at another spacing.
+//! `--noise-target` cannot be typed with a budget: the planner sets its own (below).
 //!
 //! # Adaptive pixels
 //! Once the samples are fitted, the planner asks whether the same camera time spent in
@@ -222,6 +235,9 @@ pub struct Model {
     pub beta: f64,
     /// `b²` at the pilot's effort.
     pub bias2: f64,
+    /// `b_c²`: the irradiance cache's interpolation bias, the same at every effort and sample
+    /// count (its accuracy, not its rays, sets the records' spacing).
+    pub cache_bias2: f64,
     /// The pilot's effort `F₀`.
     pub pilot_effort: f64,
     /// Prepass seconds per unit of effort spent on photons (tracing, kd-trees, precomputed
@@ -239,13 +255,13 @@ pub struct Model {
 
 impl Model {
     /// Returns the expected relative error's three parts `(camera, maps, bias)` squared at `s`
-    /// samples and effort `f`.
+    /// samples and effort `f`; the bias is the maps' blur and the cache's interpolation.
     pub fn parts2(&self, s: u32, f: f64) -> (f64, f64, f64) {
         let r = self.pilot_effort / f;
         (
             self.camera_var_at(f) * (4.0 / s as f64).powf(self.gamma),
             self.map_var * r.powf(self.beta),
-            self.bias2 * r * r,
+            self.bias2 * r * r + self.cache_bias2,
         )
     }
 
@@ -404,8 +420,9 @@ impl fmt::Display for Planned {
                 model.map_var, model.pilot_effort, model.beta
             ),
             false => format!(
-                " maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e};",
-                model.map_var, model.pilot_effort, model.beta, model.bias2
+                " maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e}, the cache's \
+                 interpolation {:.2e};",
+                model.map_var, model.pilot_effort, model.beta, model.bias2, model.cache_bias2
             ),
         };
         write!(
@@ -614,6 +631,7 @@ fn quick(
         map_var: 0.0,
         beta: 1.0,
         bias2: 0.0,
+        cache_bias2: 0.0,
         pilot_effort: PILOT_EFFORT,
         photon_per_effort: per_effort,
         photon_fixed: 0.0,
@@ -659,12 +677,15 @@ fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> f64 {
         view,
         settings.seed,
         std::slice::from_ref(&tracer),
+        &[],
         PIXELS_PROBE,
         &NoProgress,
     );
     let (pilot, _) = pilot_grid(view, PILOT_GRID);
     let threads = rayon::current_num_threads().max(1) as f64;
-    let tracers = 4.0;
+    // The four prepasses, and the cache's bias measured through the first two: their gathers
+    // cost about as much again (0.6 to 2.6 times on the scenes of docs/accuracy/budget.md).
+    let tracers = 8.0;
     let thread_seconds: f64 = probe.iter().map(PixelRun::seconds).sum();
     thread_seconds / probe.len().max(1) as f64 * pilot.len() as f64 * tracers / threads
 }
@@ -728,7 +749,7 @@ pub fn fit_samples(
     }
     let (w, h) = view.window.size();
     let side = ((w as f64 * h as f64 * FIT_SHARE).sqrt() as u32).clamp(PILOT_GRID, FIT_GRID);
-    let (all, _, samples) = pilot_pixels(view, seed, tracers, side, &NoProgress);
+    let (all, _, samples) = pilot_pixels(view, seed, tracers, &[], side, &NoProgress);
     let thread_seconds: f64 = all.iter().map(PixelRun::seconds).sum();
     let runs = lit_pixels(all.clone());
     // Thread seconds over the threads, not the wall time: the pilot's pixels take a tenth of a
@@ -1246,6 +1267,11 @@ struct PixelRun {
     noise: Halves,
     /// The thread seconds each set's samples took through the first tracer.
     set_seconds: [f64; 4],
+    /// Over the first set's samples: their count, and the sums of the first and of the second
+    /// prepass's value less the same with the cache's interpolation error taken out
+    /// ([`DiffuseTerm::Unbiased`]), and the thread seconds those traces took.
+    cache: (u32, [f64; 2]),
+    cache_seconds: f64,
 }
 
 impl PixelRun {
@@ -1260,6 +1286,18 @@ impl PixelRun {
             let d = x - self.mean[i];
             self.mean[i] += d / self.n as f64;
             self.m2[i] += d * (x - self.mean[i]);
+        }
+    }
+
+    /// Returns an estimate of the squared bias the cache's interpolation leaves in this
+    /// pixel: the product of the two prepasses' mean differences. Each difference's noise
+    /// (which records serve, and what their own gathers drew) is its prepass's, so only
+    /// the bias both share is left in the product's expectation.
+    fn cache_bias2(&self) -> f64 {
+        let (n, [a, b]) = self.cache;
+        match n {
+            0 => 0.0,
+            n => a * b / (n as f64 * n as f64),
         }
     }
 
@@ -1344,6 +1382,29 @@ fn pilot_prepasses(
     (prepasses, f0)
 }
 
+/// Returns the pilot's tracers through each of `prepasses`, and through the first two with the
+/// cache's interpolation error taken out where it serves ([`DiffuseTerm::Unbiased`]).
+fn pilot_tracers<'a>(
+    view: View<'a>,
+    settings: &Settings,
+    prepasses: &'a [Prepass],
+) -> (Vec<Tracer<'a>>, Vec<Tracer<'a>>) {
+    let tracer = |diffuse| Tracer {
+        scene: view.scene,
+        camera: view.camera,
+        light_samples: settings.light_samples,
+        diffuse,
+    };
+    let tracers = prepasses
+        .iter()
+        .map(|p| tracer(DiffuseTerm::Photons(p)))
+        .collect();
+    let unbiased = (0..2)
+        .map(|i| tracer(DiffuseTerm::Unbiased(&prepasses[i], 0xCAC4E + i as u64)))
+        .collect();
+    (tracers, unbiased)
+}
+
 /// Runs the pilot of the module doc and returns its model.
 fn pilot(
     view: View,
@@ -1366,20 +1427,21 @@ fn pilot(
         PILOT_STEP * f0,
         request.fixed_cache_rays,
     );
-    let tracers: Vec<Tracer> = prepasses
-        .iter()
-        .map(|p| Tracer {
-            scene: view.scene,
-            camera: view.camera,
-            light_samples: settings.light_samples,
-            diffuse: DiffuseTerm::Photons(p),
-        })
-        .collect();
+    let (tracers, unbiased) = pilot_tracers(view, settings, &prepasses);
     let start = Instant::now();
-    let (runs, thread_seconds, samples) =
-        pilot_pixels(view, settings.seed, &tracers, PILOT_GRID, progress);
+    let (runs, thread_seconds, samples) = pilot_pixels(
+        view,
+        settings.seed,
+        &tracers,
+        &unbiased,
+        PILOT_GRID,
+        progress,
+    );
+    // The wall time of the four tracers alone: the camera pass shares its threads as they did.
+    let unbiased_seconds: f64 = runs.iter().map(|r| r.cache_seconds).sum();
+    let wall = start.elapsed().as_secs_f64() * thread_seconds
+        / (thread_seconds + unbiased_seconds).max(1e-12);
     let runs = lit_pixels(runs);
-    let wall = start.elapsed().as_secs_f64();
     let n = runs.len().max(1) as f64;
     let mean = runs.iter().map(|r| r.mean[0]).sum::<f64>() / n;
     let m2 = (mean * mean).max(1e-300);
@@ -1407,6 +1469,11 @@ fn pilot(
     };
     // b(F₀) − b(sF₀) = b (1 − 1/s).
     let bias2 = db2 / (1.0 - 1.0 / PILOT_STEP).powi(2);
+    let measured = runs.iter().filter(|r| r.cache.0 > 0);
+    let cache_bias2 = (measured.clone().map(PixelRun::cache_bias2).sum::<f64>()
+        / measured.count().max(1) as f64
+        / m2)
+        .max(0.0);
     // The pilot's own parallel efficiency: the camera pass shares its threads the same way.
     let threads = rayon::current_num_threads().max(1) as f64;
     let efficiency = (thread_seconds / (wall * threads).max(1e-12)).clamp(0.25, 1.0);
@@ -1424,6 +1491,7 @@ fn pilot(
         map_var: v1,
         beta,
         bias2,
+        cache_bias2,
         pilot_effort: f0,
         photon_per_effort,
         photon_fixed,
@@ -1517,6 +1585,7 @@ fn pilot_pixels(
     view: View,
     seed: u64,
     tracers: &[Tracer],
+    unbiased: &[Tracer],
     side: u32,
     progress: &dyn Progress,
 ) -> (Vec<PixelRun>, f64, u64) {
@@ -1549,10 +1618,22 @@ fn pilot_pixels(
                         let ray = view.camera.ray(x as f32 + u, y as f32 + v);
                         crate::render::scope::take_light_seen();
                         let start = Instant::now();
+                        // The cache's bias from the first set's samples.
+                        let before = (set == 0 && !unbiased.is_empty()).then(|| rng.clone());
                         let (values, first) =
                             trace_all(tracers, &ray, share, &mut rng, &mut counts);
                         run.light |= crate::render::scope::take_light_seen();
                         seconds += start.elapsed().as_secs_f64();
+                        if let Some(mut r) = before {
+                            let start = Instant::now();
+                            let (u, _) = trace_all(unbiased, &ray, share, &mut r, &mut counts);
+                            crate::render::scope::take_light_seen();
+                            run.cache_seconds += start.elapsed().as_secs_f64();
+                            run.cache.0 += 1;
+                            for (i, u) in u.iter().enumerate().take(2) {
+                                run.cache.1[i] += ((values[i] - *u).element_sum() / 3.0) as f64;
+                            }
+                        }
                         run.set_seconds[set] += first;
                         samples += 1;
                         if set < 2 {
@@ -1602,6 +1683,7 @@ mod tests {
             map_var: 2.5,
             beta: 1.0,
             bias2: 0.0,
+            cache_bias2: 0.0,
             pilot_effort: 0.001,
             photon_per_effort: 1.0,
             photon_fixed: 0.0,

@@ -127,6 +127,37 @@ fn a_pilot_whose_pixels_outlast_the_budget_is_skipped() {
     assert!(said.contains("too short for a pilot"), "{said}");
 }
 
+/// The pilot measures the irradiance cache's interpolation bias and counts it in the expected
+/// error (`DiffuseTerm::Unbiased` in `src/integrator/eye.rs`, the pilot in
+/// `src/integrator/planner.rs`). On the box at 64² (`--target-error 0.05`): none without a
+/// cache; with records ten times further apart than the default's reach (`--cache-accuracy
+/// 1`), a bias at least four times the one at `--cache-accuracy 0.1` (with gradients the
+/// interpolation's error is second order in the distance: a hundred times, in the square).
+#[test]
+fn the_pilot_measures_the_caches_interpolation_bias() {
+    let bias = |name: &str, args: &[&str]| {
+        let base = [
+            "--scale",
+            "1.6",
+            "--target-error",
+            "0.05",
+            "-q",
+            "-o",
+            "x.png",
+        ];
+        let said = render_box(name, &[&base[..], args].concat());
+        (number_after(&said, "the cache's interpolation"), said)
+    };
+    let (off, said) = bias("time_planner_cache_off", &["--irradiance-cache", "off"]);
+    assert_eq!(off, 0.0, "{said}");
+    let (fine, _) = bias("time_planner_cache_fine", &["--cache-accuracy", "0.1"]);
+    let (coarse, said) = bias("time_planner_cache_coarse", &["--cache-accuracy", "1"]);
+    assert!(
+        coarse > 0.0 && coarse >= 4.0 * fine,
+        "{coarse} against {fine}: {said}"
+    );
+}
+
 /// The flags typed on the command line stay as typed; the planner moves the rest.
 #[test]
 fn typed_flags_stay() {

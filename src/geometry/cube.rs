@@ -171,8 +171,9 @@ mod tests {
     /// The three slabs at once give what the slab test one axis at a time gives, bit for bit:
     /// over 200000 lines from a fixed stream (origins inside, outside and on the faces and
     /// edges, directions with components of either sign, zero, negative zero, subnormal, and
-    /// lines parallel to a face within and beyond its slack) and every special direction
-    /// from every corner, edge midpoint and face centre.
+    /// lines parallel to a face within and beyond its slack), and four special directions (along
+    /// an axis either way, with a negative zero, none) from a corner, an edge's midpoint and a
+    /// face's centre.
     #[test]
     fn three_slabs_at_once_match_one_at_a_time() {
         let mut rng = crate::sampling::Rng::new(7, crate::sampling::Pass::Pixel, 0);

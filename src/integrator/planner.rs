@@ -67,7 +67,7 @@
 //!   two points and little noise); per pixel the product of the two prepasses' mean
 //!   differences, whose noises are independent, so that only the bias both share is left.
 //!   A difference against a fresh gather of independent rays was tried first: its noise
-//!   buried the bias, and on the showcase a gather's glimpse of the caustic made it ten times
+//!   buried the bias, and on the showcase a gather's glimpse of the caustic made it twice
 //!   the whole error (`docs/accuracy/budget.md`).
 //!
 //! and the larger pair's phase times and the samples' time give `c_p`, `c_r` and `τ`. `β` is

@@ -941,13 +941,11 @@ impl Prepass {
         // Where a cache record serves the point, its gather stands for the indirect light of
         // every eye path, those too weak to be gathered included (they would read the map
         // directly, blotchier and slower: a 50-nearest estimate against a grid cell's records).
-        e += if let Some(cached) = self.cache.as_ref().and_then(|c| c.lookup(p, ng, bsdf.n)) {
+        e += if let Some(cache) = &self.cache
+            && let Some(cached) = cache.lookup(p, ng, bsdf.n)
+        {
             counts.cached += 1;
-            let picked = unbiased.and_then(|salt| {
-                let cache = self.cache.as_ref()?;
-                cache.pick(p, ng, rng.fork(salt).next_f32())
-            });
-            match picked {
+            match unbiased.and_then(|salt| cache.pick(p, ng, rng.fork(salt).next_f32())) {
                 Some((record, mut stream)) => {
                     let g = Gather::with_translation(ng, self.settings.cache.rays);
                     let fresh = self.gather(scene, gather_at, g, &mut stream, counts);

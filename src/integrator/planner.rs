@@ -1270,8 +1270,8 @@ struct PixelRun {
     /// Over the first set's samples: their count, and the sums of the first and of the second
     /// prepass's value less the same with the cache's interpolation error taken out
     /// ([`DiffuseTerm::Unbiased`]), and the thread seconds those traces took.
-    cache: (u32, [f64; 2]),
-    cache_seconds: f64,
+    unbiased: (u32, [f64; 2]),
+    unbiased_seconds: f64,
 }
 
 impl PixelRun {
@@ -1294,7 +1294,7 @@ impl PixelRun {
     /// (which records serve, and what their own gathers drew) is its prepass's, so only
     /// the bias both share is left in the product's expectation.
     fn cache_bias2(&self) -> f64 {
-        let (n, [a, b]) = self.cache;
+        let (n, [a, b]) = self.unbiased;
         match n {
             0 => 0.0,
             n => a * b / (n as f64 * n as f64),
@@ -1438,7 +1438,7 @@ fn pilot(
         progress,
     );
     // The wall time of the four tracers alone: the camera pass shares its threads as they did.
-    let unbiased_seconds: f64 = runs.iter().map(|r| r.cache_seconds).sum();
+    let unbiased_seconds: f64 = runs.iter().map(|r| r.unbiased_seconds).sum();
     let wall = start.elapsed().as_secs_f64() * thread_seconds
         / (thread_seconds + unbiased_seconds).max(1e-12);
     let runs = lit_pixels(runs);
@@ -1469,7 +1469,7 @@ fn pilot(
     };
     // b(F₀) − b(sF₀) = b (1 − 1/s).
     let bias2 = db2 / (1.0 - 1.0 / PILOT_STEP).powi(2);
-    let measured = runs.iter().filter(|r| r.cache.0 > 0);
+    let measured = runs.iter().filter(|r| r.unbiased.0 > 0);
     let cache_bias2 = (measured.clone().map(PixelRun::cache_bias2).sum::<f64>()
         / measured.count().max(1) as f64
         / m2)
@@ -1628,10 +1628,10 @@ fn pilot_pixels(
                             let start = Instant::now();
                             let (u, _) = trace_all(unbiased, &ray, share, &mut r, &mut counts);
                             crate::render::scope::take_light_seen();
-                            run.cache_seconds += start.elapsed().as_secs_f64();
-                            run.cache.0 += 1;
+                            run.unbiased_seconds += start.elapsed().as_secs_f64();
+                            run.unbiased.0 += 1;
                             for (i, u) in u.iter().enumerate().take(2) {
-                                run.cache.1[i] += ((values[i] - *u).element_sum() / 3.0) as f64;
+                                run.unbiased.1[i] += ((values[i] - *u).element_sum() / 3.0) as f64;
                             }
                         }
                         run.set_seconds[set] += first;

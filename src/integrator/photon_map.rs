@@ -377,6 +377,7 @@ pub fn render(
         None => prepass(view.scene, view.camera, &photons, read, progress),
     };
     if let (Some(p), Some(request)) = (&mut chosen, &request) {
+        p.prepass_seconds = Some(super::planner::PrepassSeconds::of(&p.model, p.effort, &gi));
         let tracer = super::eye::Tracer {
             scene: view.scene,
             camera: view.camera,

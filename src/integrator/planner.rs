@@ -32,9 +32,11 @@
 //!   spacing) sets, not the effort: the undershoot in a box's concave corners, the largest part
 //!   of caustic's converged difference from Mitsuba on the boxes at long budgets.
 //!
-//! Time is `T(s, F) = c_p·F + c_r·R(F) + s·N·τ`: photons (tracing, kd-trees, precomputed
-//! points) in proportion to the effort, the cache in proportion to its rays per record `R(F)`,
-//! and `N` pixels of `s` samples at `τ` wall seconds a sample.
+//! Time is `T(s, F) = c_p·F + c_r·R(F)·G(F) + s·N·τ`: photons (tracing, kd-trees, precomputed
+//! points) in proportion to the effort, the cache in proportion to its rays per record `R(F)`
+//! and to `G(F)`, the growth of a gather ray's cost once the precomputation points are
+//! estimated as gather rays read them ([`lazy_growth`]), and `N` pixels of `s` samples at `τ`
+//! wall seconds a sample.
 //!
 //! # The pilot
 //! Four prepasses of independent seeds, two at `F₀` and two at `4F₀`, each the real chain
@@ -249,6 +251,11 @@ pub struct Model {
     pub cache_per_ray: f64,
     pub cache_rays: u32,
     pub fixed_rays: bool,
+    /// The precomputation points at effort 1 (zero when the photons are fixed), and the count
+    /// from which more points make a gather ray cost more ([`lazy_growth`]): the larger of the
+    /// points `cache_per_ray` was measured with and the image's pixels.
+    pub points_per_effort: f64,
+    pub lazy_from: f64,
     /// Wall seconds of one sample of every pixel of the window.
     pub per_spp: f64,
 }
@@ -307,7 +314,8 @@ impl Model {
     /// Returns the irradiance cache's expected wall seconds at effort `f` (the part of the
     /// prepass a pilot's own prepass still takes: its cache covered only the pilot's pixels).
     pub fn cache_time(&self, f: f64) -> f64 {
-        self.cache_per_ray * cache_rays(self.cache_rays, f, self.fixed_rays) as f64
+        let growth = lazy_growth(self.points_per_effort * f, self.lazy_from);
+        self.cache_per_ray * cache_rays(self.cache_rays, f, self.fixed_rays) as f64 * growth
     }
 
     /// Returns the expected wall seconds of prepass and camera pass at `s` and `f`.
@@ -351,6 +359,27 @@ pub struct Adaptive {
     pub cost: f64,
 }
 
+/// A planned prepass's photons' and cache's wall seconds, as expected and as taken.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrepassSeconds {
+    pub expected: (f64, f64),
+    pub taken: (f64, f64),
+}
+
+impl PrepassSeconds {
+    /// Returns the seconds of the prepass `made` at effort `f`, against what `model` expected.
+    pub fn of(model: &Model, f: f64, made: &Prepass) -> PrepassSeconds {
+        let st = &made.stats;
+        let photons = (st.trace_time + st.build_time + st.precompute_time).as_secs_f64();
+        let cache = st.cache.as_ref().map_or(0.0, |c| c.whole_seconds());
+        let expected_cache = model.cache_time(f);
+        PrepassSeconds {
+            expected: (model.prepass_time(f) - expected_cache, expected_cache),
+            taken: (photons, cache),
+        }
+    }
+}
+
 /// What the planner chose for a frame, with the model it chose by; reported with the plan.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Planned {
@@ -373,6 +402,10 @@ pub struct Planned {
     pub parts: (f64, f64, f64),
     /// The expected wall seconds of the planned prepass and camera pass.
     pub expected_seconds: f64,
+    /// The planned prepass's seconds, photons and cache, as the model expected them and as
+    /// they were taken (the cache's extrapolated from a pilot's when the render takes its
+    /// prepass); `None` until the prepass is made.
+    pub prepass_seconds: Option<PrepassSeconds>,
     /// The pilot's wall seconds.
     pub pilot_seconds: f64,
     pub model: Model,
@@ -425,13 +458,31 @@ impl fmt::Display for Planned {
                 model.map_var, model.pilot_effort, model.beta, model.bias2, model.cache_bias2
             ),
         };
+        let growth = match model.points_per_effort > 0.0 {
+            true => format!(
+                " up to {:.0} precomputation points ({:.0} at effort 1), beyond them times \
+                 (points / {:.0})^{LAZY_GROWTH}",
+                model.lazy_from, model.points_per_effort, model.lazy_from
+            ),
+            false => String::new(),
+        };
+        let taken = match self.prepass_seconds {
+            Some(PrepassSeconds {
+                expected: (ep, ec),
+                taken: (tp, tc),
+            }) => format!(
+                "; the prepass expected {ep:.2} s of photons and {ec:.2} s of cache, took {tp:.2} \
+                 and {tc:.2} s"
+            ),
+            None => String::new(),
+        };
         write!(
             f,
             "{goal}: {} spp{rounds}, prepass effort x{:.3} (photon scale {:.4}, {} cache rays a \
              record{}): {why}; expected relative RMSE {:.4} ({parts}; lights seen directly left \
              out) in {:.2} s after a {:.2} s {} (measured: camera variance {:.3} a 4-sample \
              pixel at effort 1 falling as spp^-{:.2};{maps} photons {:.3} s per unit effort, \
-             cache {:.2e} s per ray a record, {:.4} s a sample of every pixel)",
+             cache {:.2e} s per ray a record{growth}, {:.4} s a sample of every pixel){taken}",
             self.spp,
             self.effort,
             self.photon_scale,
@@ -453,6 +504,33 @@ impl fmt::Display for Planned {
             model.cache_per_ray,
             model.per_spp,
         )
+    }
+}
+
+/// How a gather ray's cost grows with the precomputation points beyond those its cost was
+/// measured with: as `(points / from)^LAZY_GROWTH`, where more points than the image's pixels
+/// are estimated as gather rays first read them, inside the cache's build.
+///
+/// Why: the pilot times the cache at `4F₀`, and plans reach 10 to 100 times that effort. With
+/// the points all estimated up front (no more of them than pixels) their time is the photons'
+/// and grows with the effort; beyond, a gather ray more often reads a point no ray has read
+/// yet, and the cache's time grows with the photons at fixed rays. On the diffuse box at 96²
+/// with 256 rays a record: 0.263, 0.417, 0.502, 0.728 and 0.994 s at 1/8, 1/2, 1, 2 and 4 times
+/// its photons. The pilot's prediction, by its rays alone, was 1.7 to 3.6 times short on the
+/// box, the glass in water and the showcase (`docs/accuracy/budget.md`), and a plan that
+/// counted on it left the box at `--time-budget 2.5` 2 samples a pixel and 2.4 times the error
+/// of the defaults. The exponent that the planned prepasses measured was 0.19 to 0.34 over
+/// those scenes and budgets (9 to 75 times the pilot's points); 0.27 is their middle. The
+/// final scene at 256², whose points stay below its pixels at the efforts it plans, has none.
+pub const LAZY_GROWTH: f64 = 0.27;
+
+/// Returns the factor [`LAZY_GROWTH`] puts on a gather ray's cost at `points` precomputation
+/// points, measured at `from` (the larger of the pilot's points and the image's pixels): 1 up
+/// to `from`.
+pub fn lazy_growth(points: f64, from: f64) -> f64 {
+    match from > 0.0 && points > from {
+        true => (points / from).powf(LAZY_GROWTH),
+        false => 1.0,
     }
 }
 
@@ -613,6 +691,9 @@ fn quick(
     let prepass = Prepass::build_with(view.scene, &gi, progress).precompute_for(view.camera);
     let first_rays = first.prepass.settings.cache.rays.max(1) as f64;
     let per_ray = stats.cache.as_ref().map_or(0.0, |c| c.whole_seconds()) / first_rays;
+    let first_points = stats.precomputed_points as f64;
+    let (points_per_effort, lazy_from) = lazy_points(view, first_points, PILOT_EFFORT, request);
+    let per_ray = per_ray * lazy_growth(points_per_effort * effort, lazy_from);
     if !request.fixed_cache_rays && per_ray > 0.0 {
         let left = budget - started.elapsed().as_secs_f64();
         let most = (QUICK_CACHE * left / per_ray)
@@ -633,11 +714,21 @@ fn quick(
         bias2: 0.0,
         cache_bias2: 0.0,
         pilot_effort: PILOT_EFFORT,
-        photon_per_effort: per_effort,
-        photon_fixed: 0.0,
+        // The timing prepass's photons were the frame's when they are fixed.
+        photon_per_effort: match request.fixed_photons {
+            true => 0.0,
+            false => per_effort,
+        },
+        photon_fixed: match request.fixed_photons {
+            true => photon_seconds,
+            false => 0.0,
+        },
+        // The rays as cut above, at the effort chosen (the growth counted in `per_ray`).
         cache_per_ray: per_ray,
-        cache_rays: photons.cache.rays,
-        fixed_rays: request.fixed_cache_rays,
+        cache_rays: gi.cache.rays,
+        fixed_rays: true,
+        points_per_effort: 0.0,
+        lazy_from: 0.0,
         per_spp: 0.0,
     };
     let planned = Planned {
@@ -653,6 +744,7 @@ fn quick(
         expected: 0.0,
         parts: (0.0, 0.0, 0.0),
         expected_seconds: 0.0,
+        prepass_seconds: None,
         pilot_seconds: decided,
         model,
     };
@@ -1102,6 +1194,7 @@ impl Choice {
             expected: (c + m + b).sqrt(),
             parts: (c.sqrt(), m.sqrt(), b.sqrt()),
             expected_seconds: self.model.time(self.spp, self.effort),
+            prepass_seconds: None,
             pilot_seconds: pilot,
             model: self.model,
         }
@@ -1415,18 +1508,7 @@ fn pilot(
     progress: &dyn Progress,
 ) -> (Model, Vec<Prepass>) {
     let (prepasses, f0) = pilot_prepasses(view, photons, request, first, progress);
-    // The larger pair's phases: photons scale with the effort, the cache with its rays.
-    let (mut photon_seconds, mut cache_seconds) = (0.0, 0.0);
-    for p in &prepasses[2..] {
-        let st = &p.stats;
-        photon_seconds += (st.trace_time + st.build_time + st.precompute_time).as_secs_f64() / 2.0;
-        cache_seconds += st.cache.as_ref().map_or(0.0, |c| c.whole_seconds()) / 2.0;
-    }
-    let step_rays = cache_rays(
-        photons.cache.rays,
-        PILOT_STEP * f0,
-        request.fixed_cache_rays,
-    );
+    let costs = pair_costs(view, photons, request, &prepasses[2..], PILOT_STEP * f0);
     let (tracers, unbiased) = pilot_tracers(view, settings, &prepasses);
     let start = Instant::now();
     let (runs, thread_seconds, samples) = pilot_pixels(
@@ -1479,10 +1561,6 @@ fn pilot(
     let efficiency = (thread_seconds / (wall * threads).max(1e-12)).clamp(0.25, 1.0);
     let (w, h) = view.window.size();
     let per_sample = thread_seconds / 4.0 / samples.max(1) as f64 / efficiency;
-    let (photon_per_effort, photon_fixed) = match request.fixed_photons {
-        true => (0.0, photon_seconds),
-        false => (photon_seconds / (PILOT_STEP * f0), 0.0),
-    };
     let model = Model {
         mean,
         camera_var,
@@ -1493,14 +1571,71 @@ fn pilot(
         bias2,
         cache_bias2,
         pilot_effort: f0,
-        photon_per_effort,
-        photon_fixed,
-        cache_per_ray: cache_seconds / step_rays.max(1) as f64,
+        photon_per_effort: costs.photon_per_effort,
+        photon_fixed: costs.photon_fixed,
+        cache_per_ray: costs.cache_per_ray,
         cache_rays: photons.cache.rays,
         fixed_rays: request.fixed_cache_rays,
+        points_per_effort: costs.points_per_effort,
+        lazy_from: costs.lazy_from,
         per_spp: per_sample * w as f64 * h as f64 / threads,
     };
     (model, prepasses)
+}
+
+/// What a pair of pilot prepasses at effort `f` measured of the prepass's cost ([`Model`]'s
+/// fields of the same names).
+struct Costs {
+    photon_per_effort: f64,
+    photon_fixed: f64,
+    cache_per_ray: f64,
+    points_per_effort: f64,
+    lazy_from: f64,
+}
+
+/// Returns the prepass's costs from `pair`'s phases at effort `f`: the photons' time scales
+/// with the effort (unless the photons are fixed), the cache's with its rays and, past the
+/// pair's points or the image's pixels, with the points ([`lazy_growth`]).
+fn pair_costs(
+    view: View,
+    photons: &GiSettings,
+    request: &Request,
+    pair: &[Prepass],
+    f: f64,
+) -> Costs {
+    let n = pair.len().max(1) as f64;
+    let (mut photon_seconds, mut cache_seconds, mut points) = (0.0, 0.0, 0.0);
+    for p in pair {
+        let st = &p.stats;
+        photon_seconds += (st.trace_time + st.build_time + st.precompute_time).as_secs_f64() / n;
+        cache_seconds += st.cache.as_ref().map_or(0.0, |c| c.whole_seconds()) / n;
+        points += st.precomputed_points as f64 / n;
+    }
+    let rays = cache_rays(photons.cache.rays, f, request.fixed_cache_rays);
+    let (photon_per_effort, photon_fixed) = match request.fixed_photons {
+        true => (0.0, photon_seconds),
+        false => (photon_seconds / f, 0.0),
+    };
+    let (points_per_effort, lazy_from) = lazy_points(view, points, f, request);
+    Costs {
+        photon_per_effort,
+        photon_fixed,
+        cache_per_ray: cache_seconds / rays.max(1) as f64,
+        points_per_effort,
+        lazy_from,
+    }
+}
+
+/// Returns the precomputation points a unit of effort makes (zero when the photons are fixed:
+/// no effort adds any) and the count from which more make a gather ray cost more
+/// ([`lazy_growth`]), from `points` made at effort `f` and the image's pixels.
+fn lazy_points(view: View, points: f64, f: f64, request: &Request) -> (f64, f64) {
+    let (w, h) = view.camera.size();
+    let per_effort = match request.fixed_photons || f <= 0.0 {
+        true => 0.0,
+        false => points / f,
+    };
+    (per_effort, points.max(f64::from(w) * f64::from(h)))
 }
 
 /// Returns the pilot's pixels that saw no light directly, which its figures are taken over. A
@@ -1690,6 +1825,8 @@ mod tests {
             cache_per_ray: 0.0,
             cache_rays: 256,
             fixed_rays: false,
+            points_per_effort: 0.0,
+            lazy_from: 0.0,
             per_spp: 0.1,
         }
     }
@@ -1726,6 +1863,52 @@ mod tests {
         let margin = PREPASS_MARGIN * m.prepass_time(c.effort) + c.spp as f64 * m.per_spp;
         assert!(margin <= left + 1e-9, "{margin} s with the margin");
         assert!(got <= best * 1.02, "planner {got} vs brute force {best}");
+    }
+
+    /// A gather ray's cost grows as `(points / from)^LAZY_GROWTH` beyond `from`, and not
+    /// below it; without points per effort (the photons fixed) the cache's time is its rays'.
+    /// With the diffuse box's pilot figures at `--time-budget 2.5` (`docs/accuracy/budget.md`),
+    /// a plan that counts the growth chooses a smaller effort than one that does not and
+    /// leaves its prepass the planner's margin, where the other, charged the growth, overruns.
+    #[test]
+    fn a_plan_counts_what_more_points_cost_the_cache() {
+        assert_eq!(lazy_growth(9_000.0, 9_216.0), 1.0);
+        assert!((lazy_growth(92_160.0, 9_216.0) - 10f64.powf(LAZY_GROWTH)).abs() < 1e-12);
+        assert_eq!(lazy_growth(1e6, 0.0), 1.0);
+        let m = Model {
+            camera_var: 1e-3,
+            map_var: 1.45e-3,
+            beta: 0.63,
+            cache_bias2: 1.42e-5,
+            pilot_effort: 1.0 / 32.0,
+            photon_per_effort: 0.293,
+            cache_per_ray: 9.14e-4,
+            per_spp: 0.0271,
+            // The larger pair's points at 4F₀ (the box's 147k at effort 1 over 8), more than
+            // its 9216 pixels.
+            points_per_effort: 147_220.0,
+            lazy_from: 18_403.0,
+            ..model()
+        };
+        let rays = |f: f64| cache_rays(256, f, false) as f64;
+        let grown = 9.14e-4 * rays(2.0) * (147_220.0 * 2.0 / 18_403.0f64).powf(LAZY_GROWTH);
+        assert!((m.cache_time(2.0) - grown).abs() < 1e-12);
+        assert_eq!(m.cache_time(0.1), 9.14e-4 * rays(0.1));
+        let flat = Model {
+            points_per_effort: 0.0,
+            ..m
+        };
+        assert!((flat.cache_time(2.0) - 9.14e-4 * rays(2.0)).abs() < 1e-12);
+        let r = request(Goal::Time(Duration::from_secs_f64(2.5)));
+        let counted = decide(m, &r, MAX_EFFORT, &Settings::default(), 0.51);
+        let uncounted = decide(flat, &r, MAX_EFFORT, &Settings::default(), 0.51);
+        assert!(counted.effort < uncounted.effort);
+        let left = 2.5 * (1.0 - RESERVE) - 0.51;
+        let prepass = m.prepass_time(counted.effort);
+        assert!(PREPASS_MARGIN * prepass + counted.spp as f64 * m.per_spp <= left + 1e-9);
+        // The plan that did not count it, charged the growth, overruns the time left.
+        let over = PREPASS_MARGIN * m.prepass_time(uncounted.effort);
+        assert!(over + uncounted.spp as f64 * m.per_spp > left);
     }
 
     /// With a target, the chosen plan reaches it, and no plan on a fine grid reaches it in

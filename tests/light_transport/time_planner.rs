@@ -127,6 +127,17 @@ fn a_pilot_whose_pixels_outlast_the_budget_is_skipped() {
     assert!(said.contains("too short for a pilot"), "{said}");
 }
 
+/// The box at 64² with a target error the planner reaches in about a second.
+const SMALL_TARGET: [&str; 7] = [
+    "--scale",
+    "1.6",
+    "--target-error",
+    "0.05",
+    "-q",
+    "-o",
+    "x.png",
+];
+
 /// The pilot measures the irradiance cache's interpolation bias and counts it in the expected
 /// error (`DiffuseTerm::Unbiased` in `src/integrator/eye.rs`, the pilot in
 /// `src/integrator/planner.rs`). On the box at 64² (`--target-error 0.05`): none without a
@@ -136,16 +147,7 @@ fn a_pilot_whose_pixels_outlast_the_budget_is_skipped() {
 #[test]
 fn the_pilot_measures_the_caches_interpolation_bias() {
     let bias = |name: &str, args: &[&str]| {
-        let base = [
-            "--scale",
-            "1.6",
-            "--target-error",
-            "0.05",
-            "-q",
-            "-o",
-            "x.png",
-        ];
-        let said = render_box(name, &[&base[..], args].concat());
+        let said = render_box(name, &[&SMALL_TARGET[..], args].concat());
         (number_after(&said, "the cache's interpolation"), said)
     };
     let (off, said) = bias("time_planner_cache_off", &["--irradiance-cache", "off"]);
@@ -156,6 +158,26 @@ fn the_pilot_measures_the_caches_interpolation_bias() {
         coarse > 0.0 && coarse >= 4.0 * fine,
         "{coarse} against {fine}: {said}"
     );
+}
+
+/// The plan counts what more precomputation points cost the cache (`lazy_growth` in
+/// `src/integrator/planner.rs`): it says from how many points a gather ray costs more (the
+/// larger of the pilot's and the image's 64² pixels), how many an effort makes, and the
+/// prepass's seconds as expected and as taken. With the photons typed no effort adds points,
+/// and the plan says nothing of them.
+#[test]
+fn the_plan_counts_the_points_the_cache_reads() {
+    let said = render_box("time_planner_points", &SMALL_TARGET);
+    let from = number_after(&said, "a record up to");
+    let per_effort = number_after(&said, "precomputation points (");
+    assert!(from >= 64.0 * 64.0 && per_effort > 0.0, "{said}");
+    let expected = number_after(&said, "the prepass expected");
+    let took = number_after(&said, "of cache, took");
+    assert!(expected > 0.0 && took > 0.0, "{said}");
+    let typed = [&SMALL_TARGET[..], &["--photon-scale", "0.5"]].concat();
+    let said = render_box("time_planner_points_typed", &typed);
+    assert!(!said.contains("precomputation points"), "{said}");
+    assert!(said.contains("the prepass expected"), "{said}");
 }
 
 /// The flags typed on the command line stay as typed; the planner moves the rest.

@@ -246,6 +246,11 @@ pub struct Model {
     /// points; zero when the photons are fixed) and their fixed seconds otherwise.
     pub photon_per_effort: f64,
     pub photon_fixed: f64,
+    /// Seconds per unit of effort the precomputation points' estimates took up front in the
+    /// pilot (zero when its points outnumbered the pixels and were estimated as gather rays
+    /// read them): an effort whose points outnumber `lazy_from` estimates none up front, and
+    /// pays for them in the cache instead ([`lazy_growth`]).
+    pub upfront_per_effort: f64,
     /// The irradiance cache's seconds per ray of a record (times its records), and its rays
     /// per record at effort 1 (`fixed_rays`: they do not move).
     pub cache_per_ray: f64,
@@ -308,7 +313,11 @@ impl Model {
 
     /// Returns the prepass's expected wall seconds at effort `f`.
     pub fn prepass_time(&self, f: f64) -> f64 {
-        self.photon_fixed + self.photon_per_effort * f + self.cache_time(f)
+        let upfront = match self.points_per_effort * f <= self.lazy_from {
+            true => self.upfront_per_effort * f,
+            false => 0.0,
+        };
+        self.photon_fixed + self.photon_per_effort * f + upfront + self.cache_time(f)
     }
 
     /// Returns the irradiance cache's expected wall seconds at effort `f` (the part of the
@@ -466,6 +475,13 @@ impl fmt::Display for Planned {
             ),
             false => String::new(),
         };
+        let upfront = match model.upfront_per_effort > 0.0 {
+            true => format!(
+                " and {:.3} s more while the points are estimated up front (up to {:.0})",
+                model.upfront_per_effort, model.lazy_from
+            ),
+            false => String::new(),
+        };
         let taken = match self.prepass_seconds {
             Some(PrepassSeconds {
                 expected: (ep, ec),
@@ -481,7 +497,7 @@ impl fmt::Display for Planned {
             "{goal}: {} spp{rounds}, prepass effort x{:.3} (photon scale {:.4}, {} cache rays a \
              record{}): {why}; expected relative RMSE {:.4} ({parts}; lights seen directly left \
              out) in {:.2} s after a {:.2} s {} (measured: camera variance {:.3} a 4-sample \
-             pixel at effort 1 falling as spp^-{:.2};{maps} photons {:.3} s per unit effort, \
+             pixel at effort 1 falling as spp^-{:.2};{maps} photons {:.3} s per unit effort{upfront}, \
              cache {:.2e} s per ray a record{growth}, {:.4} s a sample of every pixel){taken}",
             self.spp,
             self.effort,
@@ -727,6 +743,7 @@ fn quick(
             true => photon_seconds,
             false => 0.0,
         },
+        upfront_per_effort: 0.0,
         // The rays as cut above, at the effort chosen (the growth counted in `per_ray`).
         cache_per_ray: per_ray,
         cache_rays: gi.cache.rays,
@@ -1577,6 +1594,7 @@ fn pilot(
         pilot_effort: f0,
         photon_per_effort: costs.photon_per_effort,
         photon_fixed: costs.photon_fixed,
+        upfront_per_effort: costs.upfront_per_effort,
         cache_per_ray: costs.cache_per_ray,
         cache_rays: photons.cache.rays,
         fixed_rays: request.fixed_cache_rays,
@@ -1592,6 +1610,7 @@ fn pilot(
 struct Costs {
     photon_per_effort: f64,
     photon_fixed: f64,
+    upfront_per_effort: f64,
     cache_per_ray: f64,
     points_per_effort: f64,
     lazy_from: f64,
@@ -1608,21 +1627,28 @@ fn pair_costs(
     f: f64,
 ) -> Costs {
     let n = pair.len().max(1) as f64;
-    let (mut photon_seconds, mut cache_seconds, mut points) = (0.0, 0.0, 0.0);
+    let (mut photon_seconds, mut precompute, mut cache_seconds, mut points) = (0.0, 0.0, 0.0, 0.0);
     for p in pair {
         let st = &p.stats;
-        photon_seconds += (st.trace_time + st.build_time + st.precompute_time).as_secs_f64() / n;
+        photon_seconds += (st.trace_time + st.build_time).as_secs_f64() / n;
+        precompute += st.precompute_time.as_secs_f64() / n;
         cache_seconds += st.cache.as_ref().map_or(0.0, |c| c.whole_seconds()) / n;
         points += st.precomputed_points as f64 / n;
     }
     let rays = cache_rays(photons.cache.rays, f, request.fixed_cache_rays);
-    let (photon_per_effort, photon_fixed) = match request.fixed_photons {
-        true => (0.0, photon_seconds),
-        false => (photon_seconds / f, 0.0),
-    };
     let (points_per_effort, lazy_from) = lazy_points(view, points, f, request);
+    // The pilot's points were estimated up front when they were no more than the pixels.
+    let (w, h) = view.camera.size();
+    let upfront = points_per_effort > 0.0 && points <= f64::from(w) * f64::from(h);
+    let (photon_per_effort, upfront_per_effort, photon_fixed) =
+        match (request.fixed_photons, upfront) {
+            (true, _) => (0.0, 0.0, photon_seconds + precompute),
+            (false, true) => (photon_seconds / f, precompute / f, 0.0),
+            (false, false) => ((photon_seconds + precompute) / f, 0.0, 0.0),
+        };
     Costs {
         photon_per_effort,
+        upfront_per_effort,
         photon_fixed,
         cache_per_ray: cache_seconds / rays.max(1) as f64,
         points_per_effort,
@@ -1826,6 +1852,7 @@ mod tests {
             pilot_effort: 0.001,
             photon_per_effort: 1.0,
             photon_fixed: 0.0,
+            upfront_per_effort: 0.0,
             cache_per_ray: 0.0,
             cache_rays: 256,
             fixed_rays: false,
@@ -1903,6 +1930,17 @@ mod tests {
             ..m
         };
         assert!((flat.cache_time(2.0) - 9.14e-4 * rays(2.0)).abs() < 1e-12);
+        // Points estimated up front in the pilot (its points no more than the pixels) cost
+        // the photons' time until an effort's points outnumber the pixels, then none.
+        let upfront = Model {
+            upfront_per_effort: 0.1,
+            lazy_from: 9_216.0,
+            ..m
+        };
+        let below = 9_000.0 / 147_220.0;
+        let photons = |f: f64| upfront.prepass_time(f) - upfront.cache_time(f);
+        assert!((photons(below) - (0.293 + 0.1) * below).abs() < 1e-12);
+        assert!((photons(2.0) - 0.293 * 2.0).abs() < 1e-12);
         let r = request(Goal::Time(Duration::from_secs_f64(2.5)));
         let counted = decide(m, &r, MAX_EFFORT, &Settings::default(), 0.51);
         let uncounted = decide(flat, &r, MAX_EFFORT, &Settings::default(), 0.51);

@@ -601,7 +601,7 @@ pub fn choose(
     let mut first = pilot_prepass(view, photons, request, &grid, 0, PILOT_EFFORT);
     progress.advance(1);
     if matches!(request.goal, Goal::Time(_)) {
-        first.pixels = pixels_seconds(view, settings, &first.prepass);
+        (first.pixels, first.per_spp) = pixels_seconds(view, settings, &first.prepass);
     }
     let short = quick(view, photons, request, &first, started, progress);
     if let Some((mut planned, prepass)) = short {
@@ -659,6 +659,11 @@ const PILOT_MOST: f64 = 0.35;
 /// with 4 samples a pixel, the photons take 0.4 s and the cache 1.25 s of the 2.4 s).
 const QUICK_PHOTONS: f64 = 0.4;
 const QUICK_CACHE: f64 = 0.6;
+/// The samples a pixel the camera keeps without a pilot, whatever the cache's share: below
+/// 2 a pixel has no two half-buffers for adaptive rounds, and the final scene at 256² with
+/// 2.5 s, whose cache took up to 18% more than its share, measured 0.200 at 1 sample a pixel
+/// against 0.085 at 2 and rounds (`docs/accuracy/budget.md`).
+const QUICK_SPP: f64 = 2.0;
 /// The maps' noise is taken to fall as `effort^-QUICK_BETA` where no pilot measured it
 /// ([`fit_samples`]): the value that puts the maps' variance at the geometric middle of what
 /// `β` = 0.2 and `β` = 1, the ends of the pilot's range, would make of the same difference, at
@@ -716,7 +721,7 @@ fn quick(
     let per_ray = per_ray * lazy_growth(points_per_effort * effort, lazy_from);
     if !request.fixed_cache_rays && per_ray > 0.0 {
         let left = budget - started.elapsed().as_secs_f64();
-        let most = (QUICK_CACHE * left / per_ray)
+        let most = (quick_cache(left, first.per_spp) / per_ray)
             .floor()
             .max(MIN_CACHE_RAYS as f64);
         gi.cache.rays = gi.cache.rays.min(most as u32);
@@ -772,14 +777,23 @@ fn quick(
     Some((planned, prepass))
 }
 
+/// Returns the seconds a plan without a pilot gives its cache when `left` seconds are left
+/// after its photons and a sample of every pixel takes `per_spp`: [`QUICK_CACHE`] of them, but
+/// no more than leaves the camera [`QUICK_SPP`] samples a pixel should the cache take
+/// [`PREPASS_MARGIN`] times as long.
+fn quick_cache(left: f64, per_spp: f64) -> f64 {
+    (QUICK_CACHE * left).min((left - QUICK_SPP * per_spp) / PREPASS_MARGIN)
+}
+
 /// The side of the grid of pixels [`pixels_seconds`] times.
 const PIXELS_PROBE: u32 = 4;
 
 /// Returns the wall seconds the pilot's pixels are expected to take (their samples through
-/// four prepasses like `prepass`), from [`PIXELS_PROBE`]² of them traced through it once. Where
-/// the prepasses are cheap, the pixels are most of a pilot: on a box of 40×40 pixels with a
+/// four prepasses like `prepass`), from [`PIXELS_PROBE`]² of them traced through it once, and
+/// the wall seconds of one sample of every pixel of the window they measure. Where the
+/// prepasses are cheap, the pixels are most of a pilot: on a box of 40×40 pixels with a
 /// thousandth of its photons, 0.15 s of a 0.02 s budget.
-fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> f64 {
+fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> (f64, f64) {
     let tracer = Tracer {
         scene: view.scene,
         camera: view.camera,
@@ -800,7 +814,13 @@ fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> f64 {
     // cost about as much again (0.6 to 2.6 times on the scenes of docs/accuracy/budget.md).
     let tracers = 8.0;
     let thread_seconds: f64 = probe.iter().map(PixelRun::seconds).sum();
-    thread_seconds / probe.len().max(1) as f64 * pilot.len() as f64 * tracers / threads
+    let per_pixel = thread_seconds / probe.len().max(1) as f64;
+    let (w, h) = view.window.size();
+    let per_sample = per_pixel / PILOT_SETS.iter().sum::<u32>() as f64;
+    (
+        per_pixel * pilot.len() as f64 * tracers / threads,
+        per_sample * w as f64 * h as f64 / threads,
+    )
 }
 
 /// Returns the seconds the rest of the pilot is expected to take after its first prepass (at
@@ -1444,6 +1464,9 @@ struct Timed {
     /// The wall seconds the pilot's pixels are expected to take ([`pixels_seconds`]; zero
     /// until measured).
     pixels: f64,
+    /// The wall seconds of one sample of every pixel through it ([`pixels_seconds`]; zero
+    /// until measured).
+    per_spp: f64,
 }
 
 /// Makes the pilot's prepass number `i` (its seed the frame's, mixed with `i`) at effort `f`,
@@ -1468,6 +1491,7 @@ fn pilot_prepass(
         prepass,
         seconds: start.elapsed().as_secs_f64(),
         pixels: 0.0,
+        per_spp: 0.0,
     }
 }
 
@@ -2194,6 +2218,18 @@ mod tests {
         assert!(rest > PILOT_MOST * 2.5 * (1.0 - RESERVE));
         assert!(rest <= PILOT_MOST * 10.0 * (1.0 - RESERVE));
         const { assert!(0.60 <= PILOT_MOST * 2.3) };
+    }
+
+    /// Without a pilot the cache takes its share of the time left, less what the camera's
+    /// [`QUICK_SPP`] samples need should the cache overrun by [`PREPASS_MARGIN`]: on the final
+    /// scene at 256² with 2.5 s (1.6 s left after the photons, 0.23 s a sample), 0.88 s where
+    /// its share is 0.96 s; on the glass in water (0.02 s a sample) its share.
+    #[test]
+    fn without_a_pilot_the_camera_keeps_two_samples() {
+        let cache = quick_cache(1.6, 0.23);
+        assert!((cache - (1.6 - 0.46) / PREPASS_MARGIN).abs() < 1e-12);
+        assert!(1.6 - PREPASS_MARGIN * cache >= QUICK_SPP * 0.23 - 1e-12);
+        assert!((quick_cache(1.6, 0.02) - QUICK_CACHE * 1.6).abs() < 1e-12);
     }
 
     /// Two prepasses of independent seeds at `F` and `rF` differ by `V(F) + V(rF)`: with the

@@ -32,11 +32,12 @@
 //!   spacing) sets, not the effort: the undershoot in a box's concave corners, the largest part
 //!   of caustic's converged difference from Mitsuba on the boxes at long budgets.
 //!
-//! Time is `T(s, F) = c_p·F + c_r·R(F)·G(F) + s·N·τ`: photons (tracing, kd-trees, precomputed
-//! points) in proportion to the effort, the cache in proportion to its rays per record `R(F)`
-//! and to `G(F)`, the growth of a gather ray's cost once the precomputation points are
-//! estimated as gather rays read them ([`lazy_growth`]), and `N` pixels of `s` samples at `τ`
-//! wall seconds a sample.
+//! Time is `T(s, F) = c_p·F + c_r·R(F)·G(F) + s·N·τ`: photons (tracing, kd-trees, and the
+//! precomputation points' estimates while there are few enough to make them up front) in
+//! proportion to the effort, the cache in proportion to its rays per record `R(F)` and to
+//! `G(F)`, the growth of a gather ray's cost once the points are estimated as gather rays read
+//! them ([`lazy_growth`]), and `N` pixels of `s` samples at `τ` wall seconds a sample. The plan
+//! line says the prepass's seconds as expected and as taken.
 //!
 //! # The pilot
 //! Four prepasses of independent seeds, two at `F₀` and two at `4F₀`, each the real chain

@@ -874,11 +874,7 @@ mod tests {
             root:add_child(floor) root:add_child(back) root:add_child(left)
             gr.render(root, 'b.png', 64, 64, {0, 1, 1.5}, {0, -0.2, -1}, {0, 1, 0}, 55, {0, 0, 0},
               {gr.area_light({0, 2.8, -4}, {6, 6, 6}, {1, 0, 0}, nil, 20000, {0.5, 0, 0}, {0, 0, 0.5})})";
-        let no_render = Box::new(|_: &_, _: &_| Ok(()));
-        let desc = crate::lua::run_source(src, "t.lua", ".".as_ref(), no_render).unwrap();
-        let r = &desc.renders[0];
-        let scene = crate::scene::build_scene(&desc, r).unwrap();
-        let camera = crate::camera::Camera::new(&r.camera, 64, 64);
+        let (scene, camera) = crate::lua::test_scene(src);
         let gi = crate::integrator::photon_map::GiSettings {
             photons: 20_000,
             caustic_photons: 0,

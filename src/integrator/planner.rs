@@ -2011,11 +2011,7 @@ mod tests {
             root = gr.node('root') root:add_child(wall)
             gr.render(root, 'x.png', 9, 9, {0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, {0, 0, 0},
               {gr.area_light({0, 0, -5}, {4, 4, 4}, {1, 0, 0}, nil, 1000, {0.5, 0, 0}, {0, 0.5, 0})})";
-        let no_render = Box::new(|_: &_, _: &_| Ok(()));
-        let desc = crate::lua::run_source(src, "t.lua", ".".as_ref(), no_render).unwrap();
-        let r = &desc.renders[0];
-        let scene = crate::scene::build_scene(&desc, r).unwrap();
-        let camera = crate::camera::Camera::new(&r.camera, 9, 9);
+        let (scene, camera) = crate::lua::test_scene(src);
         let tracer = Tracer {
             scene: &scene,
             camera: &camera,
@@ -2053,9 +2049,7 @@ mod tests {
         let src = b"s = gr.sphere('s') s:set_material(gr.material({0.5, 0.5, 0.5}, {0, 0, 0}, 0))
             gr.render(s, 'x.png', 9, 9, {0, 0, 5}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0},
               {gr.light({0, 0, 5}, {1, 1, 1}, {1, 0, 0}, 1, 1000)})";
-        let no_render = Box::new(|_: &_, _: &_| Ok(()));
-        let desc = crate::lua::run_source(src, "t.lua", ".".as_ref(), no_render).unwrap();
-        let scene = crate::scene::build_scene(&desc, &desc.renders[0]).unwrap();
+        let (scene, _) = crate::lua::test_scene(src);
         let mut photons = GiSettings {
             photons: 1000,
             caustic_photons: 5000,

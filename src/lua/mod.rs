@@ -127,6 +127,20 @@ pub fn run_script_with(path: &Path, hook: RenderHook, options: ScriptOptions) ->
     run_source_with(&source, &path.display().to_string(), &dir, hook, options)
 }
 
+/// Runs a test's Lua `src` (its renders not run) and returns the scene and the camera of its
+/// first `gr.render`, at that render's size.
+#[cfg(test)]
+pub(crate) fn test_scene(src: &[u8]) -> (crate::scene::Scene, crate::camera::Camera) {
+    let no_render = Box::new(|_: &_, _: &_| Ok(()));
+    let desc = run_source(src, "t.lua", ".".as_ref(), no_render).unwrap();
+    let r = &desc.renders[0];
+    let scene = crate::scene::build_scene(&desc, r).unwrap();
+    (
+        scene,
+        crate::camera::Camera::new(&r.camera, r.width, r.height),
+    )
+}
+
 /// Runs script text named `name` (used in messages), resolving relative paths in the working
 /// directory and then in `script_dir`.
 pub fn run_source(

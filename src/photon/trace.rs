@@ -1100,9 +1100,7 @@ mod tests {
             gr.render(root, 'x.png', 8, 8, {0, 0, 4}, {0, 0, -1}, {0, 1, 0}, 50, {0, 0, 0},
               {gr.area_light({0, 1.5, 0}, {4, 4, 4}, {1, 0, 0}, nil, 1000, {0.4, 0, 0}, {0, 0, 0.4}),
                gr.light({0.3, 1.2, 0.5}, {2, 2, 2}, {1, 0, 0})})";
-        let no_render = Box::new(|_: &_, _: &_| Ok(()));
-        let desc = crate::lua::run_source(src, "t.lua", ".".as_ref(), no_render).unwrap();
-        let scene = crate::scene::build_scene(&desc, &desc.renders[0]).unwrap();
+        let (scene, _) = crate::lua::test_scene(src);
         let targets = specular_targets(&scene);
         assert_eq!(targets.len(), 2);
         let mut coherent = Coherent::new(Coherent::reach(&scene));

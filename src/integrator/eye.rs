@@ -204,6 +204,9 @@ pub enum DiffuseTerm<'a> {
     /// one record at a time, drawn with the salt ([`Prepass::diffuse_with`]): the planner's
     /// pilot.
     Unbiased(&'a Prepass, u64),
+    /// The caustic map's estimate alone, from the `k` nearest photons
+    /// ([`Prepass::caustic_diffuse`]): the planner's pilot.
+    Caustic(&'a Prepass, usize),
     /// No light: the irradiance cache's record pass, which only follows the eye paths to find
     /// where final gathering happens ([`super::irradiance_cache`]).
     Caching(&'a Probe<'a>),
@@ -417,6 +420,11 @@ impl Tracer<'_> {
             DiffuseTerm::Unbiased(gi, salt) => {
                 if bsdf.kd.max_element() > 0.0 {
                     colour += gi.diffuse_with(self.scene, &at, rng, Some(salt), counts);
+                }
+            }
+            DiffuseTerm::Caustic(gi, k) => {
+                if bsdf.kd.max_element() > 0.0 {
+                    colour += gi.caustic_diffuse(&at, k, counts);
                 }
             }
             DiffuseTerm::Caching(probe) => {

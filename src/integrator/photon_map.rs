@@ -317,12 +317,18 @@ pub const REUSE_FRACTION: f32 = 0.25;
 /// Smallest cosine between the normals of two points that share a caustic estimate.
 const REUSE_MIN_COS: f32 = 0.99;
 
+/// The most caustic estimates a pixel round keeps for each prepass and `k` (the pilot's
+/// samples are traced through up to eight pairs of them).
+const MEMO_EACH: usize = 8;
+
 /// A caustic estimate that later samples of the same pixel round may take.
 #[derive(Clone, Copy)]
 struct Memo {
-    /// The address of the prepass it was made with (the planner's pilot traces each sample
-    /// through four).
+    /// The address of the prepass it was made with and the photons it took (the planner's
+    /// pilot traces each sample through several prepasses, and with fewer photons: see
+    /// [`Prepass::caustic_diffuse`]).
     prepass: usize,
+    k: usize,
     p: Vec3A,
     n: Vec3A,
     irradiance: Vec3A,
@@ -333,7 +339,7 @@ struct Memo {
 /// The estimates of one pixel round: `scope` is its scope's id.
 struct Memos {
     scope: u64,
-    entries: [Memo; 8],
+    entries: [Memo; 8 * MEMO_EACH],
     len: usize,
 }
 
@@ -342,11 +348,12 @@ impl Memos {
         scope: 0,
         entries: [Memo {
             prepass: 0,
+            k: 0,
             p: Vec3A::ZERO,
             n: Vec3A::ZERO,
             irradiance: Vec3A::ZERO,
             reuse_d2: 0.0,
-        }; 8],
+        }; 8 * MEMO_EACH],
         len: 0,
     };
 }
@@ -610,16 +617,18 @@ impl Prepass {
         indirect_only: bool,
         counts: &mut RayCounts,
     ) -> Vec3A {
-        self.estimate(kind, (p, n), indirect_only, true, counts).0
+        self.estimate((kind, self.settings.k), (p, n), indirect_only, true, counts)
+            .0
     }
 
-    /// [`Prepass::irradiance`] at `at` = (point, normal), over the local radii there when
+    /// [`Prepass::irradiance`] from the `k` nearest photons of the `kind` map (without fixed
+    /// radii) at `at` = (point, normal), over the local radii there when
     /// `local` (the eye path's diffuse points; a final-gather ray's end reads the radius the
     /// fields' median shrinks to: gathers average hundreds of such reads, whose noise they
     /// smooth, and a field lookup at each read doubled a gathered frame's time).
     fn estimate(
         &self,
-        kind: MapKind,
+        (kind, k): (MapKind, usize),
         (p, n): (Vec3A, Vec3A),
         indirect_only: bool,
         local: bool,
@@ -646,7 +655,7 @@ impl Prepass {
                 map.within(p, r2, found);
                 r2
             } else {
-                map.knn(p, self.settings.k, max_d2, found)
+                map.knn(p, k, max_d2, found)
             };
             counts.lookups += 1;
             counts.photons_used += found.len() as u64;
@@ -834,19 +843,23 @@ impl Prepass {
 
     /// Returns the caustic map's irradiance estimate at `p` (zero without a caustic map).
     pub fn caustic_irradiance(&self, p: Vec3A, n: Vec3A) -> Vec3A {
-        self.caustic_at(p, n, &mut RayCounts::default())
+        self.caustic_at(p, n, self.settings.k, &mut RayCounts::default())
     }
 
-    /// Returns the caustic map's estimate at an eye path's diffuse point `p` (unit normal `n`),
-    /// or, within an open pixel scope ([`crate::render::scope`]), that of an earlier sample of
-    /// the same round whose point lies within [`REUSE_FRACTION`] of its estimate's radius of `p`
-    /// on a surface facing the same way ([`REUSE_MIN_COS`]). The module doc says why.
-    fn caustic_at(&self, p: Vec3A, n: Vec3A, counts: &mut RayCounts) -> Vec3A {
+    /// Returns the caustic map's estimate from the `k` nearest photons at an eye path's diffuse
+    /// point `p` (unit normal `n`), or, within an open pixel scope ([`crate::render::scope`]),
+    /// that of an earlier sample of the same round with the same `k` whose point lies within
+    /// [`REUSE_FRACTION`] of its estimate's radius of `p` on a surface facing the same way
+    /// ([`REUSE_MIN_COS`]). The module doc says why.
+    fn caustic_at(&self, p: Vec3A, n: Vec3A, k: usize, counts: &mut RayCounts) -> Vec3A {
         let shares = self.settings.share_caustics && !self.fixed_radii && self.caustic.is_some();
         let Some(scope) = crate::render::scope::current().filter(|_| shares) else {
-            return self.irradiance(MapKind::Caustic, p, n, false, counts);
+            return self
+                .estimate((MapKind::Caustic, k), (p, n), false, true, counts)
+                .0;
         };
         let prepass = std::ptr::from_ref(self) as usize;
+        let mine = |e: &Memo| e.prepass == prepass && e.k == k;
         let reused = MEMO.with_borrow_mut(|m| {
             if m.scope != scope {
                 m.scope = scope;
@@ -854,18 +867,22 @@ impl Prepass {
             }
             m.entries[..m.len].iter().find_map(|e| {
                 let near = (e.p - p).length_squared() <= e.reuse_d2 && e.n.dot(n) >= REUSE_MIN_COS;
-                (near && e.prepass == prepass).then_some(e.irradiance)
+                (near && mine(e)).then_some(e.irradiance)
             })
         });
         if let Some(e) = reused {
             counts.reused += 1;
             return e;
         }
-        let (irradiance, r2) = self.estimate(MapKind::Caustic, (p, n), false, true, counts);
+        let (irradiance, r2) = self.estimate((MapKind::Caustic, k), (p, n), false, true, counts);
         MEMO.with_borrow_mut(|m| {
-            if m.scope == scope && m.len < m.entries.len() {
+            // Each estimator keeps as many as a render's one does, whatever else the pilot's
+            // samples are traced through.
+            let held = m.entries[..m.len].iter().filter(|e| mine(e)).count();
+            if m.scope == scope && m.len < m.entries.len() && held < MEMO_EACH {
                 m.entries[m.len] = Memo {
                     prepass,
+                    k,
                     p,
                     n,
                     irradiance,
@@ -899,8 +916,8 @@ impl Prepass {
                 }
             }
         }
-        self.estimate(MapKind::Global, (p, n), false, false, counts)
-            .0
+        let global = (MapKind::Global, self.settings.k);
+        self.estimate(global, (p, n), false, false, counts).0
     }
 
     /// Returns the caustic and indirect light leaving the diffuse lobe of the BSDF at `at`
@@ -933,7 +950,7 @@ impl Prepass {
     ) -> Vec3A {
         let (p, bsdf, state) = (at.p(), at.bsdf(), &at.state);
         let ng = bsdf.ng;
-        let mut e = self.caustic_at(p, ng, counts);
+        let mut e = self.caustic_at(p, ng, self.settings.k, counts);
         let gather_at = GatherAt {
             p,
             ng,
@@ -964,6 +981,16 @@ impl Prepass {
             self.irradiance(MapKind::Global, p, ng, true, counts)
         };
         bsdf.kd * FRAC_1_PI * e
+    }
+
+    /// Returns the caustic light alone leaving the diffuse lobe of the BSDF at `at` towards its
+    /// `wo`, estimated from the `k` nearest caustic photons: the planner's pilot. A `k`-nearest
+    /// estimate from `k' = k·F/F'` photons of a map at effort `F` has the radius of one from
+    /// `k` photons at `F'`, so pairs of its pilot prepasses read with fewer photons show how a
+    /// larger effort's caustic noise spreads over a pixel's samples ([`super::planner`]).
+    pub fn caustic_diffuse(&self, at: &ShadingPoint, k: usize, counts: &mut RayCounts) -> Vec3A {
+        let bsdf = at.bsdf();
+        bsdf.kd * FRAC_1_PI * self.caustic_at(at.p(), bsdf.ng, k, counts)
     }
 
     /// Returns the radiance a final-gather ray (in `media`) brings back: where it lands on a

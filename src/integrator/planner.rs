@@ -10,7 +10,7 @@
 //! diff` and `--noise-target` count it) of
 //!
 //! ```text
-//! E²(s, F) = V_cam(F) · (4/s)^γ  +  V_map · (F₀/F)^β  +  b² · (F₀/F)²  +  b_c²
+//! E²(s, F) = V_cam(F) · (4/s)^γ  +  V_map · (F₀/F)^β  +  V_c(F)  +  b² · (F₀/F)²  +  b_c²
 //! ```
 //!
 //! - `V_cam(F) (4/s)^γ`: the camera pass's Monte Carlo noise (pixel position, shadow rays,
@@ -26,6 +26,11 @@
 //!   footprint (its neighbours then are independent estimates), so `β` lies between 0 and 1
 //!   and is measured (clamped to [0.2, 1]), not assumed: 0.37 for the caustic of `glass_in_water` in
 //!   `docs/accuracy.md`, near 1 for the diffuse box's global map.
+//! - `V_c(F)`: the noise the caustic map's estimates at the eye paths' points make, measured
+//!   at four efforts and joined as powers of the effort ([`CausticNoise`]): on the final scene
+//!   it falls as effort^-0.9 between a thirty-second and an eighth of the photons and as
+//!   effort^-0.36 from an eighth to one, a turn that two efforts cannot see. `V_map` and `β`
+//!   are the rest: the cache's records and what they read.
 //! - `b (F₀/F)`: the density estimates' blur, the bias that the seed-pair column of
 //!   `docs/accuracy.md` shows: proportional to the squared radius, so to `1/F`.
 //! - `b_c`: the irradiance cache's interpolation bias, which its accuracy (the records'
@@ -60,7 +65,15 @@
 //! subtracting what the samples' own noise adds to each squared mean difference:
 //! - `V_cam` at `F₀` and `4F₀` and `γ`: the replicate sets' squared differences (a 2- and a
 //!   4-sample pixel's variance);
-//! - `V_map` at `F₀` and at `4F₀`: half the squared difference of each pair (so `β`);
+//! - `V_map` at `F₀` and at `4F₀`: half the squared difference of each pair, less `V_c` there
+//!   (so `β`);
+//! - `V_c` at `F₀`, at `4F₀` and at about `17F₀` and `33F₀`: the same, of the caustic map's
+//!   estimates alone traced through each pair ([`DiffuseTerm::Caustic`], no shadow rays), the
+//!   larger pair read also with a quarter and a sixteenth of `k` (at least
+//!   [`THINNED_LEAST`]): an estimate from `k' = k·F/F'` photons has the radius `k` photons have
+//!   at `F'`, so its pixels' noise, counted `k'/k` times, is `F'`'s. A pair whose mean is
+//!   lost in its noise (fewer than two standard errors: a caustic few pilot pixels see)
+//!   gives no point;
 //! - the bias change between `F₀` and `4F₀`: the squared difference of the two pairs' means,
 //!   less their noise (so `b`, as `b(F₀) − b(4F₀) = 3b/4`);
 //! - `b_c²`: each sample of the first set traced again through the first pair with the
@@ -233,9 +246,12 @@ pub struct Model {
     /// `γ`: a pixel's variance falls as `spp^-γ` (1 for independent samples; up to 2 where
     /// stratification removes the variation of a smooth signal across the pixel).
     pub gamma: f64,
-    /// `V_map` at the pilot's effort, and `β`.
+    /// `V_map` at the pilot's effort, and `β`: the maps' noise besides the caustic map's
+    /// estimates at the eye paths' points (the cache's records and what they read).
     pub map_var: f64,
     pub beta: f64,
+    /// The caustic map's estimates' part of `V_map`, at the efforts the pilot saw it.
+    pub caustic: CausticNoise,
     /// `b²` at the pilot's effort.
     pub bias2: f64,
     /// `b_c²`: the irradiance cache's interpolation bias, the same at every effort and sample
@@ -273,7 +289,7 @@ impl Model {
         let r = self.pilot_effort / f;
         (
             self.camera_var_at(f) * (4.0 / s as f64).powf(self.gamma),
-            self.map_var * r.powf(self.beta),
+            self.map_var * r.powf(self.beta) + self.caustic.at(f),
             self.bias2 * r * r + self.cache_bias2,
         )
     }
@@ -331,6 +347,117 @@ impl Model {
     /// Returns the expected wall seconds of prepass and camera pass at `s` and `f`.
     pub fn time(&self, s: u32, f: f64) -> f64 {
         self.prepass_time(f) + s as f64 * self.per_spp
+    }
+}
+
+impl fmt::Display for CausticNoise {
+    /// Writes the measured points (nothing without any): `, and the caustic estimates' 7.2e-3
+    /// at x0.031, 2.0e-3 at x0.125`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, (effort, var)) in self.points[..self.len].iter().enumerate() {
+            let lead = if i == 0 {
+                ", and the caustic estimates'"
+            } else {
+                ","
+            };
+            write!(f, "{lead} {var:.2e} at x{effort:.3}")?;
+        }
+        Ok(())
+    }
+}
+
+/// The pilot's pairs of caustic estimates alone ([`DiffuseTerm::Caustic`]): the first prepass
+/// of each pair (with the next), and how many times fewer photons than `k` each estimate takes
+/// (`k/t`, at least [`THINNED_LEAST`]): the two pairs at their own `k`, and the larger pair
+/// thinned to see larger efforts ([`CausticNoise`]).
+const PILOT_CAUSTICS: [(usize, f64); 4] = [(0, 1.0), (2, 1.0), (2, 4.0), (2, 16.0)];
+
+/// The fewest photons a thinned caustic estimate of the pilot takes: fewer make an estimate
+/// whose noise no longer scales as its count's.
+const THINNED_LEAST: usize = 6;
+
+/// Returns the photons a caustic estimate of the pilot takes, `k/t` (at least
+/// [`THINNED_LEAST`], at most `k`).
+fn thinned(k: usize, t: f64) -> usize {
+    ((k as f64 / t).round() as usize).clamp(THINNED_LEAST.min(k), k.max(1))
+}
+
+/// The caustic map's estimates' noise in a pixel (relative variance), measured by the pilot at
+/// up to four efforts, and between and past them interpolated as a power of the effort.
+///
+/// A `k`-nearest estimate's own noise falls as `1/F` only while its radius is capped (it
+/// finds fewer than `k` photons); once it holds its `k` it stops falling, and a pixel's noise
+/// then falls only as the shrinking radius lets the pixel's samples (or the refracted points
+/// of one sample's path) read different photons: on the final scene as effort^-0.4 past an
+/// eighth of its photons, where between a thirty-second and an eighth it falls as effort^-1.1.
+/// A pilot's two efforts cannot see that turn, but an estimate from `k' = k·F/F'` photons of a
+/// map at effort `F` has the radius an estimate from `k` has at effort `F'`, so it spreads
+/// over the pixel's samples as that one does, with `k/k'` times its count noise: the pilot
+/// reads its larger pair with [`PILOT_CAUSTICS`]'s fewer photons and counts each pair's
+/// variance `k'/k` times at effort `F'`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CausticNoise {
+    /// `(effort, relative variance)` by increasing effort, the variance made non-increasing;
+    /// `len` of them are measured.
+    pub points: [(f64, f64); PILOT_CAUSTICS.len()],
+    pub len: usize,
+}
+
+impl CausticNoise {
+    /// Returns the curve through `measured` (`(effort, variance)`, any order).
+    pub fn new(measured: &[(f64, f64)]) -> CausticNoise {
+        let mut c = CausticNoise::default();
+        let mut sorted: Vec<(f64, f64)> = measured
+            .iter()
+            .filter(|(f, v)| *f > 0.0 && f.is_finite() && v.is_finite())
+            .copied()
+            .take(c.points.len())
+            .collect();
+        sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut least = f64::INFINITY;
+        for (i, &(f, v)) in sorted.iter().enumerate() {
+            least = least.min(v.max(0.0));
+            c.points[i] = (f, least);
+        }
+        c.len = sorted.len();
+        c
+    }
+
+    /// Returns the variance measured at effort `f` (zero if none was).
+    fn measured(&self, f: f64) -> f64 {
+        let p = &self.points[..self.len];
+        p.iter()
+            .find(|q| (q.0 / f - 1.0).abs() < 1e-9)
+            .map_or(0.0, |q| q.1)
+    }
+
+    /// Returns the variance at effort `f`: the measured points joined as powers of the
+    /// effort, and before the first and past the last the nearest segment's power clamped to
+    /// `[0.2, 1]` (or `1` with one point).
+    pub fn at(&self, f: f64) -> f64 {
+        let p = &self.points[..self.len];
+        let slope = |a: (f64, f64), b: (f64, f64)| match a.1 > 0.0 && b.1 > 0.0 && b.0 > a.0 {
+            true => (a.1 / b.1).ln() / (b.0 / a.0).ln(),
+            false => 1.0,
+        };
+        let power = |(f0, v): (f64, f64), s: f64| v * (f0 / f).powf(s);
+        match p {
+            [] => 0.0,
+            [one] => power(*one, 1.0),
+            _ if f <= p[0].0 => power(p[0], slope(p[0], p[1]).clamp(0.2, 1.0)),
+            _ if f >= p[p.len() - 1].0 => {
+                let (a, b) = (p[p.len() - 2], p[p.len() - 1]);
+                power(b, slope(a, b).clamp(0.2, 1.0))
+            }
+            _ => {
+                let i = p.iter().position(|q| q.0 > f).unwrap_or(p.len() - 1);
+                let (a, b) = (p[i - 1], p[i]);
+                match b.1 > 0.0 {
+                    true => power(a, slope(a, b)),
+                    false => a.1 * (b.0 - f) / (b.0 - a.0),
+                }
+            }
+        }
     }
 }
 
@@ -457,15 +584,13 @@ impl fmt::Display for Planned {
             ),
             false => format!("camera {c:.4}, maps {m:.4}, bias {b:.4}"),
         };
+        let (v, f0, beta) = (model.map_var, model.pilot_effort, model.beta);
         let maps = match quick {
-            true => format!(
-                " maps {:.2e} at x{:.3}, falling as effort^-{:.2} assumed;",
-                model.map_var, model.pilot_effort, model.beta
-            ),
+            true => format!(" maps {v:.2e} at x{f0:.3}, falling as effort^-{beta:.2} assumed;"),
             false => format!(
-                " maps {:.2e} at x{:.3} falling as effort^-{:.2}, bias {:.2e}, the cache's \
-                 interpolation {:.2e};",
-                model.map_var, model.pilot_effort, model.beta, model.bias2, model.cache_bias2
+                " maps {v:.2e} at x{f0:.3} falling as effort^-{beta:.2}{}, bias {:.2e}, the \
+                 cache's interpolation {:.2e};",
+                model.caustic, model.bias2, model.cache_bias2
             ),
         };
         let growth = match model.points_per_effort > 0.0 {
@@ -737,6 +862,7 @@ fn quick(
         gamma: 1.0,
         map_var: 0.0,
         beta: 1.0,
+        caustic: CausticNoise::default(),
         bias2: 0.0,
         cache_bias2: 0.0,
         pilot_effort: PILOT_EFFORT,
@@ -804,8 +930,7 @@ fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> (f64, f
     let (probe, _, _) = pilot_pixels(
         view,
         settings.seed,
-        std::slice::from_ref(&tracer),
-        &[],
+        &PilotTracers::only(vec![tracer]),
         PIXELS_PROBE,
         &NoProgress,
     );
@@ -813,7 +938,9 @@ fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> (f64, f
     let threads = rayon::current_num_threads().max(1) as f64;
     // The four prepasses, and the cache's bias measured through the first two: their gathers
     // cost about as much again (0.6 to 2.6 times on the scenes of docs/accuracy/budget.md).
-    let tracers = 8.0;
+    // The caustic estimates alone, eight more traces without shadow rays or gathers, cost
+    // what two to four whole ones do (on the showcase and on the final scene).
+    let tracers = if prepass.caustic.is_some() { 11.0 } else { 8.0 };
     let thread_seconds: f64 = probe.iter().map(PixelRun::seconds).sum();
     let per_pixel = thread_seconds / probe.len().max(1) as f64;
     let (w, h) = view.window.size();
@@ -883,7 +1010,8 @@ pub fn fit_samples(
     }
     let (w, h) = view.window.size();
     let side = ((w as f64 * h as f64 * FIT_SHARE).sqrt() as u32).clamp(PILOT_GRID, FIT_GRID);
-    let (all, _, samples) = pilot_pixels(view, seed, tracers, &[], side, &NoProgress);
+    let only = PilotTracers::only(tracers.to_vec());
+    let (all, _, samples) = pilot_pixels(view, seed, &only, side, &NoProgress);
     let thread_seconds: f64 = all.iter().map(PixelRun::seconds).sum();
     let runs = lit_pixels(all.clone());
     // Thread seconds over the threads, not the wall time: the pilot's pixels take a tenth of a
@@ -1389,8 +1517,8 @@ fn stratification(v2: f64, v4: f64) -> f64 {
 #[derive(Clone, Copy, Default)]
 struct PixelRun {
     n: u32,
-    mean: [f64; 5],
-    m2: [f64; 5],
+    mean: [f64; QUANTITIES],
+    m2: [f64; QUANTITIES],
     /// The means of each stratified set ([`PILOT_SETS`]) of the first prepass's value and of
     /// the third's: two replicates of a 2-sample and of a 4-sample pixel.
     sets: [[f64; 4]; 2],
@@ -1406,8 +1534,15 @@ struct PixelRun {
     /// prepass's value less the same with the cache's interpolation error taken out
     /// ([`DiffuseTerm::Unbiased`]), and the thread seconds those traces took.
     unbiased: (u32, [f64; 2]),
-    unbiased_seconds: f64,
+    /// The thread seconds of the traces that only measure: the unbiased ones and the caustic
+    /// map's alone.
+    side_seconds: f64,
 }
+
+/// A pilot sample's quantities: the first prepass's value, the differences of the two pairs
+/// and of their means, the third prepass's value, and the differences of the caustic map's
+/// estimates alone ([`PILOT_CAUSTICS`]).
+const QUANTITIES: usize = 5 + PILOT_CAUSTICS.len();
 
 impl PixelRun {
     /// Returns the thread seconds its samples took through the first tracer.
@@ -1415,7 +1550,7 @@ impl PixelRun {
         self.set_seconds.iter().sum()
     }
 
-    fn add(&mut self, x: [f64; 5]) {
+    fn add(&mut self, x: [f64; QUANTITIES]) {
         self.n += 1;
         for (i, &x) in x.iter().enumerate() {
             let d = x - self.mean[i];
@@ -1521,27 +1656,68 @@ fn pilot_prepasses(
     (prepasses, f0)
 }
 
-/// Returns the pilot's tracers through each of `prepasses`, and through the first two with the
-/// cache's interpolation error taken out where it serves ([`DiffuseTerm::Unbiased`]).
+/// The pilot's tracers: through each of its prepasses; through the first two with the cache's
+/// interpolation error taken out where it serves ([`DiffuseTerm::Unbiased`]); and the
+/// caustic map's estimates alone, pair by pair ([`PILOT_CAUSTICS`]; none without a caustic
+/// map).
+struct PilotTracers<'a> {
+    tracers: Vec<Tracer<'a>>,
+    unbiased: Vec<Tracer<'a>>,
+    caustic: Vec<Tracer<'a>>,
+}
+
+impl<'a> PilotTracers<'a> {
+    /// Returns `tracers` alone, without the pilot's side traces.
+    fn only(tracers: Vec<Tracer<'a>>) -> PilotTracers<'a> {
+        PilotTracers {
+            tracers,
+            unbiased: Vec::new(),
+            caustic: Vec::new(),
+        }
+    }
+}
+
+/// Returns the pilot's tracers through `prepasses` ([`PilotTracers`]).
 fn pilot_tracers<'a>(
     view: View<'a>,
     settings: &Settings,
     prepasses: &'a [Prepass],
-) -> (Vec<Tracer<'a>>, Vec<Tracer<'a>>) {
-    let tracer = |diffuse| Tracer {
+) -> PilotTracers<'a> {
+    let tracer = |diffuse, light_samples| Tracer {
         scene: view.scene,
         camera: view.camera,
-        light_samples: settings.light_samples,
+        light_samples,
         diffuse,
     };
+    let lights = settings.light_samples;
     let tracers = prepasses
         .iter()
-        .map(|p| tracer(DiffuseTerm::Photons(p)))
+        .map(|p| tracer(DiffuseTerm::Photons(p), lights))
         .collect();
     let unbiased = (0..2)
-        .map(|i| tracer(DiffuseTerm::Unbiased(&prepasses[i], 0xCAC4E + i as u64)))
+        .map(|i| {
+            tracer(
+                DiffuseTerm::Unbiased(&prepasses[i], 0xCAC4E + i as u64),
+                lights,
+            )
+        })
         .collect();
-    (tracers, unbiased)
+    // A pair's difference holds its caustic estimates' noise alone: the direct light is the
+    // same through both, so it is not traced.
+    let caustics = prepasses.len() == 4 && prepasses.iter().all(|p| p.caustic.is_some());
+    let caustic = PILOT_CAUSTICS
+        .iter()
+        .filter(|_| caustics)
+        .flat_map(|&(i, t)| {
+            let k = thinned(prepasses[i].settings.k, t);
+            [i, i + 1].map(|i| tracer(DiffuseTerm::Caustic(&prepasses[i], k), 0))
+        })
+        .collect();
+    PilotTracers {
+        tracers,
+        unbiased,
+        caustic,
+    }
 }
 
 /// Runs the pilot of the module doc and returns its model.
@@ -1555,20 +1731,14 @@ fn pilot(
 ) -> (Model, Vec<Prepass>) {
     let (prepasses, f0) = pilot_prepasses(view, photons, request, first, progress);
     let costs = pair_costs(view, photons, request, &prepasses[2..], PILOT_STEP * f0);
-    let (tracers, unbiased) = pilot_tracers(view, settings, &prepasses);
+    let tracers = pilot_tracers(view, settings, &prepasses);
     let start = Instant::now();
-    let (runs, thread_seconds, samples) = pilot_pixels(
-        view,
-        settings.seed,
-        &tracers,
-        &unbiased,
-        PILOT_GRID,
-        progress,
-    );
+    let (runs, thread_seconds, samples) =
+        pilot_pixels(view, settings.seed, &tracers, PILOT_GRID, progress);
     // The wall time of the four tracers alone: the camera pass shares its threads as they did.
-    let unbiased_seconds: f64 = runs.iter().map(|r| r.unbiased_seconds).sum();
-    let wall = start.elapsed().as_secs_f64() * thread_seconds
-        / (thread_seconds + unbiased_seconds).max(1e-12);
+    let side_seconds: f64 = runs.iter().map(|r| r.side_seconds).sum();
+    let wall =
+        start.elapsed().as_secs_f64() * thread_seconds / (thread_seconds + side_seconds).max(1e-12);
     let runs = lit_pixels(runs);
     let n = runs.len().max(1) as f64;
     let mean = runs.iter().map(|r| r.mean[0]).sum::<f64>() / n;
@@ -1590,6 +1760,15 @@ fn pilot(
     let v1 = (avg(&|r| r.mean2(1)) / 2.0 / m2).max(0.0);
     let v2 = (avg(&|r| r.mean2(2)) / 2.0 / m2).max(0.0);
     let db2 = (avg(&|r| r.mean2(3)) / m2 - v1 / 2.0 - v2 / 2.0).max(0.0);
+    let caustic = match tracers.caustic.is_empty() {
+        true => CausticNoise::default(),
+        false => caustic_curve(prepasses[0].settings.k, f0, &|i| {
+            significant(runs.iter().map(|r| r.mean2(5 + i) / 2.0 / m2))
+        }),
+    };
+    // The rest of the maps' noise: the two pairs' less their caustic estimates'.
+    let (c1, c2) = (caustic.measured(f0), caustic.measured(PILOT_STEP * f0));
+    let (v1, v2) = ((v1 - c1).max(0.0), (v2 - c2).max(0.0));
     let beta = if v1 > 0.0 && v2 > 0.0 {
         ((v1 / v2).ln() / PILOT_STEP.ln()).clamp(0.2, 1.0)
     } else {
@@ -1614,6 +1793,7 @@ fn pilot(
         gamma: stratification(a2 + b2, c1 + c2),
         map_var: v1,
         beta,
+        caustic,
         bias2,
         cache_bias2,
         pilot_effort: f0,
@@ -1628,6 +1808,36 @@ fn pilot(
         per_spp: per_sample * w as f64 * h as f64 / threads,
     };
     (model, prepasses)
+}
+
+/// Returns the caustic map's noise the pilot measured: `var(i)`, the relative variance of
+/// [`PILOT_CAUSTICS`]'s pair `i` (the first pair at `f0`, the second at [`PILOT_STEP`]` f0`;
+/// `None` when lost in its noise), counted `k'/k` times at the effort where the frame's `k`
+/// photons have the radius its `k'` have ([`CausticNoise`]).
+fn caustic_curve(k: usize, f0: f64, var: &dyn Fn(usize) -> Option<f64>) -> CausticNoise {
+    let points: Vec<(f64, f64)> = PILOT_CAUSTICS
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &(pair, t))| {
+            let f = if pair == 0 { f0 } else { PILOT_STEP * f0 };
+            let kt = thinned(k, t) as f64 / k.max(1) as f64;
+            var(i).map(|v| (f / kt, v * kt))
+        })
+        .collect();
+    CausticNoise::new(&points)
+}
+
+/// Returns the mean of `values` (one a pixel) when it lies more than two standard errors above
+/// zero, else `None`: a caustic that few of the pilot's pixels see is measured by few, and a
+/// mean lost in its noise says nothing about how the noise falls.
+fn significant(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let (mut n, mut sum, mut sum2) = (0.0, 0.0, 0.0);
+    for v in values {
+        (n, sum, sum2) = (n + 1.0, sum + v, sum2 + v * v);
+    }
+    let mean = sum / f64::max(n, 1.0);
+    let var = (sum2 / f64::max(n, 1.0) - mean * mean).max(0.0);
+    (n > 1.0 && mean > 2.0 * (var / (n - 1.0)).sqrt()).then_some(mean)
 }
 
 /// What a pair of pilot prepasses at effort `f` measured of the prepass's cost ([`Model`]'s
@@ -1774,12 +1984,12 @@ fn pilot_grid(view: View, side: u32) -> (Vec<(u32, u32)>, u32) {
 fn pilot_pixels(
     view: View,
     seed: u64,
-    tracers: &[Tracer],
-    unbiased: &[Tracer],
+    all: &PilotTracers,
     side: u32,
     progress: &dyn Progress,
 ) -> (Vec<PixelRun>, f64, u64) {
     use rayon::prelude::*;
+    let (tracers, unbiased, caustic) = (&all.tracers, &all.unbiased, &all.caustic);
     let (grid, cols) = pilot_grid(view, side);
     let rows = grid.len() as u32 / cols.max(1);
     progress.start("planning: pilot pixels", rows as u64);
@@ -1810,6 +2020,7 @@ fn pilot_pixels(
                         let start = Instant::now();
                         // The cache's bias from the first set's samples.
                         let before = (set == 0 && !unbiased.is_empty()).then(|| rng.clone());
+                        let caustic_rng = rng.clone();
                         let (values, first) =
                             trace_all(tracers, &ray, share, &mut rng, &mut counts);
                         run.light |= crate::render::scope::take_light_seen();
@@ -1818,7 +2029,7 @@ fn pilot_pixels(
                             let start = Instant::now();
                             let (u, _) = trace_all(unbiased, &ray, share, &mut r, &mut counts);
                             crate::render::scope::take_light_seen();
-                            run.unbiased_seconds += start.elapsed().as_secs_f64();
+                            run.side_seconds += start.elapsed().as_secs_f64();
                             run.unbiased.0 += 1;
                             for (i, u) in u.iter().enumerate().take(2) {
                                 run.unbiased.1[i] += ((values[i] - *u).element_sum() / 3.0) as f64;
@@ -1833,11 +2044,22 @@ fn pilot_pixels(
                             .iter()
                             .map(|v| (v.element_sum() / 3.0) as f64)
                             .collect();
-                        let q = match l[..] {
+                        let mut q = [0.0; QUANTITIES];
+                        q[..5].copy_from_slice(&match l[..] {
                             [a, b, c, d] => [a, a - b, c - d, (a + b - c - d) / 2.0, c],
                             [a, b] => [a, a - b, 0.0, 0.0, b],
                             _ => [l[0], 0.0, 0.0, 0.0, 0.0],
-                        };
+                        });
+                        if !caustic.is_empty() {
+                            let start = Instant::now();
+                            let mut r = caustic_rng;
+                            let (c, _) = trace_all(caustic, &ray, share, &mut r, &mut counts);
+                            crate::render::scope::take_light_seen();
+                            run.side_seconds += start.elapsed().as_secs_f64();
+                            for (q, pair) in q[5..].iter_mut().zip(c.chunks_exact(2)) {
+                                *q = ((pair[0] - pair[1]).element_sum() / 3.0) as f64;
+                            }
+                        }
                         run.add(q);
                         run.sets[0][set] += q[0] / size as f64;
                         run.sets[1][set] += q[4] / size as f64;
@@ -1872,6 +2094,7 @@ mod tests {
             // 0.0025/F, from a pilot whose own prepass (at 4F₀ = 0.004) is too coarse to take.
             map_var: 2.5,
             beta: 1.0,
+            caustic: CausticNoise::default(),
             bias2: 0.0,
             cache_bias2: 0.0,
             pilot_effort: 0.001,
@@ -2280,5 +2503,147 @@ mod tests {
         let c = decide(m, &r, MAX_EFFORT, &Settings::default(), 0.5);
         assert_eq!((c.why, c.effort, c.spp), (Why::LeastError, 1.0, 4));
         assert_eq!(reused_effort(&m, &r), 1.0);
+    }
+
+    /// A glass ball's caustic on a floor, spread over most of the image by a light to the side.
+    const CAUSTIC_SCENE: &[u8] = b"
+        white = gr.material({0.8, 0.8, 0.8}, {0, 0, 0}, 0)
+        glass = gr.material({0, 0, 0}, {0, 0, 0}, 0, 1, 1.5)
+        root = gr.node('root')
+        floor = gr.cube('floor'); floor:set_material(white); floor:scale(4, 0.1, 4)
+        floor:translate(-2, -1.1, -2)
+        ball = gr.sphere('ball'); ball:set_material(glass); ball:scale(0.4, 0.4, 0.4)
+        ball:translate(0, -0.1, 0)
+        root:add_child(floor) root:add_child(ball)
+        gr.render(root, 'c.png', 48, 48, {-0.8, 2.5, 2.5}, {0, -3.5, -2.5}, {0, 1, 0}, 12,
+          {0, 0, 0}, {gr.area_light({2.5, 3, 0}, {0.6, 0.6, 0.6}, {1, 0, 0}, nil, 100000,
+            {0.1, 0, 0}, {0, 0, 0.1})})";
+
+    /// Returns the pilot's pixel variances of caustic estimates alone on [`CAUSTIC_SCENE`]:
+    /// pairs of maps (seeds from `seed`) of `photons` caustic photons at efforts 1 and 4, read
+    /// with `k` = 48 (effort 1), 48 (effort 4) and 12 (effort 1).
+    fn caustic_pairs(seed: u64, scale: f64) -> [f64; 3] {
+        let (scene, camera) = crate::lua::test_scene(CAUSTIC_SCENE);
+        let (w, h) = camera.size();
+        let view = View {
+            scene: &scene,
+            camera: &camera,
+            window: crate::film::Window::full(w, h),
+        };
+        let map = |i: u64, photon_scale| {
+            let gi = GiSettings {
+                seed: seed * 8 + i,
+                photon_scale: photon_scale * scale,
+                k: 48,
+                indirect: super::super::photon_map::Indirect::Direct,
+                precompute: false,
+                ..GiSettings::default()
+            };
+            Prepass::build_with(&scene, &gi, &NoProgress)
+        };
+        let maps = [map(0, 1.0), map(1, 1.0), map(2, 4.0), map(3, 4.0)];
+        let tracer = |diffuse, light_samples| Tracer {
+            scene: &scene,
+            camera: &camera,
+            light_samples,
+            diffuse,
+        };
+        let caustic = [(0, 48), (1, 48), (2, 48), (3, 48), (0, 12), (1, 12)]
+            .map(|(i, k)| tracer(DiffuseTerm::Caustic(&maps[i], k), 0));
+        let tracers = PilotTracers {
+            tracers: vec![tracer(DiffuseTerm::Ambient(Vec3A::ZERO), 1)],
+            unbiased: Vec::new(),
+            caustic: caustic.to_vec(),
+        };
+        let (runs, _, _) = pilot_pixels(view, seed, &tracers, PILOT_GRID, &NoProgress);
+        let n = runs.len() as f64;
+        [5, 6, 7].map(|i| runs.iter().map(|r| r.mean2(i) / 2.0).sum::<f64>() / n)
+    }
+
+    /// A caustic estimate from `k/4` photons reads as far as one from `k` photons of a map with
+    /// four times as many: its pixels' noise, counted a quarter, is the larger map's. Brute
+    /// force on a glass ball's caustic at two photon counts, four seeds each: the thinned
+    /// pair's mean agrees with the pair at four times the photons within 20% (single seeds
+    /// 0.85 to 1.22, means 1.00 and 1.07), where the `1/F` that the pilot's two efforts would
+    /// assume is 1.3 and 2.2 times too optimistic (the pair at the same photons is 1.3 and 2.2
+    /// times the larger, not 4).
+    #[test]
+    fn a_thinned_caustic_pair_measures_a_larger_effort() {
+        for scale in [0.05, 0.25] {
+            let (mut thinned, mut fall) = (0.0, 0.0);
+            for seed in 1..5 {
+                let [same, larger, thin] = caustic_pairs(seed, scale);
+                assert!(larger > 0.0, "{scale} {seed}");
+                thinned += thin * 12.0 / 48.0 / larger / 4.0;
+                fall += same / larger / 4.0;
+            }
+            assert!((0.8..1.25).contains(&thinned), "{scale}: {thinned}");
+            assert!(fall < 3.0, "{scale}: {fall}");
+        }
+    }
+
+    /// The caustic curve joins its points as powers of the effort, extends the nearest
+    /// segment's power (clamped to [0.2, 1]) beyond them, never rises with effort, and falls
+    /// linearly to a point measured at zero. Closed forms.
+    #[test]
+    fn the_caustic_curve_joins_its_points_as_powers() {
+        let c = CausticNoise::new(&[(16.0, 0.005), (1.0, 0.04), (4.0, 0.01)]);
+        assert_eq!(c.len, 3);
+        let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-12;
+        assert!(close(c.at(1.0), 0.04) && close(c.at(16.0), 0.005));
+        assert!(close(c.at(2.0), 0.02), "{}", c.at(2.0));
+        assert!(close(c.at(8.0), 0.01 / 2f64.sqrt()), "{}", c.at(8.0));
+        assert!(close(c.at(64.0), 0.0025), "{}", c.at(64.0));
+        assert!(close(c.at(0.25), 0.16), "{}", c.at(0.25));
+        // A slope steeper than 1/F or flatter than 0.2 is clamped beyond the points.
+        let steep = CausticNoise::new(&[(1.0, 0.16), (2.0, 0.01)]);
+        assert!(close(steep.at(4.0), 0.005), "{}", steep.at(4.0));
+        let flat = CausticNoise::new(&[(1.0, 0.01), (2.0, 0.0099)]);
+        assert!(close(flat.at(64.0), 0.0099 * 32f64.powf(-0.2)));
+        // Noise that rose with effort is held at the smaller effort's.
+        let rising = CausticNoise::new(&[(1.0, 0.01), (4.0, 0.02)]);
+        assert_eq!(rising.points[1], (4.0, 0.01));
+        let zero = CausticNoise::new(&[(1.0, 0.01), (4.0, 0.0)]);
+        assert!(close(zero.at(2.0), 0.01 * 2.0 / 3.0) && zero.at(8.0) == 0.0);
+        assert_eq!(CausticNoise::default().at(3.0), 0.0);
+        assert!(close(CausticNoise::new(&[(2.0, 0.01)]).at(4.0), 0.005));
+        assert_eq!(
+            c.to_string(),
+            ", and the caustic estimates' 4.00e-2 at x1.000, 1.00e-2 at \
+            x4.000, 5.00e-3 at x16.000"
+        );
+    }
+
+    /// The pilot's pairs become points at the efforts whose radius their `k'` has, counted
+    /// `k'/k` times; a pair lost in its noise gives no point. Closed forms.
+    #[test]
+    fn thinned_pairs_count_at_the_effort_of_their_radius() {
+        assert_eq!(thinned(50, 1.0), 50);
+        assert_eq!(thinned(50, 4.0), 13);
+        assert_eq!(thinned(50, 16.0), THINNED_LEAST);
+        assert_eq!(thinned(4, 16.0), 4);
+        let means = [Some(0.04), None, Some(0.02), Some(0.01)];
+        let c = caustic_curve(50, 0.25, &|i| means[i]);
+        let k = [50.0, 50.0, 13.0, 6.0];
+        assert_eq!(c.len, 3);
+        assert_eq!(c.points[0], (0.25, 0.04));
+        let close =
+            |a: (f64, f64), b: (f64, f64)| (a.0 / b.0 - 1.0).abs() + (a.1 / b.1 - 1.0).abs();
+        assert!(close(c.points[1], (50.0 / k[2], 0.02 * k[2] / 50.0)) < 1e-12);
+        assert!(close(c.points[2], (50.0 / k[3], 0.01 * k[3] / 50.0)) < 1e-12);
+        assert_eq!(c.measured(1.0), 0.0);
+        assert_eq!(c.measured(0.25), 0.04);
+    }
+
+    /// A mean counts only when it lies more than two standard errors above zero.
+    #[test]
+    fn only_significant_means_count() {
+        assert_eq!(significant([1.0, 1.2, 0.8].into_iter()), Some(1.0));
+        assert_eq!(significant([1.0, -1.1, 0.2, -0.1].into_iter()), None);
+        // Nine pixels in ten see nothing, one sees it all: 2.6 standard errors, then 1.8.
+        let rare = |n: usize| (0..n).map(|i| if i % 10 == 0 { 10.0 } else { 0.0 });
+        assert!(significant(rare(60)).is_some());
+        assert!(significant(rare(30)).is_none());
+        assert_eq!(significant(std::iter::empty()), None);
     }
 }

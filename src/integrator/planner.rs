@@ -727,9 +727,10 @@ pub fn choose(
     let mut first = pilot_prepass(view, photons, request, &grid, 0, PILOT_EFFORT);
     progress.advance(1);
     if matches!(request.goal, Goal::Time(_)) {
-        (first.pixels, first.per_spp) = pixels_seconds(view, settings, &first.prepass);
+        (first.pixels, first.caustic_pixels, first.per_spp) =
+            pixels_seconds(view, settings, &first.prepass);
     }
-    let short = quick(view, photons, request, &first, started, progress);
+    let short = quick(view, photons, request, &mut first, started, progress);
     if let Some((mut planned, prepass)) = short {
         planned.spp = given_spp(settings);
         return Chosen {
@@ -804,7 +805,8 @@ const QUICK_BETA: f64 = 0.63;
 /// phases' times the rest of the pilot (one more prepass at `F₀` = [`PILOT_EFFORT`], two at
 /// `4F₀`, whose photons take 4 times as long and caches twice, with `√4` times the rays)
 /// would take `9p + 5c` seconds, `p` the photons' and `c` the rest, and its pixels what
-/// [`pixels_seconds`] times; a pilot above [`PILOT_MOST`] of the time left is skipped. The plan then is the frame's own: effort 1,
+/// [`pixels_seconds`] times; a pilot above [`PILOT_MOST`] of the time left goes without its
+/// caustic map's traces, and one above it without them is skipped. The plan then is the frame's own: effort 1,
 /// scaled down so that the photons take at most [`QUICK_PHOTONS`] of the time left (their
 /// time per unit effort extrapolated from `first` in proportion, which overestimates it:
 /// part of a pass's time is fixed), and the cache's rays cut so that it takes at most
@@ -815,7 +817,7 @@ fn quick(
     view: View,
     photons: &GiSettings,
     request: &Request,
-    first: &Timed,
+    first: &mut Timed,
     started: Instant,
     progress: &dyn Progress,
 ) -> Option<(Planned, Prepass)> {
@@ -830,7 +832,8 @@ fn quick(
     let pilot = pilot_rest(photon_seconds, rest, request.fixed_photons) + first.pixels;
     let decided = started.elapsed().as_secs_f64();
     let left = budget - decided;
-    if pilot <= PILOT_MOST * left {
+    if let Some(caustics) = pilot_fits(pilot, first.caustic_pixels, left) {
+        first.caustic_traces = caustics;
         return None;
     }
     let per_effort = photon_seconds / PILOT_EFFORT;
@@ -912,15 +915,24 @@ fn quick_cache(left: f64, per_spp: f64) -> f64 {
     (QUICK_CACHE * left).min((left - QUICK_SPP * per_spp) / PREPASS_MARGIN)
 }
 
+/// Returns whether a pilot of `seconds`, and `caustic` more with its caustic map's traces, is
+/// taken with `left` seconds left: `Some(true)` with them, `Some(false)` without them (it then
+/// measures what it did before them), `None` not at all (above [`PILOT_MOST`] of `left`).
+fn pilot_fits(seconds: f64, caustic: f64, left: f64) -> Option<bool> {
+    let most = PILOT_MOST * left;
+    (seconds <= most).then_some(seconds + caustic <= most)
+}
+
 /// The side of the grid of pixels [`pixels_seconds`] times.
 const PIXELS_PROBE: u32 = 4;
 
 /// Returns the wall seconds the pilot's pixels are expected to take (their samples through
-/// four prepasses like `prepass`), from [`PIXELS_PROBE`]² of them traced through it once, and
-/// the wall seconds of one sample of every pixel of the window they measure. Where the
+/// four prepasses like `prepass`) and how many more its caustic map's traces add, from
+/// [`PIXELS_PROBE`]² of them traced through it once, and the wall seconds of one sample of
+/// every pixel of the window they measure. Where the
 /// prepasses are cheap, the pixels are most of a pilot: on a box of 40×40 pixels with a
 /// thousandth of its photons, 0.15 s of a 0.02 s budget.
-fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> (f64, f64) {
+fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> (f64, f64, f64) {
     let tracer = Tracer {
         scene: view.scene,
         camera: view.camera,
@@ -940,13 +952,15 @@ fn pixels_seconds(view: View, settings: &Settings, prepass: &Prepass) -> (f64, f
     // cost about as much again (0.6 to 2.6 times on the scenes of docs/accuracy/budget.md).
     // The caustic estimates alone, eight more traces without shadow rays or gathers, cost
     // what two to four whole ones do (on the showcase and on the final scene).
-    let tracers = if prepass.caustic.is_some() { 11.0 } else { 8.0 };
+    let (tracers, caustic) = (8.0, if prepass.caustic.is_some() { 3.0 } else { 0.0 });
     let thread_seconds: f64 = probe.iter().map(PixelRun::seconds).sum();
     let per_pixel = thread_seconds / probe.len().max(1) as f64;
     let (w, h) = view.window.size();
     let per_sample = per_pixel / PILOT_SETS.iter().sum::<u32>() as f64;
+    let pixels = per_pixel * pilot.len() as f64 / threads;
     (
-        per_pixel * pilot.len() as f64 * tracers / threads,
+        pixels * tracers,
+        pixels * caustic,
         per_sample * w as f64 * h as f64 / threads,
     )
 }
@@ -1597,9 +1611,13 @@ impl PixelRun {
 struct Timed {
     prepass: Prepass,
     seconds: f64,
-    /// The wall seconds the pilot's pixels are expected to take ([`pixels_seconds`]; zero
-    /// until measured).
+    /// The wall seconds the pilot's pixels are expected to take, and how many more its caustic
+    /// estimates alone add ([`pixels_seconds`]; zero until measured).
     pixels: f64,
+    caustic_pixels: f64,
+    /// Whether the pilot traces the caustic map's estimates alone ([`quick`] drops them when
+    /// only they would make the pilot too long).
+    caustic_traces: bool,
     /// The wall seconds of one sample of every pixel through it ([`pixels_seconds`]; zero
     /// until measured).
     per_spp: f64,
@@ -1627,6 +1645,8 @@ fn pilot_prepass(
         prepass,
         seconds: start.elapsed().as_secs_f64(),
         pixels: 0.0,
+        caustic_pixels: 0.0,
+        caustic_traces: true,
         per_spp: 0.0,
     }
 }
@@ -1677,11 +1697,13 @@ impl<'a> PilotTracers<'a> {
     }
 }
 
-/// Returns the pilot's tracers through `prepasses` ([`PilotTracers`]).
+/// Returns the pilot's tracers through `prepasses` ([`PilotTracers`]), the caustic map's
+/// alone only with `caustics`.
 fn pilot_tracers<'a>(
     view: View<'a>,
     settings: &Settings,
     prepasses: &'a [Prepass],
+    caustics: bool,
 ) -> PilotTracers<'a> {
     let tracer = |diffuse, light_samples| Tracer {
         scene: view.scene,
@@ -1704,7 +1726,8 @@ fn pilot_tracers<'a>(
         .collect();
     // A pair's difference holds its caustic estimates' noise alone: the direct light is the
     // same through both, so it is not traced.
-    let caustics = prepasses.len() == 4 && prepasses.iter().all(|p| p.caustic.is_some());
+    let caustics =
+        caustics && prepasses.len() == 4 && prepasses.iter().all(|p| p.caustic.is_some());
     let caustic = PILOT_CAUSTICS
         .iter()
         .filter(|_| caustics)
@@ -1729,9 +1752,10 @@ fn pilot(
     first: Timed,
     progress: &dyn Progress,
 ) -> (Model, Vec<Prepass>) {
+    let caustics = first.caustic_traces;
     let (prepasses, f0) = pilot_prepasses(view, photons, request, first, progress);
     let costs = pair_costs(view, photons, request, &prepasses[2..], PILOT_STEP * f0);
-    let tracers = pilot_tracers(view, settings, &prepasses);
+    let tracers = pilot_tracers(view, settings, &prepasses, caustics);
     let start = Instant::now();
     let (runs, thread_seconds, samples) =
         pilot_pixels(view, settings.seed, &tracers, PILOT_GRID, progress);
@@ -2436,6 +2460,11 @@ mod tests {
         assert!(rest > PILOT_MOST * 2.5 * (1.0 - RESERVE));
         assert!(rest <= PILOT_MOST * 10.0 * (1.0 - RESERVE));
         const { assert!(0.60 <= PILOT_MOST * 2.3) };
+        // Its caustic traces, 3/8 of its pixels' 0.27 s, still fit; a pilot they would put
+        // over goes without them.
+        assert_eq!(pilot_fits(0.60, 0.10, 2.3), Some(true));
+        assert_eq!(pilot_fits(0.78, 0.10, 2.3), Some(false));
+        assert_eq!(pilot_fits(0.85, 0.0, 2.3), None);
     }
 
     /// Without a pilot the cache takes its share of the time left, less what the camera's

@@ -99,7 +99,9 @@
 //! `docs/accuracy/budget.md` has the figures.
 //!
 //! # A budget too short for a pilot
-//! The pilot's first prepass is timed before the rest is made. When the rest would take more
+//! The pilot's first prepass is timed before the rest is made. When only its caustic traces
+//! would take it above [`PILOT_MOST`] of the time left, it goes without them (`V_c` is then
+//! part of `V_map`, as before they were measured). When the rest would take more
 //! than [`PILOT_MOST`] of the time left, no plan it finds can win back what it costs: on the
 //! final scene at 256² with 2.5 s, a pilot of 1.2 s left a plan of 0.102 where the defaults,
 //! their samples fitted to the time, made 0.087. The planner then makes the frame's own

@@ -1839,8 +1839,17 @@ fn pilot(
 /// Returns the caustic map's noise the pilot measured: `var(i)`, the relative variance of
 /// [`PILOT_CAUSTICS`]'s pair `i` (the first pair at `f0`, the second at [`PILOT_STEP`]` f0`;
 /// `None` when lost in its noise), counted `k'/k` times at the effort where the frame's `k`
-/// photons have the radius its `k'` have ([`CausticNoise`]).
+/// photons have the radius its `k'` have ([`CausticNoise`]). Without both pairs at `k` (the
+/// part of the two pairs' whole noise that is the caustic's) no curve: the whole noise is then
+/// the rest, as before the caustic was measured apart.
 fn caustic_curve(k: usize, f0: f64, var: &dyn Fn(usize) -> Option<f64>) -> CausticNoise {
+    let anchored = PILOT_CAUSTICS
+        .iter()
+        .enumerate()
+        .all(|(i, &(_, t))| t > 1.0 || var(i).is_some());
+    if !anchored {
+        return CausticNoise::default();
+    }
     let points: Vec<(f64, f64)> = PILOT_CAUSTICS
         .iter()
         .enumerate()
@@ -2646,24 +2655,27 @@ mod tests {
     }
 
     /// The pilot's pairs become points at the efforts whose radius their `k'` has, counted
-    /// `k'/k` times; a pair lost in its noise gives no point. Closed forms.
+    /// `k'/k` times; a thinned pair lost in its noise gives no point, and a pair at `k` lost in
+    /// its noise no curve. Closed forms.
     #[test]
     fn thinned_pairs_count_at_the_effort_of_their_radius() {
         assert_eq!(thinned(50, 1.0), 50);
         assert_eq!(thinned(50, 4.0), 13);
         assert_eq!(thinned(50, 16.0), THINNED_LEAST);
         assert_eq!(thinned(4, 16.0), 4);
-        let means = [Some(0.04), None, Some(0.02), Some(0.01)];
+        let means = [Some(0.04), Some(0.03), None, Some(0.01)];
         let c = caustic_curve(50, 0.25, &|i| means[i]);
         let k = [50.0, 50.0, 13.0, 6.0];
         assert_eq!(c.len, 3);
-        assert_eq!(c.points[0], (0.25, 0.04));
+        assert_eq!(c.points[..2], [(0.25, 0.04), (1.0, 0.03)]);
         let close =
             |a: (f64, f64), b: (f64, f64)| (a.0 / b.0 - 1.0).abs() + (a.1 / b.1 - 1.0).abs();
-        assert!(close(c.points[1], (50.0 / k[2], 0.02 * k[2] / 50.0)) < 1e-12);
         assert!(close(c.points[2], (50.0 / k[3], 0.01 * k[3] / 50.0)) < 1e-12);
-        assert_eq!(c.measured(1.0), 0.0);
-        assert_eq!(c.measured(0.25), 0.04);
+        assert_eq!(c.measured(1.0), 0.03);
+        assert_eq!(c.measured(0.5), 0.0);
+        // Without either pair at `k`, no curve: the rest holds the caustic's noise.
+        let unanchored = [Some(0.04), None, Some(0.02), Some(0.01)];
+        assert_eq!(caustic_curve(50, 0.25, &|i| unanchored[i]).len, 0);
     }
 
     /// A mean counts only when it lies more than two standard errors above zero.

@@ -791,8 +791,10 @@ const QUICK_CACHE: f64 = 0.6;
 /// The samples a pixel the camera keeps without a pilot, whatever the cache's share: below
 /// 2 a pixel has no two half-buffers for adaptive rounds, and the final scene at 256² with
 /// 2.5 s, whose cache took up to 18% more than its share, measured 0.200 at 1 sample a pixel
-/// against 0.085 at 2 and rounds (`docs/accuracy/budget.md`).
-const QUICK_SPP: f64 = 2.0;
+/// against 0.085 at 2 and rounds (`docs/accuracy/budget.md`). Keeping 2 left it 1 in two
+/// runs of seven: what the fitting of the samples and the machine's noise take comes out of
+/// the camera's time too, so it keeps 3, and the fit gets 2 where a sample's worth is lost.
+const QUICK_SPP: f64 = 3.0;
 /// The maps' noise is taken to fall as `effort^-QUICK_BETA` where no pilot measured it
 /// ([`fit_samples`]): the value that puts the maps' variance at the geometric middle of what
 /// `β` = 0.2 and `β` = 1, the ends of the pilot's range, would make of the same difference, at
@@ -2480,12 +2482,12 @@ mod tests {
 
     /// Without a pilot the cache takes its share of the time left, less what the camera's
     /// [`QUICK_SPP`] samples need should the cache overrun by [`PREPASS_MARGIN`]: on the final
-    /// scene at 256² with 2.5 s (1.6 s left after the photons, 0.23 s a sample), 0.88 s where
+    /// scene at 256² with 2.5 s (1.6 s left after the photons, 0.23 s a sample), 0.70 s where
     /// its share is 0.96 s; on the glass in water (0.02 s a sample) its share.
     #[test]
-    fn without_a_pilot_the_camera_keeps_two_samples() {
+    fn without_a_pilot_the_camera_keeps_its_samples() {
         let cache = quick_cache(1.6, 0.23);
-        assert!((cache - (1.6 - 0.46) / PREPASS_MARGIN).abs() < 1e-12);
+        assert!((cache - (1.6 - 0.69) / PREPASS_MARGIN).abs() < 1e-12);
         assert!(1.6 - PREPASS_MARGIN * cache >= QUICK_SPP * 0.23 - 1e-12);
         assert!((quick_cache(1.6, 0.02) - QUICK_CACHE * 1.6).abs() < 1e-12);
     }

@@ -390,8 +390,9 @@ fn thinned(k: usize, t: f64) -> usize {
 /// A `k`-nearest estimate's own noise falls as `1/F` only while its radius is capped (it
 /// finds fewer than `k` photons); once it holds its `k` it stops falling, and a pixel's noise
 /// then falls only as the shrinking radius lets the pixel's samples (or the refracted points
-/// of one sample's path) read different photons: on the final scene as effort^-0.4 past an
-/// eighth of its photons, where between a thirty-second and an eighth it falls as effort^-1.1.
+/// of one sample's path) read different photons: on the final scene as effort^-0.36 from an
+/// eighth of its photons to one, where between a thirty-second and an eighth it falls as
+/// effort^-0.9.
 /// A pilot's two efforts cannot see that turn, but an estimate from `k' = k·F/F'` photons of a
 /// map at effort `F` has the radius an estimate from `k` has at effort `F'`, so it spreads
 /// over the pixel's samples as that one does, with `k/k'` times its count noise: the pilot
@@ -425,12 +426,14 @@ impl CausticNoise {
         c
     }
 
-    /// Returns the variance measured at effort `f` (zero if none was).
-    fn measured(&self, f: f64) -> f64 {
-        let p = &self.points[..self.len];
-        p.iter()
-            .find(|q| (q.0 / f - 1.0).abs() < 1e-9)
-            .map_or(0.0, |q| q.1)
+    /// Returns the variances of the pilot's two pairs at `k` (at `F₀` and `4F₀`, its two
+    /// smallest efforts: [`caustic_curve`] makes a curve only with both), or zeros without a
+    /// curve.
+    fn anchors(&self) -> (f64, f64) {
+        match self.len >= 2 {
+            true => (self.points[0].1, self.points[1].1),
+            false => (0.0, 0.0),
+        }
     }
 
     /// Returns the variance at effort `f`: the measured points joined as powers of the
@@ -1790,12 +1793,15 @@ fn pilot(
     let db2 = (avg(&|r| r.mean2(3)) / m2 - v1 / 2.0 - v2 / 2.0).max(0.0);
     let caustic = match tracers.caustic.is_empty() {
         true => CausticNoise::default(),
-        false => caustic_curve(prepasses[0].settings.k, f0, &|i| {
-            significant(runs.iter().map(|r| r.mean2(5 + i) / 2.0 / m2))
-        }),
+        false => {
+            let vars: Vec<Option<f64>> = (0..PILOT_CAUSTICS.len())
+                .map(|i| significant(runs.iter().map(|r| r.mean2(5 + i) / 2.0 / m2)))
+                .collect();
+            caustic_curve(prepasses[0].settings.k, f0, &vars)
+        }
     };
     // The rest of the maps' noise: the two pairs' less their caustic estimates'.
-    let (c1, c2) = (caustic.measured(f0), caustic.measured(PILOT_STEP * f0));
+    let (c1, c2) = caustic.anchors();
     let (v1, v2) = ((v1 - c1).max(0.0), (v2 - c2).max(0.0));
     let beta = if v1 > 0.0 && v2 > 0.0 {
         ((v1 / v2).ln() / PILOT_STEP.ln()).clamp(0.2, 1.0)
@@ -1838,27 +1844,22 @@ fn pilot(
     (model, prepasses)
 }
 
-/// Returns the caustic map's noise the pilot measured: `var(i)`, the relative variance of
+/// Returns the caustic map's noise the pilot measured: `vars[i]`, the relative variance of
 /// [`PILOT_CAUSTICS`]'s pair `i` (the first pair at `f0`, the second at [`PILOT_STEP`]` f0`;
 /// `None` when lost in its noise), counted `k'/k` times at the effort where the frame's `k`
 /// photons have the radius its `k'` have ([`CausticNoise`]). Without both pairs at `k` (the
 /// part of the two pairs' whole noise that is the caustic's) no curve: the whole noise is then
 /// the rest, as before the caustic was measured apart.
-fn caustic_curve(k: usize, f0: f64, var: &dyn Fn(usize) -> Option<f64>) -> CausticNoise {
-    let anchored = PILOT_CAUSTICS
-        .iter()
-        .enumerate()
-        .all(|(i, &(_, t))| t > 1.0 || var(i).is_some());
-    if !anchored {
+fn caustic_curve(k: usize, f0: f64, vars: &[Option<f64>]) -> CausticNoise {
+    let pairs = PILOT_CAUSTICS.iter().zip(vars);
+    if !pairs.clone().all(|(&(_, t), v)| t > 1.0 || v.is_some()) {
         return CausticNoise::default();
     }
-    let points: Vec<(f64, f64)> = PILOT_CAUSTICS
-        .iter()
-        .enumerate()
-        .filter_map(|(i, &(pair, t))| {
+    let points: Vec<(f64, f64)> = pairs
+        .filter_map(|(&(pair, t), v)| {
             let f = if pair == 0 { f0 } else { PILOT_STEP * f0 };
             let kt = thinned(k, t) as f64 / k.max(1) as f64;
-            var(i).map(|v| (f / kt, v * kt))
+            v.map(|v| (f / kt, v * kt))
         })
         .collect();
     CausticNoise::new(&points)
@@ -2666,18 +2667,18 @@ mod tests {
         assert_eq!(thinned(50, 16.0), THINNED_LEAST);
         assert_eq!(thinned(4, 16.0), 4);
         let means = [Some(0.04), Some(0.03), None, Some(0.01)];
-        let c = caustic_curve(50, 0.25, &|i| means[i]);
+        let c = caustic_curve(50, 0.25, &means);
         let k = [50.0, 50.0, 13.0, 6.0];
         assert_eq!(c.len, 3);
         assert_eq!(c.points[..2], [(0.25, 0.04), (1.0, 0.03)]);
         let close =
             |a: (f64, f64), b: (f64, f64)| (a.0 / b.0 - 1.0).abs() + (a.1 / b.1 - 1.0).abs();
         assert!(close(c.points[2], (50.0 / k[3], 0.01 * k[3] / 50.0)) < 1e-12);
-        assert_eq!(c.measured(1.0), 0.03);
-        assert_eq!(c.measured(0.5), 0.0);
+        assert_eq!(c.anchors(), (0.04, 0.03));
         // Without either pair at `k`, no curve: the rest holds the caustic's noise.
         let unanchored = [Some(0.04), None, Some(0.02), Some(0.01)];
-        assert_eq!(caustic_curve(50, 0.25, &|i| unanchored[i]).len, 0);
+        let none = caustic_curve(50, 0.25, &unanchored);
+        assert_eq!((none.len, none.anchors()), (0, (0.0, 0.0)));
     }
 
     /// A mean counts only when it lies more than two standard errors above zero.
